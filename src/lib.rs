@@ -1,0 +1,16 @@
+//! # vlab — a virtual granular-damper laboratory
+//!
+//! vlab replays the granular-damper test rig of Yazici's thesis (Chapters 3, 5, 6.2
+//! and 7) as a signal-level simulator: a discrete-element model of spheres in a
+//! vibrated cylinder, inside a model of the shaker rig, emitting the records a lab
+//! would; the lab's own post-processing then recovers the physics from them.
+//!
+//! Units are SI throughout (m, kg, s, N, J, Pa, rad); names carry the unit where it
+//! could be ambiguous (`freq_hz`, `dt_s`, `mass_kg`).
+//!
+//! Module boundaries (imports that must never exist):
+//! - `signals` imports neither `rig` nor `dem`: it works on real lab files alone;
+//! - `rig` does not import `dem`: it sees the damper only as a force;
+//! - `dem` knows nothing of rigs, sensors or files.
+
+pub mod atomic_write;

@@ -1,0 +1,5 @@
+//! The `vlab` command line.
+
+fn main() {
+    println!("vlab {}", env!("CARGO_PKG_VERSION"));
+}
