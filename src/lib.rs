@@ -14,3 +14,5 @@
 //! - `dem` knows nothing of rigs, sensors or files.
 
 pub mod atomic_write;
+pub mod dem;
+pub mod scene;

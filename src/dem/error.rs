@@ -1,0 +1,42 @@
+//! Errors of the DEM engine: invalid set-ups and runs that went unstable.
+
+use thiserror::Error;
+
+/// What can go wrong inside the engine. Instabilities stop the run with a
+/// diagnosis instead of letting NaNs reach an output file.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum DemError {
+    #[error("{0}")]
+    Invalid(String),
+    #[error(
+        "numerical instability at t = {time_s:.6} s (step {step}): particle {particle} has a non-finite position; reduce the time step (now {dt_s:.3e} s)"
+    )]
+    NonFinite {
+        time_s: f64,
+        step: u64,
+        particle: usize,
+        dt_s: f64,
+    },
+    #[error(
+        "numerical instability at t = {time_s:.6} s (step {step}): particle {particle} passed through the {wall}; the time step {dt_s:.3e} s is too large for these impact speeds"
+    )]
+    Escaped {
+        time_s: f64,
+        step: u64,
+        particle: usize,
+        wall: String,
+        dt_s: f64,
+    },
+    #[error(
+        "numerical instability at t = {time_s:.6} s (step {step}): overlap of {overlap_percent:.1} % of the radius in a {contact} contact (limit {limit_percent:.0} %), approach speed {speed_mps:.2} m/s; the collision is too fast for the time step {dt_s:.3e} s or for the small-strain Hertz model"
+    )]
+    ExcessiveOverlap {
+        time_s: f64,
+        step: u64,
+        contact: String,
+        overlap_percent: f64,
+        limit_percent: f64,
+        speed_mps: f64,
+        dt_s: f64,
+    },
+}

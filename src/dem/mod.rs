@@ -1,0 +1,27 @@
+//! The discrete-element engine: spheres in rigid walls (thesis Chapters 3 and 5).
+//!
+//! Pure state and physics, driven by the wall kinematics it is given: no rigs, no
+//! sensors, no files. [`World`] holds the state and advances it with
+//! [`World::step`]; [`contact`] holds the force laws as small pure functions;
+//! [`ledger`] keeps the energy books.
+
+pub mod contact;
+pub mod error;
+pub mod hertz_theory;
+pub mod ledger;
+pub mod material;
+pub mod neighbours;
+pub mod particles;
+pub mod restitution;
+pub mod timestep;
+pub mod walls;
+pub mod world;
+
+pub use contact::{ContactLaw, ContactState};
+pub use error::DemError;
+pub use ledger::{Dissipation, EnergyState, Ledger, LedgerBalance, LedgerSnapshot};
+pub use material::Material;
+pub use particles::Particles;
+pub use restitution::RestitutionMode;
+pub use walls::{WallShape, Walls};
+pub use world::{Numerics, World};

@@ -1,0 +1,430 @@
+//! The DEM world: particles, walls, contact histories, and the time step.
+//!
+//! Integration is velocity Verlet (kick–drift–kick), which is symplectic, unlike
+//! the explicit Euler of thesis eq. 3.29–3.30 (whose angle update, eq. 3.30, should
+//! use ω, not its derivative). Each step:
+//! 1. half kick `v += F/m Δt/2`, `ω += τ/I Δt/2`; drift `x += v Δt`;
+//! 2. the walls move to the prescribed displacement for the end of the step;
+//! 3. the pair list is rebuilt if some particle moved more than half the skin;
+//! 4. forces at the new positions (gravity, wall and pair contacts, eq. 3.25–3.28),
+//!    with the half-step velocities for damping and tangential displacement;
+//! 5. second half kick, and the ledger is updated.
+//!
+//! Forces are summed in a fixed order (walls in order, then pairs sorted by
+//! `(i, j)`), and pair contributions are computed into a buffer before they are
+//! added, so results are bit-identical whatever the number of threads.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::contact::{ContactGeometry, ContactLaw, ContactOutput, ContactState, evaluate_contact};
+use super::error::DemError;
+use super::ledger::{EnergyState, Ledger, LedgerSnapshot};
+use super::material::{effective_mass_kg, effective_radius_m};
+use super::neighbours::NeighbourList;
+use super::particles::Particles;
+use super::walls::Walls;
+
+/// Tunables of a world that are not physics.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Numerics {
+    /// Time step (s).
+    pub dt_s: f64,
+    /// Verlet-list skin as a fraction of the largest radius.
+    pub skin_ratio: f64,
+    /// Overlap, as a fraction of the smaller radius, taken as a sign of instability.
+    pub max_overlap_ratio: f64,
+}
+
+impl Numerics {
+    /// Defaults for a given time step: skin 0.2 R, overlap limit 10 % of R.
+    pub fn with_dt(dt_s: f64) -> Self {
+        Numerics {
+            dt_s,
+            skin_ratio: 0.2,
+            max_overlap_ratio: 0.10,
+        }
+    }
+}
+
+/// Contribution of one listed pair to the forces and the ledger.
+#[derive(Debug, Clone, Copy, Default)]
+struct PairOutput {
+    touching: bool,
+    force_i: DVec3,
+    torque_i: DVec3,
+    torque_j: DVec3,
+    dissipated_normal_j: f64,
+    dissipated_tangential_j: f64,
+    stiffness_work_j: f64,
+    overlap_ratio: f64,
+    approach_mps: f64,
+}
+
+/// Below this many pairs the pair loop runs on the calling thread.
+const PARALLEL_MIN_PAIRS: usize = 512;
+
+/// A complete DEM system.
+#[derive(Debug, Clone)]
+pub struct World {
+    pub particles: Particles,
+    pub walls: Walls,
+    /// Particle-particle contact law.
+    pub pp_law: ContactLaw,
+    /// Particle-wall contact law.
+    pub pw_law: ContactLaw,
+    /// Gravitational acceleration vector (m/s²).
+    pub gravity: DVec3,
+    pub numerics: Numerics,
+    /// Simulated time (s).
+    pub time_s: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// Cumulative energy flows.
+    pub ledger: Ledger,
+    neighbours: NeighbourList,
+    /// Contact state of particle `i` with wall `w` at `i * n_walls + w`.
+    wall_states: Vec<ContactState>,
+    pair_out: Vec<PairOutput>,
+    /// Total force of the walls on the particles at the current step (N).
+    wall_force: DVec3,
+}
+
+impl World {
+    /// Builds a world and evaluates the initial forces (no history, no ledger).
+    pub fn new(
+        particles: Particles,
+        walls: Walls,
+        pp_law: ContactLaw,
+        pw_law: ContactLaw,
+        gravity: DVec3,
+        numerics: Numerics,
+    ) -> Result<Self, DemError> {
+        let skin = numerics.skin_ratio * particles.max_radius_m();
+        let mut world = World {
+            particles,
+            walls,
+            pp_law,
+            pw_law,
+            gravity,
+            numerics,
+            time_s: 0.0,
+            steps: 0,
+            ledger: Ledger::default(),
+            neighbours: NeighbourList::new(skin),
+            wall_states: Vec::new(),
+            pair_out: Vec::new(),
+            wall_force: DVec3::ZERO,
+        };
+        world.reset_contacts();
+        world.compute_forces(0.0)?;
+        Ok(world)
+    }
+
+    /// Forgets every contact history and re-reads the geometry (after the scene was
+    /// edited, e.g. particles placed or walls moved by hand).
+    pub fn reset_contacts(&mut self) {
+        self.neighbours = NeighbourList::new(self.neighbours.skin_m());
+        self.neighbours
+            .rebuild(&self.particles.position, &self.particles.radius);
+        let n_walls = self.walls.len();
+        let offset = self.walls.offset();
+        self.wall_states.clear();
+        for i in 0..self.particles.len() {
+            for w in 0..n_walls {
+                let (dist, _) =
+                    self.walls.shapes[w].distance_and_normal(self.particles.position[i], offset);
+                self.wall_states
+                    .push(ContactState::apart(self.particles.radius[i] - dist));
+            }
+        }
+    }
+
+    /// Time step (s).
+    pub fn dt_s(&self) -> f64 {
+        self.numerics.dt_s
+    }
+
+    /// Force the walls exert on the particles now (N); the particles push the
+    /// enclosure with the opposite force.
+    pub fn wall_force(&self) -> DVec3 {
+        self.wall_force
+    }
+
+    /// How often the neighbour list was rebuilt.
+    pub fn neighbour_rebuilds(&self) -> u64 {
+        self.neighbours.rebuilds()
+    }
+
+    /// Number of particle-particle and particle-wall contacts now.
+    pub fn contact_counts(&self) -> (usize, usize) {
+        let pp = self
+            .neighbours
+            .states
+            .iter()
+            .filter(|s| s.delta_prev > 0.0)
+            .count();
+        let pw = self
+            .wall_states
+            .iter()
+            .filter(|s| s.delta_prev > 0.0)
+            .count();
+        (pp, pw)
+    }
+
+    /// Mechanical energy stored now.
+    pub fn energy_state(&self) -> EnergyState {
+        let p = &self.particles;
+        let (kt, kr) = p.kinetic_energy_j();
+        let mut un = 0.0;
+        let mut ut = 0.0;
+        for (&(i, j), st) in self.neighbours.pairs.iter().zip(&self.neighbours.states) {
+            let r_star = effective_radius_m(p.radius[i as usize], p.radius[j as usize]);
+            let (a, b) = st.stored_energy_j(&self.pp_law, r_star);
+            un += a;
+            ut += b;
+        }
+        let n_walls = self.walls.len();
+        for (k, st) in self.wall_states.iter().enumerate() {
+            let (a, b) = st.stored_energy_j(&self.pw_law, p.radius[k / n_walls.max(1)]);
+            un += a;
+            ut += b;
+        }
+        EnergyState {
+            kinetic_translational_j: kt,
+            kinetic_rotational_j: kr,
+            potential_j: p.potential_energy_j(self.gravity),
+            elastic_normal_j: un,
+            elastic_tangential_j: ut,
+        }
+    }
+
+    /// Cumulative flows and stored energy now.
+    pub fn snapshot(&self) -> LedgerSnapshot {
+        LedgerSnapshot {
+            time_s: self.time_s,
+            flows: self.ledger,
+            stored: self.energy_state(),
+        }
+    }
+
+    /// Advances one step; the wall body ends the step at `wall_displacement_m`.
+    pub fn step(&mut self, wall_displacement_m: f64) -> Result<(), DemError> {
+        let dt = self.numerics.dt_s;
+        let half = 0.5 * dt;
+        let p = &mut self.particles;
+        for i in 0..p.position.len() {
+            p.velocity[i] += p.force[i] * (p.inv_mass[i] * half);
+            p.angular_velocity[i] += p.torque[i] * (p.inv_inertia[i] * half);
+            p.position[i] += p.velocity[i] * dt;
+        }
+        if let Some(i) = p.position.iter().position(|x| !x.is_finite()) {
+            return Err(DemError::NonFinite {
+                time_s: self.time_s + dt,
+                step: self.steps + 1,
+                particle: i,
+                dt_s: dt,
+            });
+        }
+
+        let du = wall_displacement_m - self.walls.displacement_m;
+        self.walls.displacement_m = wall_displacement_m;
+        self.walls.velocity_mps = du / dt;
+        let axial_before = self.wall_force.dot(self.walls.axis);
+
+        if self.neighbours.needs_rebuild(&self.particles.position) {
+            self.neighbours
+                .rebuild(&self.particles.position, &self.particles.radius);
+        }
+        self.compute_forces(dt)?;
+
+        let p = &mut self.particles;
+        for i in 0..p.position.len() {
+            p.velocity[i] += p.force[i] * (p.inv_mass[i] * half);
+            p.angular_velocity[i] += p.torque[i] * (p.inv_inertia[i] * half);
+        }
+        // Trapezoidal work of the walls on the particles over the step.
+        self.ledger.work_in_j += 0.5 * (axial_before + self.wall_force.dot(self.walls.axis)) * du;
+        self.time_s += dt;
+        self.steps += 1;
+        Ok(())
+    }
+
+    /// Forces and torques at the current positions. `dt` is the step over which the
+    /// tangential springs advance and the ledger accumulates (0 for a pure
+    /// evaluation that changes no history).
+    fn compute_forces(&mut self, dt: f64) -> Result<(), DemError> {
+        let p = &mut self.particles;
+        for i in 0..p.len() {
+            p.force[i] = self.gravity * p.mass[i];
+            p.torque[i] = DVec3::ZERO;
+        }
+        self.wall_contacts(dt)?;
+        self.pair_contacts(dt)
+    }
+
+    fn wall_contacts(&mut self, dt: f64) -> Result<(), DemError> {
+        let n_walls = self.walls.len();
+        let offset = self.walls.offset();
+        let v_wall = self.walls.velocity();
+        let law = self.pw_law;
+        let p = &mut self.particles;
+        let mut total = DVec3::ZERO;
+        for i in 0..p.len() {
+            let (x, r) = (p.position[i], p.radius[i]);
+            for w in 0..n_walls {
+                let (dist, n) = self.walls.shapes[w].distance_and_normal(x, offset);
+                let delta = r - dist;
+                let st = &mut self.wall_states[i * n_walls + w];
+                if delta <= 0.0 && st.delta_prev <= 0.0 {
+                    st.delta_prev = delta;
+                    continue;
+                }
+                if dist <= 0.0 {
+                    return Err(DemError::Escaped {
+                        time_s: self.time_s + dt,
+                        step: self.steps + 1,
+                        particle: i,
+                        wall: self.walls.names[w].to_string(),
+                        dt_s: self.numerics.dt_s,
+                    });
+                }
+                let arm = n * (r - 0.5 * delta.max(0.0));
+                let v_rel = p.velocity[i] + p.angular_velocity[i].cross(arm) - v_wall;
+                if delta > self.numerics.max_overlap_ratio * r {
+                    return Err(DemError::ExcessiveOverlap {
+                        time_s: self.time_s + dt,
+                        step: self.steps + 1,
+                        contact: format!("particle-{}", self.walls.names[w]),
+                        overlap_percent: 100.0 * delta / r,
+                        limit_percent: 100.0 * self.numerics.max_overlap_ratio,
+                        speed_mps: v_rel.dot(n),
+                        dt_s: self.numerics.dt_s,
+                    });
+                }
+                let geometry = ContactGeometry {
+                    r_star_m: r,
+                    m_star_kg: p.mass[i],
+                    delta_m: delta,
+                    normal: n,
+                    v_rel,
+                };
+                let out: ContactOutput = evaluate_contact(&law, &geometry, dt, st);
+                p.force[i] += out.force_on_i;
+                p.torque[i] += arm.cross(out.tangential_on_i);
+                total += out.force_on_i;
+                if dt > 0.0 {
+                    self.ledger.dissipated.pw_normal += out.dissipated_normal_j;
+                    self.ledger.dissipated.pw_tangential += out.dissipated_tangential_j;
+                    self.ledger.stiffness_work_j += out.stiffness_work_j;
+                }
+            }
+        }
+        self.wall_force = total;
+        Ok(())
+    }
+
+    fn pair_contacts(&mut self, dt: f64) -> Result<(), DemError> {
+        let n_pairs = self.neighbours.pairs.len();
+        self.pair_out.resize(n_pairs, PairOutput::default());
+        let law = self.pp_law;
+        let p = &self.particles;
+        let work = |(&(i, j), (st, out)): (&(u32, u32), (&mut ContactState, &mut PairOutput))| {
+            *out = pair_contact(&law, p, i as usize, j as usize, dt, st);
+        };
+        let pairs = &self.neighbours.pairs;
+        let states = &mut self.neighbours.states;
+        if rayon::current_num_threads() > 1 && n_pairs >= PARALLEL_MIN_PAIRS {
+            pairs
+                .par_iter()
+                .zip(states.par_iter_mut().zip(self.pair_out.par_iter_mut()))
+                .with_min_len(256)
+                .for_each(work);
+        } else {
+            pairs
+                .iter()
+                .zip(states.iter_mut().zip(self.pair_out.iter_mut()))
+                .for_each(work);
+        }
+
+        // Fixed-order accumulation: identical sums for any thread count.
+        let p = &mut self.particles;
+        for (k, out) in self.pair_out.iter().enumerate() {
+            if !out.touching {
+                continue;
+            }
+            let (i, j) = self.neighbours.pairs[k];
+            let (i, j) = (i as usize, j as usize);
+            if out.overlap_ratio > self.numerics.max_overlap_ratio {
+                return Err(DemError::ExcessiveOverlap {
+                    time_s: self.time_s + dt,
+                    step: self.steps + 1,
+                    contact: format!("particle-particle ({i}, {j})"),
+                    overlap_percent: 100.0 * out.overlap_ratio,
+                    limit_percent: 100.0 * self.numerics.max_overlap_ratio,
+                    speed_mps: out.approach_mps,
+                    dt_s: self.numerics.dt_s,
+                });
+            }
+            p.force[i] += out.force_i;
+            p.force[j] -= out.force_i;
+            p.torque[i] += out.torque_i;
+            p.torque[j] += out.torque_j;
+            if dt > 0.0 {
+                self.ledger.dissipated.pp_normal += out.dissipated_normal_j;
+                self.ledger.dissipated.pp_tangential += out.dissipated_tangential_j;
+                self.ledger.stiffness_work_j += out.stiffness_work_j;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One particle-particle contact (thesis eq. 3.1–3.8, 3.26–3.27).
+#[inline]
+fn pair_contact(
+    law: &ContactLaw,
+    p: &Particles,
+    i: usize,
+    j: usize,
+    dt: f64,
+    st: &mut ContactState,
+) -> PairOutput {
+    let d = p.position[j] - p.position[i];
+    let (ri, rj) = (p.radius[i], p.radius[j]);
+    let dist_sq = d.length_squared();
+    let reach = ri + rj;
+    if dist_sq >= reach * reach && st.delta_prev <= 0.0 {
+        // Apart now and before: remember the gap for the trapezoid at contact onset.
+        st.delta_prev = reach - dist_sq.sqrt();
+        return PairOutput::default();
+    }
+    let dist = dist_sq.sqrt();
+    let n = d / dist;
+    let delta = reach - dist;
+    let half_overlap = 0.5 * delta.max(0.0);
+    let arm_i = n * (ri - half_overlap);
+    let arm_j = -n * (rj - half_overlap);
+    let v_rel = p.velocity[i] + p.angular_velocity[i].cross(arm_i)
+        - p.velocity[j]
+        - p.angular_velocity[j].cross(arm_j);
+    let geometry = ContactGeometry {
+        r_star_m: effective_radius_m(ri, rj),
+        m_star_kg: effective_mass_kg(p.mass[i], p.mass[j]),
+        delta_m: delta,
+        normal: n,
+        v_rel,
+    };
+    let out = evaluate_contact(law, &geometry, dt, st);
+    PairOutput {
+        touching: true,
+        force_i: out.force_on_i,
+        torque_i: arm_i.cross(out.tangential_on_i),
+        torque_j: arm_j.cross(-out.tangential_on_i),
+        dissipated_normal_j: out.dissipated_normal_j,
+        dissipated_tangential_j: out.dissipated_tangential_j,
+        stiffness_work_j: out.stiffness_work_j,
+        overlap_ratio: delta / ri.min(rj),
+        approach_mps: v_rel.dot(n),
+    }
+}

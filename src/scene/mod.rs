@@ -1,0 +1,5 @@
+//! Scenes: descriptions that compose the engine into an experiment, building only
+//! what the experiment needs (a single collision has no enclosure; a damper run
+//! has particles, a cylinder and a drive).
+
+pub mod impact;
