@@ -28,6 +28,29 @@ pub enum DemError {
         dt_s: f64,
     },
     #[error(
+        "numerical instability at t = {time_s:.6} s (step {step}): a {contact} collision at {speed_mps:.2} m/s lasts {duration_s:.2e} s (Hertz, thesis eq. 5.10), only {steps:.1} time steps of {dt_s:.3e} s; use a time step of at most {suggested_dt_s:.2e} s"
+    )]
+    UnresolvedCollision {
+        time_s: f64,
+        step: u64,
+        contact: String,
+        speed_mps: f64,
+        duration_s: f64,
+        steps: f64,
+        dt_s: f64,
+        suggested_dt_s: f64,
+    },
+    #[error(
+        "numerical instability at t = {time_s:.6} s (step {step}): the energy books are off by {residual_j:.3e} J, {percent:.1} % of the energy in play; the time step {dt_s:.3e} s is too large"
+    )]
+    EnergyNotConserved {
+        time_s: f64,
+        step: u64,
+        residual_j: f64,
+        percent: f64,
+        dt_s: f64,
+    },
+    #[error(
         "numerical instability at t = {time_s:.6} s (step {step}): overlap of {overlap_percent:.1} % of the radius in a {contact} contact (limit {limit_percent:.0} %), approach speed {speed_mps:.2} m/s; the collision is too fast for the time step {dt_s:.3e} s or for the small-strain Hertz model"
     )]
     ExcessiveOverlap {

@@ -19,7 +19,8 @@ use rayon::prelude::*;
 
 use super::contact::{ContactGeometry, ContactLaw, ContactOutput, ContactState, evaluate_contact};
 use super::error::DemError;
-use super::ledger::{EnergyState, Ledger, LedgerSnapshot};
+use super::hertz_theory;
+use super::ledger::{EnergyState, Ledger, LedgerBalance, LedgerSnapshot};
 use super::material::{effective_mass_kg, effective_radius_m};
 use super::neighbours::NeighbourList;
 use super::particles::Particles;
@@ -34,15 +35,28 @@ pub struct Numerics {
     pub skin_ratio: f64,
     /// Overlap, as a fraction of the smaller radius, taken as a sign of instability.
     pub max_overlap_ratio: f64,
+    /// The pair loop is split across threads only from this many listed pairs on:
+    /// below it, waking a second thread costs more than the loop (a thesis-scene
+    /// step, ~2500 pairs, takes about 25 µs on one core).
+    pub parallel_min_pairs: usize,
+    /// A collision resolved in fewer time steps than this is refused.
+    pub min_steps_per_collision: f64,
+    /// Steps between checks that the energy books still close.
+    pub energy_check_steps: u64,
 }
 
 impl Numerics {
-    /// Defaults for a given time step: skin 0.2 R, overlap limit 10 % of R.
+    /// Defaults for a given time step: skin 0.2 R, overlap limit 10 % of R,
+    /// parallel pair loop from 16384 pairs, at least 5 steps per collision, energy
+    /// books checked every 2000 steps.
     pub fn with_dt(dt_s: f64) -> Self {
         Numerics {
             dt_s,
             skin_ratio: 0.2,
             max_overlap_ratio: 0.10,
+            parallel_min_pairs: 16384,
+            min_steps_per_collision: 5.0,
+            energy_check_steps: 2000,
         }
     }
 }
@@ -59,10 +73,9 @@ struct PairOutput {
     stiffness_work_j: f64,
     overlap_ratio: f64,
     approach_mps: f64,
+    /// Steps the collision will take, set when the contact opens (else infinite).
+    steps_per_collision: f64,
 }
-
-/// Below this many pairs the pair loop runs on the calling thread.
-const PARALLEL_MIN_PAIRS: usize = 512;
 
 /// A complete DEM system.
 #[derive(Debug, Clone)]
@@ -88,6 +101,8 @@ pub struct World {
     pair_out: Vec<PairOutput>,
     /// Total force of the walls on the particles at the current step (N).
     wall_force: DVec3,
+    /// Ledger reading the energy check compares against.
+    baseline: LedgerSnapshot,
 }
 
 impl World {
@@ -115,10 +130,42 @@ impl World {
             wall_states: Vec::new(),
             pair_out: Vec::new(),
             wall_force: DVec3::ZERO,
+            baseline: LedgerSnapshot::default(),
         };
         world.reset_contacts();
         world.compute_forces(0.0)?;
+        world.rebaseline();
         Ok(world)
+    }
+
+    /// Restarts the energy check from the current state; call after editing the
+    /// world by hand (changing gravity, moving a wall, placing particles).
+    pub fn rebaseline(&mut self) {
+        self.baseline = self.snapshot();
+    }
+
+    /// Checks that the energy books still close since the last baseline: a
+    /// residual above 2 % of the energy in play (kinetic + elastic + dissipated +
+    /// |work in|) means the integration has gone wrong.
+    pub fn check_energy(&self) -> Result<(), DemError> {
+        let now = self.snapshot();
+        let b = LedgerBalance::between(&self.baseline, &now);
+        let in_play = now.stored.kinetic_j()
+            + now.stored.elastic_j()
+            + self.baseline.stored.kinetic_j()
+            + self.baseline.stored.elastic_j()
+            + b.dissipated_j.abs()
+            + b.work_in_j.abs();
+        if in_play > 0.0 && b.residual_j.abs() > 0.02 * in_play {
+            return Err(DemError::EnergyNotConserved {
+                time_s: self.time_s,
+                step: self.steps,
+                residual_j: b.residual_j,
+                percent: 100.0 * b.residual_j.abs() / in_play,
+                dt_s: self.numerics.dt_s,
+            });
+        }
+        Ok(())
     }
 
     /// Forgets every contact history and re-reads the geometry (after the scene was
@@ -137,6 +184,22 @@ impl World {
                 self.wall_states
                     .push(ContactState::apart(self.particles.radius[i] - dist));
             }
+        }
+    }
+
+    /// Re-reads the gap to every wall a particle does not touch, after walls were
+    /// moved by hand (closing the lid); contacts in progress keep their history.
+    pub fn refresh_wall_gaps(&mut self) {
+        let n_walls = self.walls.len();
+        let offset = self.walls.offset();
+        for (k, st) in self.wall_states.iter_mut().enumerate() {
+            if st.delta_prev > 0.0 {
+                continue;
+            }
+            let (i, w) = (k / n_walls, k % n_walls);
+            let (dist, _) =
+                self.walls.shapes[w].distance_and_normal(self.particles.position[i], offset);
+            st.delta_prev = self.particles.radius[i] - dist;
         }
     }
 
@@ -247,7 +310,24 @@ impl World {
         self.ledger.work_in_j += 0.5 * (axial_before + self.wall_force.dot(self.walls.axis)) * du;
         self.time_s += dt;
         self.steps += 1;
+        if self.steps % self.numerics.energy_check_steps == 0 {
+            self.check_energy()?;
+        }
         Ok(())
+    }
+
+    fn unresolved(&self, contact: String, speed_mps: f64, duration_s: f64) -> DemError {
+        let dt = self.numerics.dt_s;
+        DemError::UnresolvedCollision {
+            time_s: self.time_s + dt,
+            step: self.steps + 1,
+            contact,
+            speed_mps,
+            duration_s,
+            steps: duration_s / dt,
+            dt_s: dt,
+            suggested_dt_s: duration_s / 20.0,
+        }
     }
 
     /// Forces and torques at the current positions. `dt` is the step over which the
@@ -302,6 +382,14 @@ impl World {
                         dt_s: self.numerics.dt_s,
                     });
                 }
+                if dt > 0.0 && st.delta_prev <= 0.0 {
+                    let v_n = v_rel.dot(n).max(0.0);
+                    let t_c = hertz_theory::contact_duration_s(p.mass[i], law.e_star_pa, r, v_n);
+                    if t_c < self.numerics.min_steps_per_collision * dt {
+                        let contact = format!("particle-{}", self.walls.names[w]);
+                        return Err(self.unresolved(contact, v_n, t_c));
+                    }
+                }
                 let geometry = ContactGeometry {
                     r_star_m: r,
                     m_star_kg: p.mass[i],
@@ -334,7 +422,7 @@ impl World {
         };
         let pairs = &self.neighbours.pairs;
         let states = &mut self.neighbours.states;
-        if rayon::current_num_threads() > 1 && n_pairs >= PARALLEL_MIN_PAIRS {
+        if rayon::current_num_threads() > 1 && n_pairs >= self.numerics.parallel_min_pairs {
             pairs
                 .par_iter()
                 .zip(states.par_iter_mut().zip(self.pair_out.par_iter_mut()))
@@ -355,6 +443,11 @@ impl World {
             }
             let (i, j) = self.neighbours.pairs[k];
             let (i, j) = (i as usize, j as usize);
+            if out.steps_per_collision < self.numerics.min_steps_per_collision {
+                let t_c = out.steps_per_collision * dt;
+                let contact = format!("particle-particle ({i}, {j})");
+                return Err(self.unresolved(contact, out.approach_mps, t_c));
+            }
             if out.overlap_ratio > self.numerics.max_overlap_ratio {
                 return Err(DemError::ExcessiveOverlap {
                     time_s: self.time_s + dt,
@@ -415,6 +508,13 @@ fn pair_contact(
         normal: n,
         v_rel,
     };
+    let steps_per_collision = if dt > 0.0 && st.delta_prev <= 0.0 {
+        let v_n = v_rel.dot(n).max(0.0);
+        hertz_theory::contact_duration_s(geometry.m_star_kg, law.e_star_pa, geometry.r_star_m, v_n)
+            / dt
+    } else {
+        f64::INFINITY
+    };
     let out = evaluate_contact(law, &geometry, dt, st);
     PairOutput {
         touching: true,
@@ -426,5 +526,6 @@ fn pair_contact(
         stiffness_work_j: out.stiffness_work_j,
         overlap_ratio: delta / ri.min(rj),
         approach_mps: v_rel.dot(n),
+        steps_per_collision,
     }
 }

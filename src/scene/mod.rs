@@ -2,4 +2,7 @@
 //! what the experiment needs (a single collision has no enclosure; a damper run
 //! has particles, a cylinder and a drive).
 
+pub mod damper;
+pub mod file;
+pub mod fill;
 pub mod impact;

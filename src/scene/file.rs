@@ -1,0 +1,483 @@
+//! Scene files: the damper, its particles, contacts and run length, in TOML.
+//!
+//! The built-in thesis preset is `rig/thesis-damper.toml`, embedded in the binary.
+//! A user scene file is merged over the preset key by key, so it only needs the
+//! keys it changes; unknown keys are errors, and `version` must be 1. Every value
+//! is checked with its unit and valid range before anything runs.
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::dem::material::{
+    Material, effective_mass_kg, effective_radius_m, effective_youngs_pa, sphere_mass_kg,
+};
+use crate::dem::timestep::{check_time_step, rayleigh_time_step_s};
+use crate::dem::{DemError, RestitutionMode, hertz_theory};
+use crate::scene::impact::{check_friction, check_restitution};
+
+/// The embedded thesis damper preset.
+pub const THESIS_DAMPER_TOML: &str = include_str!("../../rig/thesis-damper.toml");
+
+/// Densest fill a random packing of spheres reaches (random close packing).
+pub const MAX_FILL: f64 = 0.64;
+
+/// Errors of scene files and scene runs.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    #[error("cannot read scene file {path}: {source}")]
+    Read {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("scene file {path} is not valid: {message}")]
+    Parse { path: String, message: String },
+    #[error("{0}")]
+    Invalid(String),
+    #[error(transparent)]
+    Dem(#[from] DemError),
+}
+
+/// A material given by preset name or inline constants.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum MaterialSpec {
+    Named(String),
+    Inline(Material),
+}
+
+impl MaterialSpec {
+    /// Resolves the spec; `what` names the key in messages.
+    pub fn resolve(&self, what: &str) -> Result<Material, String> {
+        match self {
+            MaterialSpec::Inline(m) => {
+                m.validate(what)?;
+                Ok(*m)
+            }
+            MaterialSpec::Named(name) => material_preset(name).ok_or_else(|| {
+                format!(
+                    "{what} = \"{name}\" is unknown: use acrylic, steel, aluminium, rigid, or an inline table {{ youngs_pa, poisson, density_kgm3 }}"
+                )
+            }),
+        }
+    }
+}
+
+/// Material presets by name.
+pub fn material_preset(name: &str) -> Option<Material> {
+    match name {
+        "acrylic" => Some(Material::ACRYLIC),
+        "steel" => Some(Material::STEEL),
+        "aluminium" | "aluminum" => Some(Material::ALUMINIUM),
+        "rigid" => Some(Material::rigid()),
+        _ => None,
+    }
+}
+
+/// Gravity relative to the cylinder (and drive) axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Orientation {
+    /// Axis along gravity.
+    Vertical,
+    /// Axis perpendicular to gravity.
+    Horizontal,
+}
+
+impl Orientation {
+    /// Lower-case name, as in scene files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Orientation::Vertical => "vertical",
+            Orientation::Horizontal => "horizontal",
+        }
+    }
+}
+
+/// `dt_s`: a time step in seconds, or "rayleigh" for the safety factor rule.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum TimeStepSpec {
+    Seconds(f64),
+    Rule(String),
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticlesSpec {
+    pub count: usize,
+    pub diameter_m: f64,
+    pub material: MaterialSpec,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnclosureSpec {
+    pub inner_diameter_m: f64,
+    pub inner_length_m: f64,
+    pub orientation: Orientation,
+    pub material: MaterialSpec,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairSpec {
+    pub restitution: f64,
+    pub friction: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    pub restitution_mode: RestitutionMode,
+    pub particle_particle: PairSpec,
+    pub particle_wall: PairSpec,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationSpec {
+    pub dt_s: TimeStepSpec,
+    pub rayleigh_safety_factor: f64,
+    pub settle_s: f64,
+    pub gravity_mps2: f64,
+    pub seed: u64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveSpec {
+    pub cycles: u32,
+    pub steady_cycles: u32,
+}
+
+/// A complete damper scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    pub version: u32,
+    pub name: String,
+    pub particles: ParticlesSpec,
+    pub enclosure: EnclosureSpec,
+    pub contact: ContactSpec,
+    pub simulation: SimulationSpec,
+    pub drive: DriveSpec,
+}
+
+impl Scene {
+    /// The built-in thesis damper.
+    pub fn thesis() -> Scene {
+        // The embedded preset is checked by a unit test; parsing it cannot fail.
+        Scene::from_toml_str(THESIS_DAMPER_TOML, "built-in thesis scene")
+            .unwrap_or_else(|e| panic!("embedded thesis scene is broken: {e}"))
+    }
+
+    /// Parses and validates a complete scene from TOML text.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        scene.validate().map_err(|message| SceneError::Parse {
+            path: origin.to_string(),
+            message,
+        })?;
+        Ok(scene)
+    }
+
+    /// Reads a scene file and merges it over the thesis preset.
+    pub fn load_over_preset(path: &Path) -> Result<Scene, SceneError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+            path: shown.clone(),
+            source,
+        })?;
+        Scene::merge_over_preset(&text, &shown)
+    }
+
+    /// Merges TOML `text` over the thesis preset and validates the result.
+    pub fn merge_over_preset(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let parse = |t: &str, o: &str| -> Result<toml::Table, SceneError> {
+            t.parse::<toml::Table>().map_err(|e| SceneError::Parse {
+                path: o.to_string(),
+                message: e.to_string(),
+            })
+        };
+        let mut base = parse(THESIS_DAMPER_TOML, "built-in thesis scene")?;
+        let overlay = parse(text, origin)?;
+        merge_tables(&mut base, overlay);
+        let merged = toml::to_string(&base).map_err(|e| SceneError::Parse {
+            path: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        Scene::from_toml_str(&merged, origin)
+    }
+
+    /// The resolved scene as TOML.
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot print scene: {e}\n"))
+    }
+
+    /// Checks every value; the message names the key, its unit and valid range.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.version != 1 {
+            return Err(format!(
+                "version = {} is not supported: this vlab reads scene files of version 1",
+                self.version
+            ));
+        }
+        let p = &self.particles;
+        positive("particles.diameter_m", p.diameter_m, "m")?;
+        let particle = p.material.resolve("particles.material")?;
+        if !particle.youngs_pa.is_finite() {
+            return Err(
+                "particles.material = \"rigid\" is invalid: particles must be elastic".into(),
+            );
+        }
+        let e = &self.enclosure;
+        positive("enclosure.inner_diameter_m", e.inner_diameter_m, "m")?;
+        positive("enclosure.inner_length_m", e.inner_length_m, "m")?;
+        e.material.resolve("enclosure.material")?;
+        if e.inner_diameter_m <= p.diameter_m || e.inner_length_m <= p.diameter_m {
+            return Err(format!(
+                "the enclosure ({} m x {} m) must be larger than a particle ({} m) in both directions",
+                e.inner_diameter_m, e.inner_length_m, p.diameter_m
+            ));
+        }
+        let fill = self.fill_ratio();
+        if fill > MAX_FILL {
+            return Err(format!(
+                "particles.count = {} spheres of {} m fill {:.3} of the enclosure, above random close packing ({MAX_FILL}): the enclosure cannot hold them (at most {} fit)",
+                p.count,
+                p.diameter_m,
+                fill,
+                self.max_particles()
+            ));
+        }
+        let c = &self.contact;
+        check_restitution(
+            "contact.particle_particle.restitution",
+            c.particle_particle.restitution,
+        )?;
+        check_friction(
+            "contact.particle_particle.friction",
+            c.particle_particle.friction,
+        )?;
+        check_restitution(
+            "contact.particle_wall.restitution",
+            c.particle_wall.restitution,
+        )?;
+        check_friction("contact.particle_wall.friction", c.particle_wall.friction)?;
+        let s = &self.simulation;
+        let f = s.rayleigh_safety_factor;
+        if !(f > 0.0 && f <= 1.0) {
+            return Err(format!(
+                "simulation.rayleigh_safety_factor = {f} is invalid: must lie in (0, 1] (dimensionless; 0.1-0.4 is typical)"
+            ));
+        }
+        if let TimeStepSpec::Rule(rule) = &s.dt_s {
+            if rule != "rayleigh" {
+                return Err(format!(
+                    "simulation.dt_s = \"{rule}\" is invalid: give a time step in seconds or \"rayleigh\""
+                ));
+            }
+        }
+        check_time_step(self.dt_s(), self.rayleigh_limit_s())
+            .map_err(|m| format!("simulation.dt_s: {m}"))?;
+        if !(s.settle_s >= 0.0 && s.settle_s.is_finite()) {
+            return Err(format!(
+                "simulation.settle_s = {} is invalid: must be >= 0 and finite (s)",
+                s.settle_s
+            ));
+        }
+        if !(s.gravity_mps2 >= 0.0 && s.gravity_mps2.is_finite()) {
+            return Err(format!(
+                "simulation.gravity_mps2 = {} is invalid: must be >= 0 and finite (m/s^2)",
+                s.gravity_mps2
+            ));
+        }
+        let d = &self.drive;
+        if d.cycles == 0 {
+            return Err("drive.cycles = 0 is invalid: must be at least 1".into());
+        }
+        if d.steady_cycles == 0 || d.steady_cycles > d.cycles {
+            return Err(format!(
+                "drive.steady_cycles = {} is invalid: must lie in [1, drive.cycles = {}]",
+                d.steady_cycles, d.cycles
+            ));
+        }
+        Ok(())
+    }
+
+    /// Particle material (validated scenes only).
+    pub fn particle_material(&self) -> Material {
+        self.particles
+            .material
+            .resolve("particles.material")
+            .unwrap_or(Material::ACRYLIC)
+    }
+
+    /// Wall material (validated scenes only).
+    pub fn wall_material(&self) -> Material {
+        self.enclosure
+            .material
+            .resolve("enclosure.material")
+            .unwrap_or(Material::ACRYLIC)
+    }
+
+    /// Particle radius (m).
+    pub fn radius_m(&self) -> f64 {
+        0.5 * self.particles.diameter_m
+    }
+
+    /// Enclosure inner volume (m³).
+    pub fn enclosure_volume_m3(&self) -> f64 {
+        let r = 0.5 * self.enclosure.inner_diameter_m;
+        PI * r * r * self.enclosure.inner_length_m
+    }
+
+    /// Volume of one particle (m³).
+    pub fn particle_volume_m3(&self) -> f64 {
+        4.0 / 3.0 * PI * self.radius_m().powi(3)
+    }
+
+    /// Volume fill ratio, thesis eq. 6.1.
+    pub fn fill_ratio(&self) -> f64 {
+        self.particles.count as f64 * self.particle_volume_m3() / self.enclosure_volume_m3()
+    }
+
+    /// Most particles the enclosure can hold (random close packing).
+    pub fn max_particles(&self) -> usize {
+        (MAX_FILL * self.enclosure_volume_m3() / self.particle_volume_m3()).floor() as usize
+    }
+
+    /// Total particle mass (kg).
+    pub fn particle_mass_kg(&self) -> f64 {
+        self.particles.count as f64
+            * sphere_mass_kg(self.radius_m(), self.particle_material().density_kgm3)
+    }
+
+    /// Rayleigh time step, the stability limit (s), eq. 3.31.
+    pub fn rayleigh_limit_s(&self) -> f64 {
+        rayleigh_time_step_s(&self.particle_material(), self.radius_m())
+    }
+
+    /// The working time step (s).
+    pub fn dt_s(&self) -> f64 {
+        match self.simulation.dt_s {
+            TimeStepSpec::Seconds(dt) => dt,
+            TimeStepSpec::Rule(_) => {
+                self.simulation.rayleigh_safety_factor * self.rayleigh_limit_s()
+            }
+        }
+    }
+
+    /// Yield velocities (m/s) of particle-particle and particle-wall impacts,
+    /// eq. 5.26, when the particle material has a yield strength.
+    pub fn yield_velocities_mps(&self) -> Option<(f64, f64)> {
+        let pm = self.particle_material();
+        let wm = self.wall_material();
+        let y = pm.yield_strength_pa?;
+        let r = self.radius_m();
+        let m = sphere_mass_kg(r, pm.density_kgm3);
+        let pp = hertz_theory::yield_velocity_mps(
+            effective_mass_kg(m, m),
+            effective_youngs_pa(&pm, &pm),
+            effective_radius_m(r, r),
+            y,
+        );
+        let pw = hertz_theory::yield_velocity_mps(m, effective_youngs_pa(&pm, &wm), r, y);
+        Some((pp, pw))
+    }
+}
+
+fn positive(name: &str, value: f64, unit: &str) -> Result<(), String> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name} = {value} is invalid: must be positive and finite ({unit})"
+        ))
+    }
+}
+
+/// Recursively overlays `top` onto `base`: tables merge, everything else replaces.
+fn merge_tables(base: &mut toml::Table, top: toml::Table) {
+    for (key, value) in top {
+        match (base.get_mut(&key), value) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(t)) => merge_tables(b, t),
+            (_, v) => {
+                base.insert(key, v);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_preset_is_the_thesis_damper() {
+        let s = Scene::thesis();
+        assert_eq!(s.particles.count, 358);
+        assert!((s.fill_ratio() - 0.466).abs() < 0.001, "{}", s.fill_ratio());
+        assert!((s.particle_mass_kg() - 0.0279).abs() < 0.0001);
+        assert_eq!(s.dt_s(), 1e-6);
+        let (pp, _) = s
+            .yield_velocities_mps()
+            .expect("acrylic has a yield strength");
+        assert!((pp - 3.5).abs() < 0.1);
+    }
+
+    #[test]
+    fn every_checked_in_rig_toml_that_is_a_scene_parses() {
+        // The scene preset is a file in rig/; it must parse on its own.
+        let s = Scene::from_toml_str(THESIS_DAMPER_TOML, "rig/thesis-damper.toml");
+        assert!(s.is_ok(), "{:?}", s.err());
+    }
+
+    #[test]
+    fn partial_file_overrides_only_its_keys() {
+        let s = Scene::merge_over_preset(
+            "[particles]\ncount = 200\n[enclosure]\norientation = \"horizontal\"\n",
+            "test",
+        )
+        .expect("valid");
+        assert_eq!(s.particles.count, 200);
+        assert_eq!(s.enclosure.orientation, Orientation::Horizontal);
+        assert_eq!(s.particles.diameter_m, 0.005);
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_values_are_named() {
+        let err = Scene::merge_over_preset("[particles]\ncolour = 3\n", "f.toml").unwrap_err();
+        assert!(err.to_string().contains("colour"), "{err}");
+        let err = Scene::merge_over_preset("[particles]\ncount = 700\n", "f.toml").unwrap_err();
+        assert!(err.to_string().contains("random close packing"), "{err}");
+        let err = Scene::merge_over_preset("[simulation]\ndt_s = 1e-4\n", "f.toml").unwrap_err();
+        assert!(err.to_string().contains("stability limit"), "{err}");
+        let err = Scene::merge_over_preset(
+            "[contact]\nparticle_wall = { restitution = 1.5, friction = 0.5 }\n",
+            "f.toml",
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("(0, 1]"), "{err}");
+        let err = Scene::merge_over_preset("version = 2\n", "f.toml").unwrap_err();
+        assert!(err.to_string().contains("version"), "{err}");
+        let err = Scene::merge_over_preset("[particles\n", "f.toml").unwrap_err();
+        assert!(err.to_string().contains("f.toml"), "{err}");
+    }
+
+    #[test]
+    fn rayleigh_rule_uses_the_safety_factor() {
+        let s = Scene::merge_over_preset(
+            "[simulation]\ndt_s = \"rayleigh\"\nrayleigh_safety_factor = 0.1\n",
+            "t",
+        )
+        .expect("valid");
+        assert!((s.dt_s() - 0.1 * s.rayleigh_limit_s()).abs() < 1e-18);
+    }
+}
