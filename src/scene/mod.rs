@@ -6,3 +6,4 @@ pub mod damper;
 pub mod file;
 pub mod fill;
 pub mod impact;
+pub mod record;
