@@ -14,3 +14,4 @@
 //! - `dem` knows nothing of rigs, sensors or files.
 
 pub mod atomic_write;
+pub mod signals;

@@ -1,0 +1,35 @@
+//! The lab's post-processing: traces, their files, and the measurements of
+//! thesis Chapter 7 — usable on real lab records alone.
+//!
+//! - [`trace`]: multichannel uniformly sampled records ([`Trace`]);
+//! - [`csv`], [`wav`]: trace files (CSV with units in the header; 32-bit float
+//!   WAV with a JSON sidecar);
+//! - [`spectrum`]: one-sided amplitude spectra (scaling convention stated there);
+//! - [`power`]: Yang's structure-independent dissipated power, eq. 7.8-7.12,
+//!   and the damping efficiency, eq. 7.7 / 6.10;
+//! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
+//! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
+//! - [`plot`]: small SVG plots;
+//! - [`bench`]: a timing hook for `vlab bench`.
+//!
+//! SI units throughout. This module imports neither `dem` nor `rig`. Every
+//! file it writes goes through [`crate::atomic_write`].
+
+pub mod calibration;
+pub mod error;
+pub mod power;
+pub mod spectrum;
+pub mod trace;
+
+pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
+pub use error::{CsvErrorKind, Result, SignalsError, WavErrorKind};
+pub use power::{
+    BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,
+    WindowPlan, YangPower, efficiency, max_energy_per_cycle_j, mean_power_time_domain, plan_window,
+    yang_power, yang_power_of_trace,
+};
+pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
+pub use trace::{Channel, Sensitivity, Trace, TraceMetadata};
+
+/// Standard gravity, 9.806 65 m/s^2 (a convenience; pass your local g where it matters).
+pub const STANDARD_GRAVITY_MPS2: f64 = 9.806_65;
