@@ -16,12 +16,14 @@
 //! file it writes goes through [`crate::atomic_write`].
 
 pub mod calibration;
+pub mod csv;
 pub mod error;
 pub mod power;
 pub mod spectrum;
 pub mod trace;
 
 pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
+pub use csv::{read_csv, write_csv};
 pub use error::{CsvErrorKind, Result, SignalsError, WavErrorKind};
 pub use power::{
     BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,
