@@ -21,6 +21,7 @@ pub mod error;
 pub mod power;
 pub mod spectrum;
 pub mod trace;
+pub mod wav;
 
 pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
 pub use csv::{read_csv, write_csv};
@@ -32,6 +33,10 @@ pub use power::{
 };
 pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
 pub use trace::{Channel, Sensitivity, Trace, TraceMetadata};
+pub use wav::{
+    WavChannelInfo, WavSidecar, read_wav, read_wav_with, sidecar_path, write_wav,
+    write_wav_with_full_scale,
+};
 
 /// Standard gravity, 9.806 65 m/s^2 (a convenience; pass your local g where it matters).
 pub const STANDARD_GRAVITY_MPS2: f64 = 9.806_65;
