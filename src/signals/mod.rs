@@ -18,14 +18,22 @@
 pub mod calibration;
 pub mod csv;
 pub mod error;
+pub mod impacts;
 pub mod power;
 pub mod spectrum;
 pub mod trace;
 pub mod wav;
 
+#[cfg(test)]
+mod testutil;
+
 pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
 pub use csv::{read_csv, write_csv};
 pub use error::{CsvErrorKind, Result, SignalsError, WavErrorKind};
+pub use impacts::{
+    CorEstimate, DropTestResult, Impact, ImpactDetection, ImpactParams, Polarity, detect_impacts,
+    estimate_cor, restitution_from_impact_times,
+};
 pub use power::{
     BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,
     WindowPlan, YangPower, efficiency, max_energy_per_cycle_j, mean_power_time_domain, plan_window,

@@ -497,8 +497,7 @@ pub fn wrap_phase_rad(phi: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand_core::{Rng, SeedableRng};
-    use rand_xoshiro::Xoshiro256PlusPlus;
+    use crate::signals::testutil::{gaussian, rng};
 
     const FS: f64 = 40_000.0;
     const F_DRIVE: f64 = 40.0;
@@ -757,19 +756,12 @@ mod tests {
         assert!(rel_err(harm.power_w, p_drive) < 1e-9);
     }
 
-    fn gaussian(rng: &mut Xoshiro256PlusPlus) -> f64 {
-        // Box-Muller; u1 in (0, 1] so ln is finite.
-        let u1 = ((rng.next_u64() >> 11) as f64 + 1.0) / (1u64 << 53) as f64;
-        let u2 = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-        (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
-    }
-
     #[test]
     fn white_noise_at_ten_percent_rms_moves_power_by_less_than_one_percent() {
         // 200 periods; noise RMS = 10 % of each signal's RMS, seeded. Tol 1 %.
         let n = 200_000;
         let (f_amp, a_amp, phi) = (10.0, 100.0, -PI / 3.0);
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x5EED);
+        let mut rng = rng(0x5EED);
         let f_rms = f_amp / 2f64.sqrt();
         let a_rms = a_amp / 2f64.sqrt();
         let force: Vec<f64> = harmonics(n, &[(1, f_amp, phi)], 0.0)
