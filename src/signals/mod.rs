@@ -19,6 +19,7 @@ pub mod calibration;
 pub mod csv;
 pub mod error;
 pub mod impacts;
+pub mod plot;
 pub mod power;
 pub mod spectrum;
 pub mod trace;
@@ -34,6 +35,7 @@ pub use impacts::{
     CorEstimate, DropTestResult, Impact, ImpactDetection, ImpactParams, Polarity, detect_impacts,
     estimate_cor, restitution_from_impact_times,
 };
+pub use plot::{Series, SeriesStyle, plot_xy_svg};
 pub use power::{
     BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,
     WindowPlan, YangPower, efficiency, max_energy_per_cycle_j, mean_power_time_domain, plan_window,
