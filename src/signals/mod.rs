@@ -15,6 +15,7 @@
 //! SI units throughout. This module imports neither `dem` nor `rig`. Every
 //! file it writes goes through [`crate::atomic_write`].
 
+pub mod bench;
 pub mod calibration;
 pub mod csv;
 pub mod error;
