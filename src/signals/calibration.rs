@@ -97,12 +97,6 @@ pub fn estimate_phase_error(
     sample_rate_hz: f64,
     drive_freq_hz: f64,
 ) -> Result<PhaseErrorPoint> {
-    let w = plan_window(
-        force.len().min(accel.len()),
-        sample_rate_hz,
-        drive_freq_hz,
-        PowerWindow::default(),
-    )?;
     if force.len() != accel.len() {
         return Err(SignalsError::LengthMismatch {
             first: "force".into(),
@@ -113,6 +107,12 @@ pub fn estimate_phase_error(
     }
     super::error::all_finite("force", force)?;
     super::error::all_finite("acceleration", accel)?;
+    let w = plan_window(
+        force.len(),
+        sample_rate_hz,
+        drive_freq_hz,
+        PowerWindow::default(),
+    )?;
     let mut est = YangPower::new();
     let (f_spec, a_spec) = est.spectra(&force[..w.n_samples], &accel[..w.n_samples])?;
     let k = w.n_periods;

@@ -10,7 +10,7 @@
 //! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
 //! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
 //! - [`plot`]: small SVG plots;
-//! - [`bench`]: a timing hook for `vlab bench`.
+//! - [`bench`](mod@bench): a timing hook for `vlab bench`.
 //!
 //! SI units throughout. This module imports neither `dem` nor `rig`. Every
 //! file it writes goes through [`crate::atomic_write`].
@@ -29,6 +29,7 @@ pub mod wav;
 #[cfg(test)]
 mod testutil;
 
+pub use bench::{YangBenchReport, bench_yang_power};
 pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
 pub use csv::{read_csv, write_csv};
 pub use error::{CsvErrorKind, Result, SignalsError, WavErrorKind};
@@ -40,7 +41,7 @@ pub use plot::{Series, SeriesStyle, plot_xy_svg};
 pub use power::{
     BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,
     WindowPlan, YangPower, efficiency, max_energy_per_cycle_j, mean_power_time_domain, plan_window,
-    yang_power, yang_power_of_trace,
+    wrap_phase_rad, yang_power, yang_power_of_trace,
 };
 pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
 pub use trace::{Channel, Sensitivity, Trace, TraceMetadata};

@@ -305,14 +305,17 @@ impl YangPower {
         accel: &[f64],
     ) -> Result<(&[Complex64], &[Complex64])> {
         let n = force.len();
-        if self.plan.as_ref().is_none_or(|p| p.n_samples() != n) {
-            let plan = SpectrumPlan::new(n)?;
-            self.force_spec = plan.make_output();
-            self.accel_spec = plan.make_output();
-            self.plan = Some(plan);
+        if self.plan.as_ref().is_some_and(|p| p.n_samples() != n) {
+            self.plan = None;
         }
-        let Some(plan) = self.plan.as_mut() else {
-            unreachable!("plan set just above");
+        let plan = match &mut self.plan {
+            Some(plan) => plan,
+            slot => {
+                let plan = SpectrumPlan::new(n)?;
+                self.force_spec = plan.make_output();
+                self.accel_spec = plan.make_output();
+                slot.insert(plan)
+            }
         };
         plan.process_into(force, &mut self.force_spec)?;
         plan.process_into(accel, &mut self.accel_spec)?;

@@ -273,6 +273,11 @@ fn read_normalised(path: &Path) -> Result<(u32, Vec<Vec<f64>>)> {
     })?;
     let spec = reader.spec();
     let n_ch = usize::from(spec.channels);
+    if n_ch == 0 {
+        return Err(wav_err(WavErrorKind::UnsupportedFormat(
+            "the header declares 0 channels".into(),
+        )));
+    }
     let per_channel = reader.duration() as usize;
     let mut columns = vec![Vec::with_capacity(per_channel); n_ch];
     match (spec.sample_format, spec.bits_per_sample) {
