@@ -16,3 +16,4 @@
 pub mod atomic_write;
 pub mod dem;
 pub mod scene;
+pub mod signals;

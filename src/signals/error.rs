@@ -1,0 +1,374 @@
+//! The one error type of the `signals` module.
+//!
+//! Every fallible function in `signals` returns [`SignalsError`]. Messages name
+//! the parameter, channel, file, line or column at fault, with the unit and the
+//! valid range where there is one, so that a lab user can fix the input without
+//! reading the source. File-format problems carry a nested kind
+//! ([`CsvErrorKind`], [`WavErrorKind`]) so callers can match on them.
+
+use std::io;
+use std::path::PathBuf;
+
+/// Result alias used throughout `signals`.
+pub type Result<T, E = SignalsError> = std::result::Result<T, E>;
+
+/// Everything that can go wrong in `signals`.
+#[derive(Debug, thiserror::Error)]
+pub enum SignalsError {
+    /// A scalar parameter is out of its valid range.
+    #[error("{name} = {value} {unit}: must be {valid}")]
+    InvalidParameter {
+        /// Parameter name as it appears in the API, e.g. `sample_rate_hz`.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+        /// Its unit (`Hz`, `s`, `N`, ... or `1` when dimensionless).
+        unit: &'static str,
+        /// What would have been valid, in words.
+        valid: String,
+    },
+    /// A sample is NaN or infinite.
+    #[error("channel '{channel}' sample {index} is {value}: samples must be finite")]
+    NonFiniteSample {
+        /// Channel (or input) name.
+        channel: String,
+        /// Zero-based sample index.
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A channel name was looked up and is not in the trace.
+    #[error("channel '{name}' not found; the trace has channels [{available}]")]
+    ChannelNotFound {
+        /// Requested name.
+        name: String,
+        /// Comma-separated names present.
+        available: String,
+    },
+    /// A channel name is empty or already used.
+    #[error("channel name '{name}' is {problem}")]
+    BadChannelName {
+        /// The name.
+        name: String,
+        /// What is wrong with it ("already used", "empty", ...).
+        problem: String,
+    },
+    /// Two sequences that must have equal length do not.
+    #[error(
+        "{first} has {first_len} samples but {second} has {second_len}: they must have equal length"
+    )]
+    LengthMismatch {
+        /// Name of the first sequence.
+        first: String,
+        /// Its length.
+        first_len: usize,
+        /// Name of the second sequence.
+        second: String,
+        /// Its length.
+        second_len: usize,
+    },
+    /// A record is too short for the requested analysis.
+    #[error("{what} needs at least {need} samples, got {got}")]
+    TooFewSamples {
+        /// The analysis or input.
+        what: String,
+        /// Minimum number of samples.
+        need: usize,
+        /// Number available.
+        got: usize,
+    },
+    /// The power window holds fewer than two drive periods.
+    #[error(
+        "the analysis window holds {periods:.3} periods of the {drive_freq_hz} Hz drive \
+         ({n_samples} samples at {sample_rate_hz} Hz); at least 2 whole periods are needed"
+    )]
+    TooFewPeriods {
+        /// Drive periods that fit.
+        periods: f64,
+        /// Drive frequency.
+        drive_freq_hz: f64,
+        /// Samples available for the window.
+        n_samples: usize,
+        /// Sample rate.
+        sample_rate_hz: f64,
+    },
+    /// An explicit window does not lie inside the record.
+    #[error(
+        "window start {start} + length {len} samples exceeds the record of {available} samples"
+    )]
+    WindowOutOfRange {
+        /// First sample of the window.
+        start: usize,
+        /// Window length in samples.
+        len: usize,
+        /// Record length in samples.
+        available: usize,
+    },
+    /// Too few impacts for the restitution estimator.
+    #[error("found {found} impacts; the estimator needs at least 3 (two gaps)")]
+    NotEnoughImpacts {
+        /// Impacts found.
+        found: usize,
+    },
+    /// Nothing in the force record looks like an impact.
+    #[error("no impacts: {reason}")]
+    NoImpacts {
+        /// Why the detector concluded so.
+        reason: String,
+    },
+    /// Impact times are not strictly increasing.
+    #[error(
+        "impact {index} at {time_s} s is not after impact {prev_index} at {prev_time_s} s: impact times must increase strictly"
+    )]
+    ImpactTimesNotIncreasing {
+        /// Index of the offending time.
+        index: usize,
+        /// Its value.
+        time_s: f64,
+        /// Index of the previous time.
+        prev_index: usize,
+        /// Previous value.
+        prev_time_s: f64,
+    },
+    /// A phase calibration table is unusable.
+    #[error("phase calibration: {reason}")]
+    InvalidCalibration {
+        /// What is wrong.
+        reason: String,
+    },
+    /// Reading or writing a file failed at the OS level.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: io::Error,
+    },
+    /// A JSON file (metadata, sidecar, calibration) did not parse.
+    #[error("{}: {source}", path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The parser's error, with line and column.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A CSV trace file is malformed.
+    #[error("{}: line {line}: {kind}", path.display())]
+    Csv {
+        /// The file.
+        path: PathBuf,
+        /// One-based line number (0 when the problem concerns the whole file).
+        line: usize,
+        /// What is wrong.
+        kind: CsvErrorKind,
+    },
+    /// A WAV trace file (or its sidecar) is malformed or inconsistent.
+    #[error("{}: {kind}", path.display())]
+    Wav {
+        /// The WAV file.
+        path: PathBuf,
+        /// What is wrong.
+        kind: WavErrorKind,
+    },
+    /// A plot could not be drawn.
+    #[error("{}: plot: {message}", path.display())]
+    Plot {
+        /// The SVG file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+/// What is wrong with a CSV trace file.
+#[derive(Debug, thiserror::Error)]
+pub enum CsvErrorKind {
+    /// No header and no data.
+    #[error("the file is empty (expected a header such as 'time [s],force [N]')")]
+    Empty,
+    /// The first column is not a time column.
+    #[error("first column is '{found}'; expected a time column 'time [s]' or 'time_s'")]
+    MissingTimeColumn {
+        /// The header cell found.
+        found: String,
+    },
+    /// Only a time column.
+    #[error("the header has no data columns after the time column")]
+    NoDataColumns,
+    /// A header cell cannot be used as a channel name.
+    #[error("column {column} header '{header}': {problem}")]
+    BadHeader {
+        /// One-based column number.
+        column: usize,
+        /// The header cell.
+        header: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// A row has the wrong number of cells.
+    #[error("row has {got} cells but the header has {expected} columns")]
+    Ragged {
+        /// Cells in the header.
+        expected: usize,
+        /// Cells in the row.
+        got: usize,
+    },
+    /// A cell is not a number.
+    #[error("column '{column}': '{text}' is not a number")]
+    NotANumber {
+        /// Column header.
+        column: String,
+        /// The cell text.
+        text: String,
+    },
+    /// A cell is NaN or infinite.
+    #[error("column '{column}': value {value} is not finite")]
+    NonFinite {
+        /// Column header.
+        column: String,
+        /// The value.
+        value: f64,
+    },
+    /// Fewer than two data rows.
+    #[error("{got} data rows; at least 2 are needed to define a sample rate")]
+    TooFewRows {
+        /// Rows found.
+        got: usize,
+    },
+    /// The time column is not uniformly spaced.
+    #[error(
+        "time {time_s} s deviates from the uniform grid (expected {expected_s} s, step {step_s} s, \
+         tolerance {rel_tol:e} of a step)"
+    )]
+    NonUniformTime {
+        /// Time read.
+        time_s: f64,
+        /// Time expected on the uniform grid.
+        expected_s: f64,
+        /// Sample period.
+        step_s: f64,
+        /// Relative tolerance used.
+        rel_tol: f64,
+    },
+    /// A `# key: value` comment has a bad value.
+    #[error("comment '{key}': {problem}")]
+    BadComment {
+        /// The key.
+        key: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// A channel name or unit cannot be written into a CSV header.
+    #[error(
+        "channel '{name}' unit '{unit}': names and units must not contain ',', '[', ']', '\"' or line breaks"
+    )]
+    Unwritable {
+        /// Channel name.
+        name: String,
+        /// Channel unit.
+        unit: String,
+    },
+}
+
+/// What is wrong with a WAV trace file or its JSON sidecar.
+#[derive(Debug, thiserror::Error)]
+pub enum WavErrorKind {
+    /// hound could not read or write the WAV.
+    #[error("WAV: {0}")]
+    Hound(#[from] hound::Error),
+    /// No sidecar next to the WAV.
+    #[error(
+        "no sidecar '{}' next to the WAV: channel names, units and full-scale values live \
+         there (a WAV stores only normalised samples); supply them with read_wav_with",
+        sidecar.display()
+    )]
+    SidecarMissing {
+        /// Where the sidecar was expected.
+        sidecar: PathBuf,
+    },
+    /// The sidecar is of another format or version.
+    #[error("sidecar: {problem}")]
+    BadSidecar {
+        /// What is wrong.
+        problem: String,
+    },
+    /// The sidecar's sample rate is not the WAV header's.
+    #[error("sidecar sample rate {sidecar_hz} Hz disagrees with the WAV header's {header_hz} Hz")]
+    SampleRateMismatch {
+        /// Rate in the sidecar.
+        sidecar_hz: f64,
+        /// Rate in the WAV header.
+        header_hz: u32,
+    },
+    /// The sidecar names a different number of channels than the WAV holds.
+    #[error("the sidecar describes {described} channels but the WAV holds {in_wav}")]
+    ChannelCountMismatch {
+        /// Channels described.
+        described: usize,
+        /// Channels in the WAV.
+        in_wav: usize,
+    },
+    /// The sidecar's sample count is not the WAV's.
+    #[error("the sidecar says {described} samples per channel but the WAV holds {in_wav}")]
+    LengthMismatch {
+        /// Samples described.
+        described: usize,
+        /// Samples in the WAV.
+        in_wav: usize,
+    },
+    /// A full-scale value is unusable.
+    #[error("channel '{channel}' full scale {full_scale}: {problem}")]
+    BadFullScale {
+        /// Channel.
+        channel: String,
+        /// The value.
+        full_scale: f64,
+        /// What is wrong.
+        problem: String,
+    },
+    /// The sample rate cannot be stored in a WAV header.
+    #[error(
+        "sample rate {sample_rate_hz} Hz: a WAV header holds a whole number of hertz in 1..=4294967295"
+    )]
+    RateNotWholeHertz {
+        /// The rate.
+        sample_rate_hz: f64,
+    },
+    /// Too many channels for a WAV file.
+    #[error("{channels} channels: a WAV file holds at most 65535")]
+    TooManyChannels {
+        /// Channels requested.
+        channels: usize,
+    },
+    /// Sample format not supported.
+    #[error("unsupported WAV sample format: {0}")]
+    UnsupportedFormat(String),
+}
+
+/// Checks that `value` is positive and finite; names the parameter otherwise.
+pub(crate) fn positive_finite(name: &'static str, value: f64, unit: &'static str) -> Result<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(SignalsError::InvalidParameter {
+            name,
+            value,
+            unit,
+            valid: "positive and finite".into(),
+        })
+    }
+}
+
+/// Checks that every sample is finite; names the input and index otherwise.
+pub(crate) fn all_finite(channel: &str, samples: &[f64]) -> Result<()> {
+    match samples.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(index) => Err(SignalsError::NonFiniteSample {
+            channel: channel.to_string(),
+            index,
+            value: samples[index],
+        }),
+    }
+}

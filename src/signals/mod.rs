@@ -1,0 +1,54 @@
+//! The lab's post-processing: traces, their files, and the measurements of
+//! thesis Chapter 7 — usable on real lab records alone.
+//!
+//! - [`trace`]: multichannel uniformly sampled records ([`Trace`]);
+//! - [`csv`], [`wav`]: trace files (CSV with units in the header; 32-bit float
+//!   WAV with a JSON sidecar);
+//! - [`spectrum`]: one-sided amplitude spectra (scaling convention stated there);
+//! - [`power`]: Yang's structure-independent dissipated power, eq. 7.8-7.12,
+//!   and the damping efficiency, eq. 7.7 / 6.10;
+//! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
+//! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
+//! - [`plot`]: small SVG plots;
+//! - [`bench`](mod@bench): a timing hook for `vlab bench`.
+//!
+//! SI units throughout. This module imports neither `dem` nor `rig`. Every
+//! file it writes goes through [`crate::atomic_write`].
+
+pub mod bench;
+pub mod calibration;
+pub mod csv;
+pub mod error;
+pub mod impacts;
+pub mod plot;
+pub mod power;
+pub mod spectrum;
+pub mod trace;
+pub mod wav;
+
+#[cfg(test)]
+mod testutil;
+
+pub use bench::{YangBenchReport, bench_yang_power};
+pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
+pub use csv::{read_csv, write_csv};
+pub use error::{CsvErrorKind, Result, SignalsError, WavErrorKind};
+pub use impacts::{
+    CorEstimate, DropTestResult, Impact, ImpactDetection, ImpactParams, Polarity, detect_impacts,
+    estimate_cor, restitution_from_impact_times,
+};
+pub use plot::{Series, SeriesStyle, plot_xy_svg};
+pub use power::{
+    BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,
+    WindowPlan, YangPower, efficiency, max_energy_per_cycle_j, mean_power_time_domain, plan_window,
+    wrap_phase_rad, yang_power, yang_power_of_trace,
+};
+pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
+pub use trace::{Channel, Sensitivity, Trace, TraceMetadata};
+pub use wav::{
+    WavChannelInfo, WavSidecar, read_wav, read_wav_with, sidecar_path, write_wav,
+    write_wav_with_full_scale,
+};
+
+/// Standard gravity, 9.806 65 m/s^2 (a convenience; pass your local g where it matters).
+pub const STANDARD_GRAVITY_MPS2: f64 = 9.806_65;
