@@ -1,5 +1,10 @@
-//! The `vlab` command line.
+//! The `vlab` command line: a virtual granular-damper laboratory.
+//!
+//! Library errors are typed; here they gain context and are printed as one line
+//! (`error: <what> : <why>`), and the process exits non-zero.
 
-fn main() {
-    println!("vlab {}", env!("CARGO_PKG_VERSION"));
+mod cli;
+
+fn main() -> std::process::ExitCode {
+    cli::main()
 }

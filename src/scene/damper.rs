@@ -180,13 +180,15 @@ pub fn settle_bed(
     }
     let (pp, pw) = contact_laws(scene);
     let g = scene.simulation.gravity_mps2;
+    let mut numerics = Numerics::with_dt(dt_s);
+    numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
     let mut world = World::new(
         particles,
         Walls::closed_cylinder(cyl_r, column),
         pp,
         pw,
         gravity_vector(Orientation::Vertical, g),
-        Numerics::with_dt(dt_s),
+        numerics,
     )?;
 
     // Pour: axis vertical, until the bed is at rest (at least the fall time).

@@ -144,6 +144,14 @@ pub struct SimulationSpec {
     pub settle_s: f64,
     pub gravity_mps2: f64,
     pub seed: u64,
+    /// The pair loop is split across threads from this many listed pairs on
+    /// (results are bit-identical either way; below it one core is faster).
+    #[serde(default = "default_parallel_min_pairs")]
+    pub parallel_min_pairs: usize,
+}
+
+fn default_parallel_min_pairs() -> usize {
+    crate::dem::Numerics::with_dt(1.0).parallel_min_pairs
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

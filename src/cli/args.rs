@@ -1,0 +1,129 @@
+//! Parsers for command-line values that state their unit and valid range when
+//! they refuse something.
+
+/// A positive, finite number.
+fn positive(s: &str, unit: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number ({unit})"))?;
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("must be positive and finite ({unit})"))
+    }
+}
+
+/// Frequency in Hz, positive and finite.
+pub fn freq_hz(s: &str) -> Result<f64, String> {
+    positive(s, "Hz")
+}
+
+/// Dimensionless acceleration amplitude Γ, positive and finite.
+pub fn gamma(s: &str) -> Result<f64, String> {
+    positive(s, "dimensionless, peak acceleration / g")
+}
+
+/// A length in metres, positive and finite.
+pub fn metres(s: &str) -> Result<f64, String> {
+    positive(s, "m")
+}
+
+/// A time in seconds, positive and finite.
+pub fn seconds(s: &str) -> Result<f64, String> {
+    positive(s, "s")
+}
+
+/// A speed in m/s, positive and finite.
+pub fn speed_mps(s: &str) -> Result<f64, String> {
+    positive(s, "m/s")
+}
+
+/// A pressure or modulus in Pa, positive and finite.
+pub fn pascals(s: &str) -> Result<f64, String> {
+    positive(s, "Pa")
+}
+
+/// A density in kg/m³, positive and finite.
+pub fn density(s: &str) -> Result<f64, String> {
+    positive(s, "kg/m^3")
+}
+
+/// Coefficient of restitution in (0, 1].
+pub fn restitution(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err("the coefficient of restitution must lie in (0, 1] (dimensionless)".into())
+    }
+}
+
+/// Coefficient of friction, ≥ 0 and finite.
+pub fn friction(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v >= 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err("the coefficient of friction must be >= 0 and finite (dimensionless)".into())
+    }
+}
+
+/// Poisson's ratio in (-1, 0.5).
+pub fn poisson(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v > -1.0 && v < 0.5 {
+        Ok(v)
+    } else {
+        Err("Poisson's ratio must lie in (-1, 0.5) (dimensionless)".into())
+    }
+}
+
+/// A finite number (any sign).
+pub fn finite(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err("must be finite".into())
+    }
+}
+
+/// At least one thread.
+pub fn threads(s: &str) -> Result<usize, String> {
+    let v: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a whole number of threads"))?;
+    if v >= 1 {
+        Ok(v)
+    } else {
+        Err("must be at least 1 thread".into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_state_unit_and_range() {
+        assert!(freq_hz("-3").unwrap_err().contains("Hz"));
+        assert!(freq_hz("nan").unwrap_err().contains("positive and finite"));
+        assert!(freq_hz("abc").unwrap_err().contains("not a number"));
+        assert!(restitution("1.2").unwrap_err().contains("(0, 1]"));
+        assert!(friction("-0.1").unwrap_err().contains(">= 0"));
+    }
+}

@@ -1,0 +1,74 @@
+//! Progress of long runs on standard error: a line rewritten in place on a
+//! terminal, an occasional line otherwise, nothing with `--quiet`.
+
+use std::io::{IsTerminal, Write};
+use std::time::Instant;
+
+use vlab::scene::damper::Progress;
+
+/// Throttled progress printer.
+pub struct ProgressLine {
+    enabled: bool,
+    terminal: bool,
+    last: Option<Instant>,
+    label: String,
+}
+
+impl ProgressLine {
+    /// A printer labelled `label`; silent when `quiet`.
+    pub fn new(label: &str, quiet: bool) -> Self {
+        ProgressLine {
+            enabled: !quiet,
+            terminal: std::io::stderr().is_terminal(),
+            last: None,
+            label: label.to_string(),
+        }
+    }
+
+    /// Shows `p` if enough time passed since the last line.
+    pub fn update(&mut self, p: Progress) {
+        if !self.enabled {
+            return;
+        }
+        let every = if self.terminal { 0.25 } else { 5.0 };
+        if self.last.is_some_and(|t| t.elapsed().as_secs_f64() < every) {
+            return;
+        }
+        self.last = Some(Instant::now());
+        let rate = if p.wall_time_s > 0.0 {
+            p.particle_steps as f64 / p.wall_time_s / 1e6
+        } else {
+            0.0
+        };
+        let line = format!(
+            "{}: {} {:5.1} %  t = {:.4} s simulated  {:.1} M particle-steps/s",
+            self.label,
+            p.phase,
+            100.0 * p.fraction.min(1.0),
+            p.sim_time_s,
+            rate
+        );
+        let mut err = std::io::stderr().lock();
+        if self.terminal {
+            let _ = write!(err, "\r\x1b[2K{line}");
+        } else {
+            let _ = writeln!(err, "{line}");
+        }
+        let _ = err.flush();
+    }
+
+    /// Ends the progress display (clears the in-place line).
+    pub fn finish(&mut self) {
+        if self.enabled && self.terminal && self.last.is_some() {
+            let _ = write!(std::io::stderr(), "\r\x1b[2K");
+        }
+    }
+
+    /// A note on standard error, unless quiet.
+    pub fn note(&mut self, text: &str) {
+        if self.enabled {
+            self.finish();
+            eprintln!("{text}");
+        }
+    }
+}

@@ -1,0 +1,87 @@
+//! `vlab scene`: what the built-in scene (or a scene file over it) contains, and
+//! the figures that follow from it.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+
+use vlab::dem::restitution::realised_restitution;
+use vlab::scene::damper::contact_laws;
+use vlab::scene::file::{Scene, THESIS_DAMPER_TOML};
+
+#[derive(Debug, Clone, Args)]
+pub struct SceneArgs {
+    /// Scene file (TOML) merged over the built-in thesis scene.
+    #[arg(long, value_name = "FILE")]
+    scene: Option<PathBuf>,
+    /// Print the scene as TOML (the annotated preset when no --scene is given).
+    #[arg(long)]
+    print: bool,
+}
+
+pub fn run(a: SceneArgs) -> Result<()> {
+    let scene = match &a.scene {
+        Some(path) => Scene::load_over_preset(path)?,
+        None => Scene::thesis(),
+    };
+    if a.print {
+        if a.scene.is_none() {
+            print!("{THESIS_DAMPER_TOML}");
+        } else {
+            print!("{}", scene.to_toml());
+        }
+        return Ok(());
+    }
+    let (pp, pw) = contact_laws(&scene);
+    let p = &scene.particles;
+    let e = &scene.enclosure;
+    println!("scene \"{}\"", scene.name);
+    println!(
+        "  particles        {} spheres of {} mm, {:.4} kg in all",
+        p.count,
+        p.diameter_m * 1e3,
+        scene.particle_mass_kg()
+    );
+    println!(
+        "  enclosure        {} mm x {} mm closed cylinder, {}; fill ratio {:.3} (eq. 6.1; at most {} particles fit)",
+        e.inner_diameter_m * 1e3,
+        e.inner_length_m * 1e3,
+        e.orientation.as_str(),
+        scene.fill_ratio(),
+        scene.max_particles()
+    );
+    for (name, law) in [("particle-particle", pp), ("particle-wall", pw)] {
+        println!(
+            "  {name:18} e = {}, mu = {}, E* = {:.3e} Pa, G* = {:.3e} Pa, damping factor {:.4} ({} mode: realised e = {:.4})",
+            law.restitution,
+            law.friction,
+            law.e_star_pa,
+            law.g_star_pa,
+            law.damping_factor,
+            match scene.contact.restitution_mode {
+                vlab::dem::RestitutionMode::Exact => "exact",
+                vlab::dem::RestitutionMode::Thesis => "thesis",
+            },
+            realised_restitution(law.damping_factor)
+        );
+    }
+    println!(
+        "  time step        {:.3e} s; Rayleigh limit {:.3e} s (eq. 3.31)",
+        scene.dt_s(),
+        scene.rayleigh_limit_s()
+    );
+    if let Some((vpp, vpw)) = scene.yield_velocities_mps() {
+        println!(
+            "  yield velocity   {vpp:.3} m/s particle-particle, {vpw:.3} m/s particle-wall (eq. 5.26)"
+        );
+    }
+    println!(
+        "  run              settle up to {} s, then {} cycles with the last {} as steady state; seed {}",
+        scene.simulation.settle_s,
+        scene.drive.cycles,
+        scene.drive.steady_cycles,
+        scene.simulation.seed
+    );
+    Ok(())
+}

@@ -1,0 +1,406 @@
+//! `vlab shake`: drive the damper at one frequency and amplitude and write what
+//! the simulator knows, the DEM truth (`summary.json`, `kinematics.csv`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use serde::Serialize;
+
+use vlab::atomic_write::write_bytes_atomic;
+use vlab::dem::{Dissipation, LedgerBalance};
+use vlab::scene::damper::{DriveOutcome, DrivePlan, SineDrive, run_drive, settle_bed};
+use vlab::scene::file::{Orientation, Scene};
+use vlab::scene::record::{TruthRecorder, TruthSamples};
+use vlab::signals::{Trace, TraceMetadata, write_csv};
+
+use super::args;
+use super::progress::ProgressLine;
+
+/// Sample rate of the truth record (Hz), the thesis DAQ's.
+pub const TRUTH_SAMPLE_RATE_HZ: f64 = 40_000.0;
+
+#[derive(Debug, Clone, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct ShakeArgs {
+    /// Drive frequency (Hz).
+    #[arg(long = "freq", value_name = "HZ", default_value = "40", value_parser = args::freq_hz)]
+    pub freq_hz: f64,
+    /// Acceleration amplitude Γ: peak enclosure acceleration / g (dimensionless).
+    #[arg(long, default_value = "20", value_parser = args::gamma)]
+    pub gamma: f64,
+    #[command(flatten)]
+    pub scene: SceneOverrides,
+    /// Output folder [default: signals/<scene>-<freq>Hz-G<gamma>].
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print the summary as JSON on standard output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Scene options shared by the commands that run the damper.
+#[derive(Debug, Clone, Args)]
+pub struct SceneOverrides {
+    /// Scene file (TOML) merged over the built-in thesis scene.
+    #[arg(long, value_name = "FILE")]
+    pub scene: Option<PathBuf>,
+    /// Drive cycles in all [scene default: 8].
+    #[arg(long)]
+    pub cycles: Option<u32>,
+    /// Last cycles kept as the steady state [scene default: 5].
+    #[arg(long)]
+    pub steady_cycles: Option<u32>,
+    /// Gravity relative to the drive axis [scene default: vertical].
+    #[arg(long, value_enum)]
+    pub orientation: Option<Orientation>,
+    /// Seed of the random fill [scene default: 1].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Time step (s) [scene default: 1e-6]; at most the Rayleigh limit.
+    #[arg(long = "dt-s", value_name = "S", value_parser = args::seconds)]
+    pub dt_s: Option<f64>,
+}
+
+impl SceneOverrides {
+    /// The scene (built-in or file) with the command-line overrides applied and
+    /// everything validated; the messages name the flag or key at fault.
+    pub fn resolve(&self) -> Result<Scene> {
+        let mut scene = match &self.scene {
+            Some(path) => Scene::load_over_preset(path)?,
+            None => Scene::thesis(),
+        };
+        if let Some(c) = self.cycles {
+            if c == 0 {
+                bail!("--cycles 0 is invalid: must be at least 1 drive cycle");
+            }
+            scene.drive.cycles = c;
+        }
+        if let Some(s) = self.steady_cycles {
+            scene.drive.steady_cycles = s;
+        }
+        let (cycles, steady) = (scene.drive.cycles, scene.drive.steady_cycles);
+        if steady == 0 || steady > cycles {
+            bail!("--steady-cycles {steady} is invalid: must lie in [1, --cycles = {cycles}]");
+        }
+        if let Some(o) = self.orientation {
+            scene.enclosure.orientation = o;
+        }
+        if let Some(seed) = self.seed {
+            scene.simulation.seed = seed;
+        }
+        if let Some(dt) = self.dt_s {
+            let limit = scene.rayleigh_limit_s();
+            if dt > limit {
+                bail!(
+                    "--dt-s {dt:.3e} is above the stability limit {limit:.3e} s (Rayleigh estimate, thesis eq. 3.31, for {} m {} spheres): use at most {limit:.3e} s",
+                    scene.particles.diameter_m,
+                    particle_material_name(&scene)
+                );
+            }
+            scene.simulation.dt_s = vlab::scene::file::TimeStepSpec::Seconds(dt);
+        }
+        scene.validate().map_err(anyhow::Error::msg)?;
+        Ok(scene)
+    }
+}
+
+fn particle_material_name(scene: &Scene) -> String {
+    match &scene.particles.material {
+        vlab::scene::file::MaterialSpec::Named(n) => n.clone(),
+        vlab::scene::file::MaterialSpec::Inline(_) => "custom".into(),
+    }
+}
+
+/// Checks that a drive can be resolved by the scene's time step.
+pub fn check_drive(scene: &Scene, freq_hz: f64) -> Result<()> {
+    let dt = scene.dt_s();
+    let period = 1.0 / freq_hz;
+    if period < 200.0 * dt {
+        bail!(
+            "--freq {freq_hz} Hz is too high for the time step {dt:.3e} s: a cycle would take fewer than 200 steps (at most {:.0} Hz)",
+            1.0 / (200.0 * dt)
+        );
+    }
+    if period < 4.0 / TRUTH_SAMPLE_RATE_HZ {
+        bail!(
+            "--freq {freq_hz} Hz is too high for the {TRUTH_SAMPLE_RATE_HZ} Hz record: at most {} Hz",
+            TRUTH_SAMPLE_RATE_HZ / 4.0
+        );
+    }
+    Ok(())
+}
+
+/// Short text for a number in a folder name: 40 → "40", 2.5 → "2.5".
+pub fn compact(x: f64) -> String {
+    format!("{x}")
+}
+
+#[derive(Debug, Serialize)]
+pub struct YieldVelocities {
+    pub particle_particle_mps: f64,
+    pub particle_wall_mps: f64,
+}
+
+/// What the DEM knows: thesis eq. 6.3–6.10.
+#[derive(Debug, Serialize)]
+pub struct DemTruth {
+    /// Dissipated energy per cycle, averaged over the steady cycles (J), eq. 6.9.
+    pub energy_per_cycle_j: f64,
+    /// Maximum dissipated energy per cycle 4 (Γ g / ω)² M (J), eq. 6.10.
+    pub e_max_j: f64,
+    /// `energy_per_cycle_j / e_max_j`, eq. 6.8.
+    pub efficiency: f64,
+    /// Energy dissipated over the steady cycles, by source (J).
+    pub dissipated_j: Dissipation,
+    /// The same per cycle (J); sums to `energy_per_cycle_j`.
+    pub dissipated_per_cycle_j: Dissipation,
+    /// |ledger residual| / dissipated energy over the whole drive.
+    pub ledger_residual_rel: f64,
+    /// Energy balance of the whole drive (J).
+    pub ledger: LedgerBalance,
+    /// Energy balance of the steady cycles (J).
+    pub steady_ledger: LedgerBalance,
+    /// Largest particle speed seen at a cycle boundary (m/s).
+    pub largest_particle_speed_mps: f64,
+    /// Yield velocities of eq. 5.26, when the material has a yield strength.
+    pub yield_velocity: Option<YieldVelocities>,
+}
+
+impl DemTruth {
+    pub fn new(out: &DriveOutcome, scene: &Scene) -> Self {
+        DemTruth {
+            energy_per_cycle_j: out.energy_per_cycle_j,
+            e_max_j: out.e_max_j,
+            efficiency: out.efficiency,
+            dissipated_j: out.steady.dissipated,
+            dissipated_per_cycle_j: out.dissipated_per_cycle,
+            ledger_residual_rel: out.whole.residual_relative(),
+            ledger: out.whole,
+            steady_ledger: out.steady,
+            largest_particle_speed_mps: out.largest_speed_mps,
+            yield_velocity: scene
+                .yield_velocities_mps()
+                .map(|(pp, pw)| YieldVelocities {
+                    particle_particle_mps: pp,
+                    particle_wall_mps: pw,
+                }),
+        }
+    }
+}
+
+#[derive(Debug, Serialize)]
+pub struct ShakeSummary {
+    pub vlab_version: &'static str,
+    pub scene: String,
+    pub freq_hz: f64,
+    pub gamma: f64,
+    pub orientation: &'static str,
+    pub n_particles: usize,
+    pub particle_mass_kg: f64,
+    pub fill_ratio: f64,
+    pub seed: u64,
+    pub dt_s: f64,
+    pub cycles: u32,
+    pub steady_cycles: u32,
+    /// Drive steps.
+    pub steps: u64,
+    /// Simulated time spent pouring and settling before the drive (s).
+    pub settle_time_s: f64,
+    /// Start of the steady window from the drive start (s).
+    pub steady_start_s: f64,
+    pub sample_rate_hz: f64,
+    /// Wall-clock time of the drive's stepping loop (s).
+    pub wall_time_s: f64,
+    /// Particles × drive steps / `wall_time_s`.
+    pub particle_steps_per_s: f64,
+    /// Wall-clock time of pouring and settling (s).
+    pub settle_wall_time_s: f64,
+    pub threads: usize,
+    pub dem: DemTruth,
+    pub files: Vec<String>,
+}
+
+/// Runs the command.
+pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
+    let scene = a.scene.resolve()?;
+    check_drive(&scene, a.freq_hz)?;
+    let out_dir = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from("signals").join(format!(
+            "{}-{}Hz-G{}",
+            scene.name,
+            compact(a.freq_hz),
+            compact(a.gamma)
+        ))
+    });
+    let made = OutputDir::prepare(&out_dir)?;
+    let mut progress = ProgressLine::new("shake", quiet);
+    let result = simulate(&scene, a.freq_hz, a.gamma, &mut progress);
+    progress.finish();
+    let (summary, samples) = made.keep_if_ok(result)?;
+    write_outputs(&out_dir, summary, &samples, a.json)
+}
+
+/// An output folder made before a long run, so that an unwritable path fails
+/// at once; removed again if the run fails before anything is written into it.
+pub struct OutputDir {
+    path: PathBuf,
+    created: bool,
+}
+
+impl OutputDir {
+    pub fn prepare(path: &Path) -> Result<Self> {
+        if path.is_file() {
+            bail!("--out {} is a file, not a folder", path.display());
+        }
+        let created = !path.exists();
+        std::fs::create_dir_all(path)
+            .with_context(|| format!("cannot create output folder {}", path.display()))?;
+        Ok(OutputDir {
+            path: path.to_path_buf(),
+            created,
+        })
+    }
+
+    /// Passes `result` through; on error removes the folder if this run made it
+    /// and it is still empty.
+    pub fn keep_if_ok<T>(&self, result: Result<T>) -> Result<T> {
+        if result.is_err() && self.created {
+            let _ = std::fs::remove_dir(&self.path);
+        }
+        result
+    }
+}
+
+/// Pours, settles and drives; returns the summary and the truth record.
+pub fn simulate(
+    scene: &Scene,
+    freq_hz: f64,
+    gamma: f64,
+    progress: &mut ProgressLine,
+) -> Result<(ShakeSummary, TruthSamples)> {
+    let dt = scene.dt_s();
+    let bed = settle_bed(scene, dt, &mut |p| progress.update(p))
+        .context("preparing the particle bed")?;
+    let mut world = bed.world;
+    let g = scene.simulation.gravity_mps2;
+    let plan = DrivePlan {
+        freq_hz,
+        gamma,
+        gravity_mps2: g,
+        cycles: scene.drive.cycles,
+        steady_cycles: scene.drive.steady_cycles,
+    };
+    let mut drive = SineDrive::new(freq_hz, gamma, g);
+    let mut recorder = TruthRecorder::new(TRUTH_SAMPLE_RATE_HZ, 0.0);
+    let outcome = run_drive(
+        &mut world,
+        &plan,
+        &mut drive,
+        &mut recorder,
+        &mut |p| progress.update(p),
+    )
+    .context("driving the damper")?;
+    let n = world.particles.len();
+    let summary = ShakeSummary {
+        vlab_version: env!("CARGO_PKG_VERSION"),
+        scene: scene.name.clone(),
+        freq_hz,
+        gamma,
+        orientation: scene.enclosure.orientation.as_str(),
+        n_particles: n,
+        particle_mass_kg: world.particles.total_mass_kg(),
+        fill_ratio: scene.fill_ratio(),
+        seed: scene.simulation.seed,
+        dt_s: dt,
+        cycles: plan.cycles,
+        steady_cycles: plan.steady_cycles,
+        steps: outcome.steps,
+        settle_time_s: bed.settle_time_s,
+        steady_start_s: outcome.steady_start_s,
+        sample_rate_hz: TRUTH_SAMPLE_RATE_HZ,
+        wall_time_s: outcome.wall_time_s,
+        particle_steps_per_s: (n as u64 * outcome.steps) as f64 / outcome.wall_time_s,
+        settle_wall_time_s: bed.wall_time_s,
+        threads: rayon::current_num_threads(),
+        dem: DemTruth::new(&outcome, scene),
+        files: vec!["summary.json".into(), "kinematics.csv".into()],
+    };
+    Ok((summary, recorder.into_samples()))
+}
+
+/// The truth record as a trace.
+pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Trace> {
+    let start = samples.time_s.first().copied().unwrap_or(0.0);
+    let mut trace = Trace::new(TRUTH_SAMPLE_RATE_HZ, start)?;
+    trace.metadata = TraceMetadata {
+        source: format!("vlab {} shake: DEM truth", summary.vlab_version),
+        rig: "none (DEM truth, no sensors)".into(),
+        drive_freq_hz: Some(summary.freq_hz),
+        gamma: Some(summary.gamma),
+        ..Default::default()
+    };
+    let columns: [(&str, &str, &Vec<f64>); 6] = [
+        ("enclosure_displacement", "m", &samples.displacement_m),
+        ("enclosure_velocity", "m/s", &samples.velocity_mps),
+        ("enclosure_acceleration", "m/s^2", &samples.acceleration_mps2),
+        ("particle_force_axial", "N", &samples.force_axial_n),
+        ("particle_force_x", "N", &samples.force_x_n),
+        ("particle_force_y", "N", &samples.force_y_n),
+    ];
+    for (name, unit, data) in columns {
+        trace.add_channel(name, unit, data.clone())?;
+    }
+    Ok(trace)
+}
+
+fn write_outputs(dir: &Path, summary: ShakeSummary, samples: &TruthSamples, json: bool) -> Result<()> {
+    let trace = truth_trace(samples, &summary)?;
+    write_csv(&dir.join("kinematics.csv"), &trace)
+        .with_context(|| format!("writing {}", dir.join("kinematics.csv").display()))?;
+    let text = serde_json::to_string_pretty(&summary)? + "\n";
+    write_bytes_atomic(&dir.join("summary.json"), text.as_bytes())
+        .with_context(|| format!("writing {}", dir.join("summary.json").display()))?;
+    if json {
+        print!("{text}");
+    } else {
+        print_summary(&summary, dir);
+    }
+    Ok(())
+}
+
+fn print_summary(s: &ShakeSummary, dir: &Path) {
+    let d = &s.dem;
+    let pc = &d.dissipated_per_cycle_j;
+    let total = pc.total().max(f64::MIN_POSITIVE);
+    println!(
+        "{} damper, {} Hz, Gamma {}, {}: {} particles ({:.4} kg, fill {:.3}), dt {:.1e} s, seed {}",
+        s.scene, s.freq_hz, s.gamma, s.orientation, s.n_particles, s.particle_mass_kg, s.fill_ratio, s.dt_s, s.seed
+    );
+    println!(
+        "  energy dissipated per cycle  {:.4e} J   (last {} of {} cycles)",
+        d.energy_per_cycle_j, s.steady_cycles, s.cycles
+    );
+    println!("  E_max = 4 (Gamma g / w)^2 M  {:.4e} J", d.e_max_j);
+    println!("  damping efficiency           {:.3}", d.efficiency);
+    println!(
+        "  by source: particle-particle normal {:.1} %, tangential {:.1} %; particle-wall normal {:.1} %, tangential {:.1} %",
+        100.0 * pc.pp_normal / total,
+        100.0 * pc.pp_tangential / total,
+        100.0 * pc.pw_normal / total,
+        100.0 * pc.pw_tangential / total
+    );
+    println!(
+        "  energy ledger residual       {:.1e} of the dissipated energy",
+        d.ledger_residual_rel
+    );
+    println!(
+        "  speed {:.2} M particle-steps/s ({} thread{}), drive {:.1} s, settling {:.1} s",
+        s.particle_steps_per_s / 1e6,
+        s.threads,
+        if s.threads == 1 { "" } else { "s" },
+        s.wall_time_s,
+        s.settle_wall_time_s
+    );
+    println!("  wrote {}", dir.display());
+}
