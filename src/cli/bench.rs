@@ -54,7 +54,9 @@ struct BenchReport {
 }
 
 pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
     let scene = Scene::thesis();
     let mut progress = ProgressLine::new("bench", quiet);
     let mut rows = Vec::new();
@@ -96,7 +98,11 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
         };
         let mut drive = SineDrive::new(plan.freq_hz, plan.gamma, plan.gravity_mps2);
         let out = pool
-            .install(|| run_drive(&mut world, &plan, &mut drive, &mut NoObserver, &mut |p| progress.update(p)))
+            .install(|| {
+                run_drive(&mut world, &plan, &mut drive, &mut NoObserver, &mut |p| {
+                    progress.update(p)
+                })
+            })
             .context("driving the thesis bed")?;
         rows.push(BenchRow {
             case: if force_parallel {
@@ -123,7 +129,10 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     if let Some(path) = &a.out {
         write_atomic(path, |w| {
             use std::io::Write;
-            writeln!(w, "case [],threads [],particles [],steps [],wall [s],particle_steps_per_s [1/s]")?;
+            writeln!(
+                w,
+                "case [],threads [],particles [],steps [],wall [s],particle_steps_per_s [1/s]"
+            )?;
             for r in &report.rows {
                 writeln!(
                     w,
@@ -138,7 +147,12 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        println!("thesis scene, {} particles, dt {:.1e} s, {} cores", n, scene.dt_s(), cores);
+        println!(
+            "thesis scene, {} particles, dt {:.1e} s, {} cores",
+            n,
+            scene.dt_s(),
+            cores
+        );
         for r in &report.rows {
             println!(
                 "  {:55} {} thread{:1}  {:6.2} M particle-steps/s  ({} steps, {:.2} s)",

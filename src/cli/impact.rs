@@ -189,6 +189,14 @@ pub fn run(a: ImpactArgs) -> Result<()> {
         if path.is_dir() {
             bail!("--trace {} is a folder, not a file", path.display());
         }
+        let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+        if let Some(folder) = parent.filter(|p| !p.is_dir()) {
+            bail!(
+                "--trace {}: folder {} does not exist",
+                path.display(),
+                folder.display()
+            );
+        }
     }
     let out = run_impact(&setup).context("simulating the collision")?;
     if let Some(path) = &a.trace {
@@ -242,7 +250,7 @@ fn write_trace(path: &std::path::Path, out: &ImpactOutcome, setup: &ImpactSetup)
     trace.add_channel("overlap", "m", column(|s| s.overlap_m))?;
     trace.add_channel("normal_force", "N", column(|s| s.normal_force_n))?;
     trace.add_channel("tangential_force", "N", column(|s| s.tangential_force_n))?;
-    write_csv(path, &trace).with_context(|| format!("writing {}", path.display()))
+    Ok(write_csv(path, &trace)?)
 }
 
 fn print_report(r: &ImpactReport, a: &ImpactArgs) {

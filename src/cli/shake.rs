@@ -280,8 +280,8 @@ pub fn simulate(
     progress: &mut ProgressLine,
 ) -> Result<(ShakeSummary, TruthSamples)> {
     let dt = scene.dt_s();
-    let bed = settle_bed(scene, dt, &mut |p| progress.update(p))
-        .context("preparing the particle bed")?;
+    let bed =
+        settle_bed(scene, dt, &mut |p| progress.update(p)).context("preparing the particle bed")?;
     let mut world = bed.world;
     let g = scene.simulation.gravity_mps2;
     let plan = DrivePlan {
@@ -293,13 +293,9 @@ pub fn simulate(
     };
     let mut drive = SineDrive::new(freq_hz, gamma, g);
     let mut recorder = TruthRecorder::new(TRUTH_SAMPLE_RATE_HZ, 0.0);
-    let outcome = run_drive(
-        &mut world,
-        &plan,
-        &mut drive,
-        &mut recorder,
-        &mut |p| progress.update(p),
-    )
+    let outcome = run_drive(&mut world, &plan, &mut drive, &mut recorder, &mut |p| {
+        progress.update(p)
+    })
     .context("driving the damper")?;
     let n = world.particles.len();
     let summary = ShakeSummary {
@@ -343,7 +339,11 @@ pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Tra
     let columns: [(&str, &str, &Vec<f64>); 6] = [
         ("enclosure_displacement", "m", &samples.displacement_m),
         ("enclosure_velocity", "m/s", &samples.velocity_mps),
-        ("enclosure_acceleration", "m/s^2", &samples.acceleration_mps2),
+        (
+            "enclosure_acceleration",
+            "m/s^2",
+            &samples.acceleration_mps2,
+        ),
         ("particle_force_axial", "N", &samples.force_axial_n),
         ("particle_force_x", "N", &samples.force_x_n),
         ("particle_force_y", "N", &samples.force_y_n),
@@ -354,10 +354,14 @@ pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Tra
     Ok(trace)
 }
 
-fn write_outputs(dir: &Path, summary: ShakeSummary, samples: &TruthSamples, json: bool) -> Result<()> {
+fn write_outputs(
+    dir: &Path,
+    summary: ShakeSummary,
+    samples: &TruthSamples,
+    json: bool,
+) -> Result<()> {
     let trace = truth_trace(samples, &summary)?;
-    write_csv(&dir.join("kinematics.csv"), &trace)
-        .with_context(|| format!("writing {}", dir.join("kinematics.csv").display()))?;
+    write_csv(&dir.join("kinematics.csv"), &trace)?;
     let text = serde_json::to_string_pretty(&summary)? + "\n";
     write_bytes_atomic(&dir.join("summary.json"), text.as_bytes())
         .with_context(|| format!("writing {}", dir.join("summary.json").display()))?;
@@ -375,7 +379,15 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
     let total = pc.total().max(f64::MIN_POSITIVE);
     println!(
         "{} damper, {} Hz, Gamma {}, {}: {} particles ({:.4} kg, fill {:.3}), dt {:.1e} s, seed {}",
-        s.scene, s.freq_hz, s.gamma, s.orientation, s.n_particles, s.particle_mass_kg, s.fill_ratio, s.dt_s, s.seed
+        s.scene,
+        s.freq_hz,
+        s.gamma,
+        s.orientation,
+        s.n_particles,
+        s.particle_mass_kg,
+        s.fill_ratio,
+        s.dt_s,
+        s.seed
     );
     println!(
         "  energy dissipated per cycle  {:.4e} J   (last {} of {} cycles)",

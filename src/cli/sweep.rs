@@ -30,7 +30,12 @@ pub struct SweepArgs {
     #[arg(long, value_name = "LIST", required = true, value_delimiter = ',', value_parser = args::gamma)]
     gammas: Vec<f64>,
     /// Seeds of the random fill, comma-separated.
-    #[arg(long, value_name = "LIST", default_value = "1,2,3", value_delimiter = ',')]
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = "1,2,3",
+        value_delimiter = ','
+    )]
     seeds: Vec<u64>,
     #[command(flatten)]
     scene: SceneOverrides,
@@ -136,7 +141,13 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
-fn drive_once(scene: &Scene, bed: &SettledBed, seed: u64, freq_hz: f64, gamma: f64) -> Result<SweepRow> {
+fn drive_once(
+    scene: &Scene,
+    bed: &SettledBed,
+    seed: u64,
+    freq_hz: f64,
+    gamma: f64,
+) -> Result<SweepRow> {
     let mut world = bed.world.clone();
     let g = scene.simulation.gravity_mps2;
     let plan = DrivePlan {
@@ -168,7 +179,11 @@ fn statistics(gammas: &[f64], rows: &[SweepRow]) -> Vec<GammaStats> {
     gammas
         .iter()
         .map(|&g| {
-            let e: Vec<f64> = rows.iter().filter(|r| r.gamma == g).map(|r| r.efficiency).collect();
+            let e: Vec<f64> = rows
+                .iter()
+                .filter(|r| r.gamma == g)
+                .map(|r| r.efficiency)
+                .collect();
             let n = e.len() as f64;
             let mean = e.iter().sum::<f64>() / n;
             let var = if e.len() > 1 {
@@ -234,10 +249,13 @@ fn write_results(
     let svg = dir.join("efficiency.svg");
     plot_xy_svg(
         &svg,
-        &format!("{} damper, {} Hz: damping efficiency (eq. 6.8)", scene.name, freq_hz),
+        &format!(
+            "{} damper, {} Hz: damping efficiency (eq. 6.8)",
+            scene.name, freq_hz
+        ),
         "Gamma (peak acceleration / g)",
         "efficiency",
         &series,
-    )
-    .with_context(|| format!("writing {}", svg.display()))
+    )?;
+    Ok(())
 }

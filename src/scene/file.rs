@@ -27,7 +27,7 @@ pub const MAX_FILL: f64 = 0.64;
 /// Errors of scene files and scene runs.
 #[derive(Debug, Error)]
 pub enum SceneError {
-    #[error("cannot read scene file {path}: {source}")]
+    #[error("cannot read scene file {path}")]
     Read {
         path: String,
         source: std::io::Error,
@@ -184,14 +184,19 @@ impl Scene {
 
     /// Parses and validates a complete scene from TOML text.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
-        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse {
-            path: origin.to_string(),
-            message: e.to_string(),
-        })?;
-        scene.validate().map_err(|message| SceneError::Parse {
+        Scene::parse(text, origin, true)
+    }
+
+    /// Parses and validates; `own_text` says whether error positions in `text`
+    /// mean anything to the user (not in a scene merged from several sources).
+    fn parse(text: &str, origin: &str, own_text: bool) -> Result<Scene, SceneError> {
+        let error = |message| SceneError::Parse {
             path: origin.to_string(),
             message,
-        })?;
+        };
+        let scene: Scene =
+            toml::from_str(text).map_err(|e| error(one_line(&e, own_text.then_some(text))))?;
+        scene.validate().map_err(error)?;
         Ok(scene)
     }
 
@@ -208,9 +213,9 @@ impl Scene {
     /// Merges TOML `text` over the thesis preset and validates the result.
     pub fn merge_over_preset(text: &str, origin: &str) -> Result<Scene, SceneError> {
         let parse = |t: &str, o: &str| -> Result<toml::Table, SceneError> {
-            t.parse::<toml::Table>().map_err(|e| SceneError::Parse {
+            toml::from_str::<toml::Table>(t).map_err(|e| SceneError::Parse {
                 path: o.to_string(),
-                message: e.to_string(),
+                message: one_line(&e, Some(t)),
             })
         };
         let mut base = parse(THESIS_DAMPER_TOML, "built-in thesis scene")?;
@@ -220,7 +225,7 @@ impl Scene {
             path: origin.to_string(),
             message: e.to_string(),
         })?;
-        Scene::from_toml_str(&merged, origin)
+        Scene::parse(&merged, origin, false)
     }
 
     /// The resolved scene as TOML.
@@ -398,6 +403,21 @@ impl Scene {
         );
         let pw = hertz_theory::yield_velocity_mps(m, effective_youngs_pa(&pm, &wm), r, y);
         Some((pp, pw))
+    }
+}
+
+/// A TOML error as one line: its message, and its line and column in `text`
+/// when the text is the user's own.
+fn one_line(e: &toml::de::Error, text: Option<&str>) -> String {
+    let message = e.message().trim().replace('\n', " ");
+    match (text, e.span()) {
+        (Some(t), Some(span)) => {
+            let before = &t[..span.start.min(t.len())];
+            let line = before.matches('\n').count() + 1;
+            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {column}: {message}")
+        }
+        _ => message,
     }
 }
 

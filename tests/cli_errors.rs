@@ -1,0 +1,140 @@
+//! Bad input: a clear one-line error naming the parameter, its unit and valid
+//! range; a non-zero exit status; nothing written.
+
+mod common;
+
+use common::{Scratch, files_below, stderr, vlab};
+
+/// Runs `args` in a fresh folder holding `scene.toml` (if given) and checks the
+/// failure; returns the first line of standard error.
+fn refuses(args: &[&str], scene: Option<&str>, must_mention: &[&str]) -> String {
+    let dir = Scratch::new("errors");
+    if let Some(text) = scene {
+        dir.write("scene.toml", text);
+    }
+    let before = files_below(&dir.0);
+    let out = vlab(&dir.0, args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    let err = stderr(&out);
+    let first = err.lines().next().unwrap_or("").to_string();
+    assert!(first.starts_with("error:"), "{args:?}: {err}");
+    for word in must_mention {
+        assert!(
+            first.contains(word),
+            "{args:?}: '{first}' does not mention '{word}'"
+        );
+    }
+    assert_eq!(files_below(&dir.0), before, "{args:?} wrote files");
+    first
+}
+
+#[test]
+fn bad_drive_parameters() {
+    refuses(
+        &["shake", "--freq", "0"],
+        None,
+        &["--freq", "Hz", "positive"],
+    );
+    refuses(&["shake", "--freq", "-40"], None, &["--freq", "Hz"]);
+    refuses(&["shake", "--freq", "nan"], None, &["--freq", "finite"]);
+    refuses(
+        &["shake", "--freq", "abc"],
+        None,
+        &["--freq", "not a number"],
+    );
+    refuses(&["shake", "--gamma", "0"], None, &["--gamma", "positive"]);
+    refuses(&["shake", "--gamma", "inf"], None, &["--gamma", "finite"]);
+    refuses(&["shake", "--freq", "100000"], None, &["--freq", "Hz"]);
+    refuses(
+        &["shake", "--cycles", "3", "--steady-cycles", "5"],
+        None,
+        &["--steady-cycles", "[1,"],
+    );
+}
+
+#[test]
+fn time_step_above_stability_limit() {
+    refuses(
+        &["shake", "--dt-s", "1e-4"],
+        None,
+        &["--dt-s", "stability limit", " s"],
+    );
+    refuses(
+        &["shake", "--scene", "scene.toml"],
+        Some("[simulation]\ndt_s = 2e-5\n"),
+        &["dt_s", "stability limit"],
+    );
+}
+
+#[test]
+fn bad_scene_values() {
+    let shake = ["shake", "--scene", "scene.toml"];
+    refuses(
+        &shake,
+        Some("[particles]\ndiameter_m = -0.005\n"),
+        &["diameter_m", "positive", "(m)"],
+    );
+    refuses(
+        &shake,
+        Some("[contact]\nparticle_particle = { restitution = 1.2, friction = 0.5 }\n"),
+        &["restitution", "(0, 1]"],
+    );
+    refuses(
+        &shake,
+        Some("[contact]\nparticle_particle = { restitution = 0.0, friction = 0.5 }\n"),
+        &["restitution", "(0, 1]"],
+    );
+    refuses(
+        &shake,
+        Some("[contact]\nparticle_wall = { restitution = 0.9, friction = -0.1 }\n"),
+        &["friction", ">= 0"],
+    );
+    refuses(
+        &shake,
+        Some("[particles]\ncount = 700\n"),
+        &["count", "random close packing"],
+    );
+    refuses(
+        &shake,
+        Some("[particles]\ncolour = \"red\"\n"),
+        &["scene.toml", "colour"],
+    );
+    refuses(&shake, Some("[particles\ncount = 3\n"), &["scene.toml"]);
+    refuses(&shake, Some("version = 7\n"), &["version"]);
+}
+
+#[test]
+fn unreadable_scene_file() {
+    refuses(
+        &["shake", "--scene", "missing.toml"],
+        None,
+        &["missing.toml", "cannot read"],
+    );
+    refuses(
+        &["scene", "--scene", "missing.toml"],
+        None,
+        &["missing.toml"],
+    );
+}
+
+#[test]
+fn bad_impact_parameters() {
+    refuses(&["impact", "--radius-m", "0"], None, &["--radius-m", "(m)"]);
+    refuses(
+        &["impact", "--speed-mps", "-2"],
+        None,
+        &["--speed-mps", "m/s"],
+    );
+    refuses(&["impact", "--cor", "1.5"], None, &["--cor", "(0, 1]"]);
+    refuses(&["impact", "--mu", "-1"], None, &["--mu", ">= 0"]);
+    refuses(
+        &["impact", "--angle-deg", "95"],
+        None,
+        &["--angle-deg", "[0, 90)"],
+    );
+    refuses(
+        &["impact", "--dt-s", "1e-5"],
+        None,
+        &["--dt-s", "too coarse"],
+    );
+}
