@@ -48,8 +48,10 @@ pub struct Adc {
 }
 
 impl Adc {
-    /// A `bits`-bit converter of range +-`full_scale_v`.
+    /// A `bits`-bit converter of range +-`full_scale_v`; `bits` is clamped to
+    /// 1..=32 ([`DaqSpec::validate`] refuses anything else).
     pub fn new(bits: u32, full_scale_v: f64) -> Self {
+        let bits = bits.clamp(1, 32);
         let half = 1i64 << (bits - 1);
         Adc {
             lsb_v: 2.0 * full_scale_v / (1u64 << bits) as f64,
@@ -99,7 +101,7 @@ pub struct MeasurementChannel {
 impl MeasurementChannel {
     /// A channel of `params` digitised by `daq`, stepped every `dem_dt_s`,
     /// keeping samples at or after `record_start_s` (from the drive start),
-    /// drawing noise from `noise`.
+    /// drawing noise from `noise`. Checks `params` and `daq` first.
     pub fn new(
         params: &ChannelParams,
         daq: &DaqSpec,
@@ -107,6 +109,8 @@ impl MeasurementChannel {
         record_start_s: f64,
         noise: GaussianNoise,
     ) -> Result<Self, RigError> {
+        daq.validate()?;
+        params.validate(daq.sample_rate_hz)?;
         positive("dem_dt_s", dem_dt_s, "s")?;
         let period_s = 1.0 / daq.sample_rate_hz;
         let mut filters = Cascade::new();

@@ -313,7 +313,9 @@ impl ChannelParams {
         h
     }
 
-    fn validate(&self, sample_rate_hz: f64) -> Result<(), RigError> {
+    /// Checks every value for a DAQ sampling at `sample_rate_hz`; the error
+    /// names the rig-file key, its unit and valid range.
+    pub fn validate(&self, sample_rate_hz: f64) -> Result<(), RigError> {
         let key = |k: &str| format!("{}.{k}", self.section);
         let sens_key = if self.name == "force" {
             "sensitivity_v_per_n"
@@ -542,18 +544,26 @@ impl RigSpec {
             (None, ShakerKind::Prescribed) => {}
         }
         let d = &self.daq;
-        positive("daq.sample_rate_hz", d.sample_rate_hz, "Hz")?;
-        if !(1..=32).contains(&d.bits) {
+        d.validate()?;
+        self.accel_channel().validate(d.sample_rate_hz)?;
+        self.force_channel().validate(d.sample_rate_hz)?;
+        Ok(())
+    }
+}
+
+impl DaqSpec {
+    /// Checks sample rate, bits and full scale.
+    pub fn validate(&self) -> Result<(), RigError> {
+        positive("daq.sample_rate_hz", self.sample_rate_hz, "Hz")?;
+        if !(1..=32).contains(&self.bits) {
             return Err(RigError::InvalidParameter {
                 key: "daq.bits".into(),
-                value: d.bits.to_string(),
+                value: self.bits.to_string(),
                 unit: "bits",
                 valid: "an integer in 1..=32".into(),
             });
         }
-        positive("daq.full_scale_v", d.full_scale_v, "V")?;
-        self.accel_channel().validate(d.sample_rate_hz)?;
-        self.force_channel().validate(d.sample_rate_hz)?;
+        positive("daq.full_scale_v", self.full_scale_v, "V")?;
         Ok(())
     }
 }
