@@ -7,7 +7,7 @@
 //! period from the drive start; those at or after `record_start_s` are kept.
 //! The trace's time zero is the record start, so its first sample lies at
 //! `start_time_s` in `[0, 1/fs)` after it. [`Daq::finish`] builds the trace,
-//! channels `acceleration` [m/s^2] and `force` [N], in physical units, and a
+//! channels `acceleration` (m/s^2) and `force` (N), in physical units, and a
 //! [`DaqReport`] that says how much was clipped.
 
 use serde_json::json;
