@@ -15,5 +15,6 @@
 
 pub mod atomic_write;
 pub mod dem;
+pub mod rig;
 pub mod scene;
 pub mod signals;

@@ -1,0 +1,171 @@
+//! The one error type of the `rig` module.
+//!
+//! Every fallible function in `rig` returns [`RigError`]. Messages name the
+//! parameter (as its rig-file key where there is one), its unit and the valid
+//! range; a refusal because the lab hardware cannot do what was asked names the
+//! limit and suggests the `ideal` rig, which has none.
+
+use std::path::PathBuf;
+
+use crate::signals::SignalsError;
+
+/// Everything that can go wrong in `rig`.
+#[derive(Debug, thiserror::Error)]
+pub enum RigError {
+    /// A parameter is out of its valid range.
+    #[error("{key} = {value} {unit}: must be {valid}")]
+    InvalidParameter {
+        /// Rig-file key (e.g. `daq.sample_rate_hz`) or API argument name.
+        key: String,
+        /// The offending value, as written.
+        value: String,
+        /// Its unit (`Hz`, `V/N`, `1` when dimensionless, ...).
+        unit: &'static str,
+        /// What would have been valid, in words.
+        valid: String,
+    },
+    /// The requested motion needs more stroke than the shaker has.
+    #[error(
+        "Gamma {gamma} at {freq_hz} Hz needs {needed_mm:.1} mm peak-to-peak stroke; the {rig} rig \
+         allows {allowed_mm} mm (stroke limit, shaker.stroke_pp_m): lower --gamma or use --rig ideal"
+    )]
+    StrokeLimit {
+        /// Rig name.
+        rig: String,
+        /// Requested Gamma.
+        gamma: f64,
+        /// Drive frequency, Hz.
+        freq_hz: f64,
+        /// Peak-to-peak displacement needed, mm.
+        needed_mm: f64,
+        /// Peak-to-peak displacement allowed, mm.
+        allowed_mm: f64,
+    },
+    /// The requested motion needs more acceleration than the shaker can give.
+    #[error(
+        "Gamma {gamma} at {freq_hz} Hz needs {needed_mps2:.1} m/s^2 peak acceleration; the {rig} rig \
+         allows {allowed_mps2} m/s^2 (acceleration limit, shaker.max_accel_mps2): lower --gamma or \
+         use --rig ideal"
+    )]
+    AccelerationLimit {
+        /// Rig name.
+        rig: String,
+        /// Requested Gamma.
+        gamma: f64,
+        /// Drive frequency, Hz.
+        freq_hz: f64,
+        /// Peak acceleration needed, m/s^2.
+        needed_mps2: f64,
+        /// Peak acceleration allowed, m/s^2.
+        allowed_mps2: f64,
+    },
+    /// A rig name that is not built in and not a file.
+    #[error("no built-in rig '{name}' (built-in: {available}) and no file of that name")]
+    UnknownRig {
+        /// The name asked for.
+        name: String,
+        /// Comma-separated built-in names.
+        available: String,
+    },
+    /// A rig file could not be read.
+    #[error("cannot read rig file {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A rig file did not parse (unknown key, missing key, wrong type, ...).
+    #[error("{origin}: {message}")]
+    Parse {
+        /// File path or built-in name.
+        origin: String,
+        /// The TOML parser's message (names the key, line and column).
+        message: String,
+    },
+    /// A rig file of another format version.
+    #[error(
+        "{origin}: version = {found} is not supported: this vlab reads rig files of version {supported}"
+    )]
+    Version {
+        /// File path or built-in name.
+        origin: String,
+        /// Version found.
+        found: u32,
+        /// Version supported.
+        supported: u32,
+    },
+    /// A section needed for what was asked is missing from the rig.
+    #[error("rig '{rig}' has no [{section}] section: {hint}")]
+    MissingSection {
+        /// Rig name.
+        rig: String,
+        /// Section, e.g. `shaker.electrodynamic`.
+        section: &'static str,
+        /// What to do about it.
+        hint: String,
+    },
+    /// The record holds no samples.
+    #[error("the DAQ recorded no samples: {reason}")]
+    EmptyRecord {
+        /// Why.
+        reason: String,
+    },
+    /// A non-finite value reached the DAQ.
+    #[error(
+        "{what} was {value} at t = {t_s} s (from the drive start): the simulation diverged or was \
+         fed a non-finite force; nothing was recorded"
+    )]
+    NonFinite {
+        /// Which input.
+        what: &'static str,
+        /// The value.
+        value: f64,
+        /// When.
+        t_s: f64,
+    },
+    /// Building the trace failed.
+    #[error(transparent)]
+    Signals(#[from] SignalsError),
+}
+
+/// Result alias used throughout `rig`.
+pub type Result<T, E = RigError> = std::result::Result<T, E>;
+
+/// An [`RigError::InvalidParameter`] for a number.
+pub(crate) fn invalid(key: &str, value: f64, unit: &'static str, valid: &str) -> RigError {
+    RigError::InvalidParameter {
+        key: key.to_string(),
+        value: value.to_string(),
+        unit,
+        valid: valid.to_string(),
+    }
+}
+
+/// Checks that `value` is positive and finite.
+pub(crate) fn positive(key: &str, value: f64, unit: &'static str) -> Result<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(invalid(key, value, unit, "positive and finite"))
+    }
+}
+
+/// Checks that `value` is zero or positive, and finite.
+pub(crate) fn non_negative(key: &str, value: f64, unit: &'static str) -> Result<f64> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(invalid(key, value, unit, "zero or positive, and finite"))
+    }
+}
+
+/// Checks that `value` is finite.
+pub(crate) fn finite(key: &str, value: f64, unit: &'static str) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(invalid(key, value, unit, "finite"))
+    }
+}

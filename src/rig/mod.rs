@@ -1,0 +1,43 @@
+//! The lab hardware (thesis Sections 7.3-7.4 and 7.6; DESIGN.md "The rig"):
+//! the shaker that moves the enclosure, the force transducer and the
+//! accelerometer on it, the signal conditioner and the digitiser.
+//!
+//! - [`spec`]: rig files (`rig/*.toml`, strict, versioned) and the built-in
+//!   rigs `thesis-shaker` (default) and `ideal`; the model's own phase error;
+//! - [`shaker`]: prescribed sine (eq. 6.2 / 7.6) or a lumped electrodynamic
+//!   shaker whose motion the particles disturb, with the rig's stroke and
+//!   acceleration limits;
+//! - [`transducer`]: what the force gauge reads, `m_enc a - F_p + W`;
+//! - [`channel`]: one channel: sensitivity, gain, AC coupling, anti-alias
+//!   filter, sampling with skew, noise, ADC;
+//! - [`daq`]: both channels sampled into a [`crate::signals::Trace`];
+//! - [`filter`], [`discretise`], [`noise`]: the numerical pieces.
+//!
+//! The rig sees the damper only as the axial force the particles exert on the
+//! enclosure: this module imports neither `dem` nor `scene`. SI units
+//! throughout. Per DEM step, [`Shaker::advance`] and [`Daq::push`] do O(1)
+//! work and do not allocate.
+//!
+//! A `vlab shake` step, in order: `x = shaker.advance(t, dt, f_p)` ->
+//! DEM step with the enclosure at `x` -> `a = shaker.kinematics()` ->
+//! `daq.push(t, a, transducer_force_n(m_enc, a, f_p, w))`.
+
+pub mod channel;
+pub mod daq;
+pub mod discretise;
+pub mod error;
+pub mod filter;
+pub mod noise;
+pub mod shaker;
+pub mod spec;
+pub mod transducer;
+
+pub use channel::{Adc, MeasurementChannel};
+pub use daq::{ACCEL_CHANNEL, Daq, DaqReport, FORCE_CHANNEL};
+pub use error::{Result, RigError};
+pub use shaker::{Shaker, ShakerKinematics, ShakerReport, check_limits};
+pub use spec::{
+    AccelerometerSpec, ChannelParams, DEFAULT_RIG, DaqSpec, ElectrodynamicSpec, EnclosureSpec,
+    ForceSpec, LowPassSpec, RIG_VERSION, RigSpec, Sampling, ShakerKind, ShakerSpec,
+};
+pub use transducer::transducer_force_n;

@@ -1,0 +1,738 @@
+//! Rig descriptions: what lab hardware a virtual test runs on (thesis Section
+//! 7.4.2, Fig. 7.7: shaker, accelerometer, force transducer, signal
+//! conditioner, digitiser).
+//!
+//! A rig is a TOML file of `version = 1` with strict keys. The built-in rigs are
+//! the files in the top-level `rig/` folder, embedded in the binary:
+//!
+//! - `thesis-shaker` (the default): a model of the thesis rig, with an
+//!   electrodynamic shaker, realistic transducers, conditioner filters, a 16-bit
+//!   ADC and the stroke / acceleration limits the thesis reports;
+//! - `ideal`: the perfect lab: prescribed motion, no noise, no filters, no phase
+//!   error, no quantisation, no limits.
+//!
+//! [`RigSpec::load`] reads a file that is a complete rig, every required key
+//! present (print a built-in with [`RigSpec::to_toml`] and edit it); nothing is
+//! merged from a built-in. Keys carry their SI unit in the name.
+//!
+//! The model's own inter-channel phase error, the quantity the empty-enclosure
+//! calibration of Fig. 7.9 estimates, is [`RigSpec::expected_phase_error_rad`].
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use realfft::num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use super::error::{RigError, finite, invalid, non_negative, positive};
+use super::filter::{MAX_LOW_PASS_ORDER, butterworth_response, high_pass_response};
+use crate::signals::wrap_phase_rad;
+
+/// Version written into, and required of, rig files.
+pub const RIG_VERSION: u32 = 1;
+
+/// Name of the default rig.
+pub const DEFAULT_RIG: &str = "thesis-shaker";
+
+/// The built-in rig files, by name.
+const BUILTIN: [(&str, &str); 2] = [
+    (
+        "thesis-shaker",
+        include_str!("../../rig/thesis-shaker.toml"),
+    ),
+    ("ideal", include_str!("../../rig/ideal.toml")),
+];
+
+/// How the enclosure is moved.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShakerKind {
+    /// The motion is exactly `u = Gamma g / w^2 sin(w t)` (thesis eq. 6.2 / 7.6),
+    /// whatever the particles do.
+    #[default]
+    Prescribed,
+    /// A lumped electrodynamic shaker driven by an amplifier; the particles'
+    /// force disturbs its motion.
+    Electrodynamic,
+}
+
+/// A complete rig description.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RigSpec {
+    /// File format version; must be [`RIG_VERSION`].
+    pub version: u32,
+    /// Rig name, written into trace metadata.
+    pub name: String,
+    /// One or two sentences on what this rig is.
+    #[serde(default)]
+    pub description: String,
+    /// The moving part above the force gauge.
+    pub enclosure: EnclosureSpec,
+    /// The drive.
+    pub shaker: ShakerSpec,
+    /// Accelerometer on the enclosure base and its conditioner channel.
+    pub accelerometer: AccelerometerSpec,
+    /// Force transducer between shaker and enclosure and its channel.
+    pub force: ForceSpec,
+    /// Digitiser.
+    pub daq: DaqSpec,
+}
+
+/// The mass the force transducer carries.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnclosureSpec {
+    /// Mass above the force gauge (enclosure, lid, accelerometer, transducer
+    /// top), kg.
+    pub mass_kg: f64,
+}
+
+/// The shaker: its kind, its limits and (for an electrodynamic one) its
+/// lumped parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShakerSpec {
+    /// Default kind for this rig (a caller may override it).
+    #[serde(default)]
+    pub kind: ShakerKind,
+    /// Largest peak-to-peak displacement, m; absent = no limit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stroke_pp_m: Option<f64>,
+    /// Largest peak acceleration, m/s^2; absent = no limit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_accel_mps2: Option<f64>,
+    /// Lumped electrodynamic model; required for `kind = "electrodynamic"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub electrodynamic: Option<ElectrodynamicSpec>,
+}
+
+/// Lumped parameters of an electrodynamic shaker and its amplifier, and the
+/// sine controller that sets the drive level.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ElectrodynamicSpec {
+    /// Armature (coil former and table) mass, kg.
+    pub armature_mass_kg: f64,
+    /// Suspension (flexure) stiffness, N/m.
+    pub suspension_stiffness_n_per_m: f64,
+    /// Suspension viscous damping, N s/m.
+    pub suspension_damping_n_s_per_m: f64,
+    /// Force factor Bl, N/A (equal to the back-EMF constant, V s/m).
+    pub force_factor_n_per_a: f64,
+    /// Coil resistance, ohm.
+    pub coil_resistance_ohm: f64,
+    /// Coil inductance, H.
+    pub coil_inductance_h: f64,
+    /// Voltage gain of the power amplifier, V/V.
+    pub amplifier_gain_v_per_v: f64,
+    /// Adjust the drive once per cycle from the measured fundamental of the
+    /// acceleration, as a vibration controller does.
+    #[serde(default = "default_true")]
+    pub closed_loop: bool,
+    /// Fraction of the remaining amplitude / phase error corrected per cycle,
+    /// in (0, 1].
+    #[serde(default = "default_loop_gain")]
+    pub loop_gain: f64,
+    /// Fraction of the particle mass counted as rigid payload when the
+    /// open-loop drive level is computed, in [0, 1].
+    #[serde(default = "default_particle_fraction")]
+    pub feedforward_particle_fraction: f64,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+fn default_loop_gain() -> f64 {
+    0.5
+}
+
+fn default_particle_fraction() -> f64 {
+    0.5
+}
+
+/// How a channel turns its filtered signal into samples.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sampling {
+    /// Track-and-hold at the (skewed) sample instant, linearly interpolated
+    /// between DEM steps.
+    #[default]
+    Point,
+    /// Mean over the DEM steps nearest the (skewed) sample instant, a window
+    /// of one sample period centred on it: no phase lag, and an impulsive
+    /// force does not alias.
+    Boxcar,
+}
+
+/// An anti-alias low-pass.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LowPassSpec {
+    /// -3 dB cutoff, Hz.
+    pub cutoff_hz: f64,
+    /// Butterworth order, 1..=8.
+    pub order: u32,
+}
+
+/// The accelerometer and its conditioner channel.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AccelerometerSpec {
+    /// Transducer sensitivity, V/(m/s^2).
+    pub sensitivity_v_per_mps2: f64,
+    /// White noise referred to the input, rms, m/s^2 (added per sample).
+    #[serde(default)]
+    pub noise_rms_mps2: f64,
+    /// Conditioner gain, V/V.
+    #[serde(default = "default_gain")]
+    pub conditioner_gain: f64,
+    /// AC-coupling high-pass corner, Hz; 0 = DC-coupled.
+    #[serde(default)]
+    pub high_pass_hz: f64,
+    /// Anti-alias low-pass; absent = none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub low_pass: Option<LowPassSpec>,
+    /// Channel samples at `t_k + sample_skew_s`, s.
+    #[serde(default)]
+    pub sample_skew_s: f64,
+    /// Sampling method.
+    #[serde(default)]
+    pub sampling: Sampling,
+}
+
+/// The force transducer and its conditioner channel.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceSpec {
+    /// Transducer sensitivity, V/N.
+    pub sensitivity_v_per_n: f64,
+    /// White noise referred to the input, rms, N (added per sample).
+    #[serde(default)]
+    pub noise_rms_n: f64,
+    /// Conditioner gain, V/V.
+    #[serde(default = "default_gain")]
+    pub conditioner_gain: f64,
+    /// AC-coupling high-pass corner, Hz; 0 = DC-coupled.
+    #[serde(default)]
+    pub high_pass_hz: f64,
+    /// Anti-alias low-pass; absent = none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub low_pass: Option<LowPassSpec>,
+    /// Channel samples at `t_k + sample_skew_s`, s.
+    #[serde(default)]
+    pub sample_skew_s: f64,
+    /// Sampling method.
+    #[serde(default)]
+    pub sampling: Sampling,
+}
+
+fn default_gain() -> f64 {
+    1.0
+}
+
+/// The digitiser.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DaqSpec {
+    /// Samples per second per channel, Hz (thesis: 40 kHz).
+    #[serde(default = "default_sample_rate")]
+    pub sample_rate_hz: f64,
+    /// ADC resolution, bits, 1..=32.
+    #[serde(default = "default_bits")]
+    pub bits: u32,
+    /// ADC input range is +-full_scale_v, V.
+    #[serde(default = "default_full_scale")]
+    pub full_scale_v: f64,
+    /// No quantisation and no clipping.
+    #[serde(default)]
+    pub ideal_adc: bool,
+}
+
+fn default_sample_rate() -> f64 {
+    40_000.0
+}
+
+fn default_bits() -> u32 {
+    16
+}
+
+fn default_full_scale() -> f64 {
+    10.0
+}
+
+/// One measurement channel, in common terms: what [`super::channel`] runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelParams {
+    /// Trace channel name (`acceleration`, `force`).
+    pub name: &'static str,
+    /// Physical unit of the channel (`m/s^2`, `N`).
+    pub unit: &'static str,
+    /// Unit of the sensitivity (`V/(m/s^2)`, `V/N`).
+    pub sensitivity_unit: &'static str,
+    /// Rig-file section (`accelerometer`, `force`), for messages.
+    pub section: &'static str,
+    /// Transducer sensitivity, V per physical unit.
+    pub sensitivity: f64,
+    /// Noise rms in physical units, referred to the input.
+    pub noise_rms: f64,
+    /// Conditioner gain, V/V.
+    pub conditioner_gain: f64,
+    /// AC-coupling corner, Hz (0 = DC-coupled).
+    pub high_pass_hz: f64,
+    /// Anti-alias low-pass.
+    pub low_pass: Option<LowPassSpec>,
+    /// Sample skew, s.
+    pub sample_skew_s: f64,
+    /// Sampling method.
+    pub sampling: Sampling,
+}
+
+impl ChannelParams {
+    /// Volts at the ADC input per physical unit at the channel input
+    /// (sensitivity x conditioner gain).
+    pub fn volts_per_unit(&self) -> f64 {
+        self.sensitivity * self.conditioner_gain
+    }
+
+    /// The channel's analogue response at `freq_hz` (sampled at
+    /// `sample_rate_hz`): high-pass x low-pass x skew `exp(j w tau)` x (boxcar
+    /// sampling) `sin(pi f / fs) / (pi f / fs)`. Sensitivity and gain excluded:
+    /// 1 means the trace reproduces the input.
+    pub fn response(&self, freq_hz: f64, sample_rate_hz: f64) -> Complex64 {
+        let mut h = high_pass_response(self.high_pass_hz, freq_hz);
+        if let Some(lp) = self.low_pass {
+            h *= butterworth_response(lp.order, lp.cutoff_hz, freq_hz);
+        }
+        h *= Complex64::from_polar(1.0, 2.0 * PI * freq_hz * self.sample_skew_s);
+        if self.sampling == Sampling::Boxcar && freq_hz > 0.0 {
+            let x = PI * freq_hz / sample_rate_hz;
+            h *= x.sin() / x;
+        }
+        h
+    }
+
+    /// Checks every value for a DAQ sampling at `sample_rate_hz`; the error
+    /// names the rig-file key, its unit and valid range.
+    pub fn validate(&self, sample_rate_hz: f64) -> Result<(), RigError> {
+        let key = |k: &str| format!("{}.{k}", self.section);
+        let sens_key = if self.name == "force" {
+            "sensitivity_v_per_n"
+        } else {
+            "sensitivity_v_per_mps2"
+        };
+        let noise_key = if self.name == "force" {
+            "noise_rms_n"
+        } else {
+            "noise_rms_mps2"
+        };
+        positive(&key(sens_key), self.sensitivity, self.sensitivity_unit)?;
+        non_negative(&key(noise_key), self.noise_rms, self.unit)?;
+        positive(&key("conditioner_gain"), self.conditioner_gain, "V/V")?;
+        non_negative(&key("high_pass_hz"), self.high_pass_hz, "Hz")?;
+        if let Some(lp) = self.low_pass {
+            positive(&key("low_pass.cutoff_hz"), lp.cutoff_hz, "Hz")?;
+            if !(1..=MAX_LOW_PASS_ORDER).contains(&lp.order) {
+                return Err(RigError::InvalidParameter {
+                    key: key("low_pass.order"),
+                    value: lp.order.to_string(),
+                    unit: "1",
+                    valid: format!("an integer in 1..={MAX_LOW_PASS_ORDER}"),
+                });
+            }
+            if lp.cutoff_hz <= self.high_pass_hz {
+                return Err(invalid(
+                    &key("low_pass.cutoff_hz"),
+                    lp.cutoff_hz,
+                    "Hz",
+                    &format!(
+                        "above the high-pass corner {} Hz ({})",
+                        self.high_pass_hz,
+                        key("high_pass_hz")
+                    ),
+                ));
+            }
+        }
+        finite(&key("sample_skew_s"), self.sample_skew_s, "s")?;
+        let period = 1.0 / sample_rate_hz;
+        if self.sample_skew_s.abs() >= 0.5 * period {
+            return Err(invalid(
+                &key("sample_skew_s"),
+                self.sample_skew_s,
+                "s",
+                &format!(
+                    "less than half a sample period ({} s at daq.sample_rate_hz = {} Hz) in magnitude",
+                    0.5 * period,
+                    sample_rate_hz
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl RigSpec {
+    /// Names of the built-in rigs; the first is the default.
+    pub fn names() -> Vec<&'static str> {
+        BUILTIN.iter().map(|(n, _)| *n).collect()
+    }
+
+    /// The TOML text of a built-in rig.
+    pub fn builtin_toml(name: &str) -> Option<&'static str> {
+        BUILTIN.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+    }
+
+    /// A built-in rig by name.
+    pub fn builtin(name: &str) -> Result<RigSpec, RigError> {
+        let text = Self::builtin_toml(name).ok_or_else(|| RigError::UnknownRig {
+            name: name.to_string(),
+            available: Self::names().join(", "),
+        })?;
+        Self::from_toml_str(text, &format!("built-in rig '{name}'"))
+    }
+
+    /// Reads a rig file: a complete rig, every required key present (nothing
+    /// is merged from a built-in).
+    pub fn load(path: &Path) -> Result<RigSpec, RigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| RigError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// A built-in name, else a path to a rig file.
+    pub fn from_name_or_path(name_or_path: &str) -> Result<RigSpec, RigError> {
+        if Self::builtin_toml(name_or_path).is_some() {
+            return Self::builtin(name_or_path);
+        }
+        let path = Path::new(name_or_path);
+        if path.is_file() {
+            return Self::load(path);
+        }
+        Err(RigError::UnknownRig {
+            name: name_or_path.to_string(),
+            available: Self::names().join(", "),
+        })
+    }
+
+    /// Parses and validates a rig from TOML text; `origin` names the source in
+    /// messages.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<RigSpec, RigError> {
+        // Check the version first so a version-2 file is not blamed for keys
+        // this version does not know.
+        if let Ok(table) = text.parse::<toml::Table>()
+            && let Some(v) = table.get("version").and_then(toml::Value::as_integer)
+            && v != i64::from(RIG_VERSION)
+        {
+            return Err(RigError::Version {
+                origin: origin.to_string(),
+                found: u32::try_from(v).unwrap_or(u32::MAX),
+                supported: RIG_VERSION,
+            });
+        }
+        let spec: RigSpec = toml::from_str(text).map_err(|e| RigError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        spec.validate().map_err(|e| match e {
+            RigError::Version { found, .. } => RigError::Version {
+                origin: origin.to_string(),
+                found,
+                supported: RIG_VERSION,
+            },
+            other => RigError::Parse {
+                origin: origin.to_string(),
+                message: other.to_string(),
+            },
+        })?;
+        Ok(spec)
+    }
+
+    /// The rig as TOML (parses back to an equal rig).
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot print rig: {e}\n"))
+    }
+
+    /// The accelerometer channel in common terms.
+    pub fn accel_channel(&self) -> ChannelParams {
+        let a = &self.accelerometer;
+        ChannelParams {
+            name: "acceleration",
+            unit: "m/s^2",
+            sensitivity_unit: "V/(m/s^2)",
+            section: "accelerometer",
+            sensitivity: a.sensitivity_v_per_mps2,
+            noise_rms: a.noise_rms_mps2,
+            conditioner_gain: a.conditioner_gain,
+            high_pass_hz: a.high_pass_hz,
+            low_pass: a.low_pass,
+            sample_skew_s: a.sample_skew_s,
+            sampling: a.sampling,
+        }
+    }
+
+    /// The force channel in common terms.
+    pub fn force_channel(&self) -> ChannelParams {
+        let f = &self.force;
+        ChannelParams {
+            name: "force",
+            unit: "N",
+            sensitivity_unit: "V/N",
+            section: "force",
+            sensitivity: f.sensitivity_v_per_n,
+            noise_rms: f.noise_rms_n,
+            conditioner_gain: f.conditioner_gain,
+            high_pass_hz: f.high_pass_hz,
+            low_pass: f.low_pass,
+            sample_skew_s: f.sample_skew_s,
+            sampling: f.sampling,
+        }
+    }
+
+    /// The model's own phase error at `freq_hz`: the phase of the force
+    /// channel's response minus that of the acceleration channel's, wrapped
+    /// to (-pi, pi], rad. Positive: the recorded force leads. This is what an
+    /// ideal empty-enclosure calibration (`signals::estimate_phase_error`)
+    /// measures on this rig, and what Yang's power must subtract.
+    ///
+    /// For first-order high-passes and skews alone it is
+    /// `atan(f_cF / f) - atan(f_cA / f) + 2 pi f (tau_F - tau_A)`.
+    pub fn expected_phase_error_rad(&self, freq_hz: f64) -> f64 {
+        let fs = self.daq.sample_rate_hz;
+        let hf = self.force_channel().response(freq_hz, fs);
+        let ha = self.accel_channel().response(freq_hz, fs);
+        wrap_phase_rad(hf.arg() - ha.arg())
+    }
+
+    /// Checks every value; the error names the key, its unit and valid range.
+    pub fn validate(&self) -> Result<(), RigError> {
+        if self.version != RIG_VERSION {
+            return Err(RigError::Version {
+                origin: format!("rig '{}'", self.name),
+                found: self.version,
+                supported: RIG_VERSION,
+            });
+        }
+        if self.name.trim().is_empty() {
+            return Err(RigError::InvalidParameter {
+                key: "name".into(),
+                value: "\"\"".into(),
+                unit: "1",
+                valid: "a non-empty rig name".into(),
+            });
+        }
+        positive("enclosure.mass_kg", self.enclosure.mass_kg, "kg")?;
+        let s = &self.shaker;
+        if let Some(v) = s.stroke_pp_m {
+            positive("shaker.stroke_pp_m", v, "m")?;
+        }
+        if let Some(v) = s.max_accel_mps2 {
+            positive("shaker.max_accel_mps2", v, "m/s^2")?;
+        }
+        match (&s.electrodynamic, s.kind) {
+            (Some(e), _) => e.validate()?,
+            (None, ShakerKind::Electrodynamic) => {
+                return Err(RigError::MissingSection {
+                    rig: self.name.clone(),
+                    section: "shaker.electrodynamic",
+                    hint: "shaker.kind = \"electrodynamic\" needs the lumped shaker parameters"
+                        .into(),
+                });
+            }
+            (None, ShakerKind::Prescribed) => {}
+        }
+        let d = &self.daq;
+        d.validate()?;
+        self.accel_channel().validate(d.sample_rate_hz)?;
+        self.force_channel().validate(d.sample_rate_hz)?;
+        Ok(())
+    }
+}
+
+impl DaqSpec {
+    /// Checks sample rate, bits and full scale.
+    pub fn validate(&self) -> Result<(), RigError> {
+        positive("daq.sample_rate_hz", self.sample_rate_hz, "Hz")?;
+        if !(1..=32).contains(&self.bits) {
+            return Err(RigError::InvalidParameter {
+                key: "daq.bits".into(),
+                value: self.bits.to_string(),
+                unit: "bits",
+                valid: "an integer in 1..=32".into(),
+            });
+        }
+        positive("daq.full_scale_v", self.full_scale_v, "V")?;
+        Ok(())
+    }
+}
+
+impl ElectrodynamicSpec {
+    fn validate(&self) -> Result<(), RigError> {
+        let k = |name: &str| format!("shaker.electrodynamic.{name}");
+        positive(&k("armature_mass_kg"), self.armature_mass_kg, "kg")?;
+        non_negative(
+            &k("suspension_stiffness_n_per_m"),
+            self.suspension_stiffness_n_per_m,
+            "N/m",
+        )?;
+        non_negative(
+            &k("suspension_damping_n_s_per_m"),
+            self.suspension_damping_n_s_per_m,
+            "N s/m",
+        )?;
+        positive(&k("force_factor_n_per_a"), self.force_factor_n_per_a, "N/A")?;
+        positive(&k("coil_resistance_ohm"), self.coil_resistance_ohm, "ohm")?;
+        positive(&k("coil_inductance_h"), self.coil_inductance_h, "H")?;
+        positive(
+            &k("amplifier_gain_v_per_v"),
+            self.amplifier_gain_v_per_v,
+            "V/V",
+        )?;
+        if !(self.loop_gain > 0.0 && self.loop_gain <= 1.0) {
+            return Err(invalid(&k("loop_gain"), self.loop_gain, "1", "in (0, 1]"));
+        }
+        let f = self.feedforward_particle_fraction;
+        if !(0.0..=1.0).contains(&f) {
+            return Err(invalid(
+                &k("feedforward_particle_fraction"),
+                f,
+                "1",
+                "in [0, 1]",
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn thesis_text() -> &'static str {
+        RigSpec::builtin_toml("thesis-shaker").expect("built in")
+    }
+
+    fn parse_err(text: &str) -> String {
+        RigSpec::from_toml_str(text, "test.toml")
+            .expect_err("must be refused")
+            .to_string()
+    }
+
+    #[test]
+    fn builtins_parse_validate_and_round_trip() {
+        assert_eq!(RigSpec::names()[0], DEFAULT_RIG);
+        for name in RigSpec::names() {
+            let rig = RigSpec::builtin(name).expect("built-in parses");
+            assert_eq!(rig.name, name);
+            let back = RigSpec::from_toml_str(&rig.to_toml(), "printed").expect("reparses");
+            assert_eq!(back, rig, "{name} must survive to_toml");
+        }
+        let msg = RigSpec::builtin("nope").expect_err("unknown").to_string();
+        assert!(msg.contains("thesis-shaker, ideal"), "{msg}");
+    }
+
+    #[test]
+    fn every_checked_in_rig_file_parses() {
+        // rig/ also holds scenes (thesis-damper.toml); a rig has a [shaker].
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("rig");
+        let mut rigs = 0;
+        for entry in std::fs::read_dir(&dir).expect("rig/ exists") {
+            let path = entry.expect("entry").path();
+            if path.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).expect("readable");
+            let table: toml::Table = text.parse().expect("valid TOML");
+            if !table.contains_key("shaker") {
+                continue;
+            }
+            RigSpec::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            rigs += 1;
+        }
+        assert!(rigs >= 2, "found {rigs} rig files");
+    }
+
+    #[test]
+    fn unknown_key_is_named() {
+        let text = thesis_text().replace("[daq]", "[daq]\nsample_rate = 40000.0");
+        let msg = parse_err(&text);
+        assert!(
+            msg.contains("sample_rate") && msg.contains("test.toml"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn version_2_is_refused_by_version() {
+        let text = thesis_text().replace("version = 1", "version = 2");
+        let msg = parse_err(&text);
+        assert!(
+            msg.contains("version = 2") && msg.contains("version 1"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn bad_values_name_key_unit_and_range() {
+        let mut rig = RigSpec::builtin("thesis-shaker").expect("built in");
+        rig.accelerometer.sensitivity_v_per_mps2 = -0.001;
+        let msg = rig.validate().expect_err("negative").to_string();
+        assert_eq!(
+            msg,
+            "accelerometer.sensitivity_v_per_mps2 = -0.001 V/(m/s^2): must be positive and finite"
+        );
+
+        let mut rig = RigSpec::builtin("thesis-shaker").expect("built in");
+        rig.daq.bits = 0;
+        let msg = rig.validate().expect_err("bits 0").to_string();
+        assert_eq!(msg, "daq.bits = 0 bits: must be an integer in 1..=32");
+
+        let mut rig = RigSpec::builtin("thesis-shaker").expect("built in");
+        rig.daq.sample_rate_hz = 0.0;
+        let msg = rig.validate().expect_err("rate 0").to_string();
+        assert_eq!(
+            msg,
+            "daq.sample_rate_hz = 0 Hz: must be positive and finite"
+        );
+
+        let mut rig = RigSpec::builtin("thesis-shaker").expect("built in");
+        rig.force.sample_skew_s = 1e-4;
+        let msg = rig.validate().expect_err("skew").to_string();
+        assert!(msg.starts_with("force.sample_skew_s = 0.0001 s"), "{msg}");
+
+        // Through the parser: the origin is named too.
+        let text = thesis_text().replace("sensitivity_v_per_n = ", "sensitivity_v_per_n = -");
+        let msg = parse_err(&text);
+        assert!(
+            msg.starts_with("test.toml: force.sensitivity_v_per_n = -") && msg.contains("V/N"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn electrodynamic_kind_needs_its_section() {
+        let mut rig = RigSpec::builtin("ideal").expect("built in");
+        rig.shaker.kind = ShakerKind::Electrodynamic;
+        let msg = rig.validate().expect_err("missing").to_string();
+        assert!(msg.contains("[shaker.electrodynamic]"), "{msg}");
+    }
+
+    #[test]
+    fn expected_phase_error_matches_the_closed_form() {
+        let rig = RigSpec::builtin("thesis-shaker").expect("built in");
+        let (a, f) = (rig.accel_channel(), rig.force_channel());
+        for freq in [20.0, 40.0, 160.0] {
+            let want = (f.high_pass_hz / freq).atan() - (a.high_pass_hz / freq).atan()
+                + 2.0 * PI * freq * (f.sample_skew_s - a.sample_skew_s);
+            let got = rig.expected_phase_error_rad(freq);
+            // Identical low-passes cancel exactly up to rounding.
+            assert!((got - want).abs() < 1e-12, "{freq} Hz: {got} vs {want}");
+            // "A fraction of a degree" at the thesis frequencies.
+            assert!(got > 0.0 && got.to_degrees() < 1.0, "{freq} Hz: {got}");
+        }
+        let ideal = RigSpec::builtin("ideal").expect("built in");
+        assert_eq!(ideal.expected_phase_error_rad(40.0), 0.0);
+    }
+}
