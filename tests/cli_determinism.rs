@@ -12,8 +12,8 @@ count = 150
 settle_s = 0.02
 parallel_min_pairs = 0
 [drive]
-cycles = 2
-steady_cycles = 1
+cycles = 3
+steady_cycles = 2
 "#;
 
 #[test]

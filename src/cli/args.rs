@@ -44,6 +44,11 @@ pub fn pascals(s: &str) -> Result<f64, String> {
     positive(s, "Pa")
 }
 
+/// A mass in kg, positive and finite.
+pub fn positive_kg(s: &str) -> Result<f64, String> {
+    positive(s, "kg")
+}
+
 /// A density in kg/m³, positive and finite.
 pub fn density(s: &str) -> Result<f64, String> {
     positive(s, "kg/m^3")

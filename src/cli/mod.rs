@@ -3,8 +3,10 @@
 //! line with context; the process then exits with status 1 (2 for usage errors,
 //! which clap reports itself).
 
+mod analyze;
 mod args;
 mod bench;
+mod calibrate;
 mod impact;
 mod progress;
 mod scene_cmd;
@@ -34,8 +36,13 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Shake the damper at one frequency and amplitude; write traces and the DEM truth.
+    /// Shake the damper at one frequency and amplitude through the rig; write
+    /// the traces, the DEM truth and the measurement.
     Shake(shake::ShakeArgs),
+    /// Measure the rig's phase error on the empty enclosure (no particles).
+    Calibrate(calibrate::CalibrateArgs),
+    /// Dissipated power of a force/acceleration record by Yang's method.
+    Analyze(analyze::AnalyzeArgs),
     /// One collision, sphere against a wall or a sphere, against Hertz theory.
     Impact(impact::ImpactArgs),
     /// Show the built-in scene (or a scene file merged over it).
@@ -44,6 +51,11 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Measure speed: particle-steps per second on the thesis scene.
     Bench(bench::BenchArgs),
+}
+
+/// Name of a shaker kind, as on the command line.
+pub fn shake_name(kind: vlab::rig::ShakerKind) -> &'static str {
+    vlab::scene::measurement::shaker_name(kind)
 }
 
 /// Runs the command line and maps errors to an exit status.
@@ -88,6 +100,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     let quiet = cli.quiet;
     pool.install(|| match cli.command {
         Command::Shake(a) => shake::run(a, quiet),
+        Command::Calibrate(a) => calibrate::run(a),
+        Command::Analyze(a) => analyze::run(a),
         Command::Impact(a) => impact::run(a),
         Command::Scene(a) => scene_cmd::run(a),
         Command::Sweep(a) => sweep::run(a, quiet),

@@ -1,18 +1,26 @@
 //! `vlab shake`: drive the damper at one frequency and amplitude and write what
 //! the simulator knows, the DEM truth (`summary.json`, `kinematics.csv`).
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use clap::Args;
+use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use vlab::atomic_write::write_bytes_atomic;
 use vlab::dem::{Dissipation, LedgerBalance};
-use vlab::scene::damper::{DriveOutcome, DrivePlan, SineDrive, run_drive, settle_bed};
+use vlab::rig::{RigSpec, ShakerKind, check_limits};
+use vlab::scene::damper::{DriveOutcome, settle_bed};
 use vlab::scene::file::{Orientation, Scene};
-use vlab::scene::record::{TruthRecorder, TruthSamples};
-use vlab::signals::{Trace, TraceMetadata, write_csv};
+use vlab::scene::measurement::{
+    CalibrationSource, Measured, ShakeExperiment, ShakeSetup, run_measured_shake,
+};
+use vlab::scene::record::TruthSamples;
+use vlab::signals::{
+    PhaseCalibration, Series, SeriesStyle, Trace, TraceMetadata, plot_xy_svg, write_csv,
+    write_wav_with_full_scale,
+};
 
 use super::args;
 use super::progress::ProgressLine;
@@ -31,12 +39,65 @@ pub struct ShakeArgs {
     pub gamma: f64,
     #[command(flatten)]
     pub scene: SceneOverrides,
+    /// The rig that measures the damper: a built-in name (thesis-shaker, ideal)
+    /// or a rig file (TOML).
+    #[arg(long, value_name = "NAME|FILE", default_value = vlab::rig::DEFAULT_RIG)]
+    pub rig: String,
+    /// How the enclosure is moved [default: the rig's own].
+    #[arg(long, value_enum)]
+    pub shaker: Option<ShakerChoice>,
+    /// Length of the record after the transient cycles (s); sets the number of
+    /// steady cycles instead of --steady-cycles.
+    #[arg(long = "duration-s", value_name = "S", value_parser = args::seconds, conflicts_with = "steady_cycles")]
+    pub duration_s: Option<f64>,
+    /// Phase-error table of the rig (from `vlab calibrate`) [default: measure
+    /// one now on the empty enclosure at the drive frequency].
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<PathBuf>,
     /// Output folder [default: signals/<scene>-<freq>Hz-G<gamma>].
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Print the summary as JSON on standard output.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The drive, as named on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ShakerChoice {
+    /// The enclosure follows u = Gamma g / w^2 sin(w t) exactly.
+    Prescribed,
+    /// A lumped electrodynamic shaker whose motion the particles disturb.
+    Electrodynamic,
+}
+
+impl ShakerChoice {
+    pub fn kind(self) -> ShakerKind {
+        match self {
+            ShakerChoice::Prescribed => ShakerKind::Prescribed,
+            ShakerChoice::Electrodynamic => ShakerKind::Electrodynamic,
+        }
+    }
+}
+
+/// The rig named by `--rig`, its drive, and a refusal of what it cannot do.
+pub fn resolve_rig(
+    name: &str,
+    shaker: Option<ShakerChoice>,
+    freq_hz: f64,
+    gamma: f64,
+    g_mps2: f64,
+) -> Result<(RigSpec, ShakerKind)> {
+    let rig = RigSpec::from_name_or_path(name).with_context(|| format!("--rig {name}"))?;
+    let kind = shaker.map_or(rig.shaker.kind, ShakerChoice::kind);
+    check_limits(&rig, freq_hz, gamma, g_mps2)?;
+    if kind == ShakerKind::Electrodynamic && rig.shaker.electrodynamic.is_none() {
+        bail!(
+            "--shaker electrodynamic: rig {} has no [shaker.electrodynamic] section; use --shaker prescribed or --rig thesis-shaker",
+            rig.name
+        );
+    }
+    Ok((rig, kind))
 }
 
 /// Scene options shared by the commands that run the damper.
@@ -155,6 +216,12 @@ pub struct DemTruth {
     pub dissipated_j: Dissipation,
     /// The same per cycle (J); sums to `energy_per_cycle_j`.
     pub dissipated_per_cycle_j: Dissipation,
+    /// Work the enclosure did on the particles per steady cycle (J): what an
+    /// input-power measurement sees.
+    pub work_in_per_cycle_j: f64,
+    /// (work in − dissipated) / dissipated over the steady cycles: zero in a
+    /// steady state; otherwise the bed stored or gave back energy.
+    pub steadiness_rel: f64,
     /// |ledger residual| / dissipated energy over the whole drive.
     pub ledger_residual_rel: f64,
     /// Energy balance of the whole drive (J).
@@ -163,8 +230,10 @@ pub struct DemTruth {
     pub steady_ledger: LedgerBalance,
     /// Largest particle speed seen at a cycle boundary (m/s).
     pub largest_particle_speed_mps: f64,
+    /// Largest normal approach speeds at contact onset during the drive (m/s).
+    pub largest_impact_speed_mps: YieldVelocities,
     /// Yield velocities of eq. 5.26, when the material has a yield strength.
-    pub yield_velocity: Option<YieldVelocities>,
+    pub yield_velocity_mps: Option<YieldVelocities>,
 }
 
 impl DemTruth {
@@ -175,17 +244,55 @@ impl DemTruth {
             efficiency: out.efficiency,
             dissipated_j: out.steady.dissipated,
             dissipated_per_cycle_j: out.dissipated_per_cycle,
+            work_in_per_cycle_j: out.work_in_per_cycle_j,
+            steadiness_rel: out.work_in_per_cycle_j / out.energy_per_cycle_j - 1.0,
             ledger_residual_rel: out.whole.residual_relative(),
             ledger: out.whole,
             steady_ledger: out.steady,
             largest_particle_speed_mps: out.largest_speed_mps,
-            yield_velocity: scene
+            largest_impact_speed_mps: YieldVelocities {
+                particle_particle_mps: out.impact_speeds.particle_particle_mps,
+                particle_wall_mps: out.impact_speeds.particle_wall_mps,
+            },
+            yield_velocity_mps: scene
                 .yield_velocities_mps()
                 .map(|(pp, pw)| YieldVelocities {
                     particle_particle_mps: pp,
                     particle_wall_mps: pw,
                 }),
         }
+    }
+
+    /// Warnings a user must see: impacts beyond yield, a record that is not
+    /// steady.
+    pub fn warnings(&self, freq_hz: f64) -> Vec<String> {
+        let mut w = Vec::new();
+        if let Some(y) = &self.yield_velocity_mps {
+            let v = &self.largest_impact_speed_mps;
+            for (what, speed, limit) in [
+                (
+                    "particle-particle",
+                    v.particle_particle_mps,
+                    y.particle_particle_mps,
+                ),
+                ("particle-wall", v.particle_wall_mps, y.particle_wall_mps),
+            ] {
+                if speed > limit {
+                    w.push(format!(
+                        "{what} impacts reached {speed:.2} m/s, above the yield velocity {limit:.2} m/s (thesis eq. 5.26): the contacts would yield and the constant restitution of the model no longer holds (Section 5.5.4)"
+                    ));
+                }
+            }
+        }
+        if self.steadiness_rel.abs() > 0.02 {
+            w.push(format!(
+                "the bed is not in a steady state over the record: the enclosure put in {:+.1} % of the energy the DEM dissipated (the bed {} the difference), so any input-power measurement differs from the DEM's dissipation by that much; lengthen the transient with --cycles (at {freq_hz} Hz try {} cycles)",
+                100.0 * self.steadiness_rel,
+                if self.steadiness_rel < 0.0 { "gave back" } else { "stored" },
+                (freq_hz * 0.5).ceil().max(16.0)
+            ));
+        }
+        w
     }
 }
 
@@ -207,8 +314,10 @@ pub struct ShakeSummary {
     pub steps: u64,
     /// Simulated time spent pouring and settling before the drive (s).
     pub settle_time_s: f64,
-    /// Start of the steady window from the drive start (s).
+    /// Start of the steady window and of the rig's record, from the drive start (s).
     pub steady_start_s: f64,
+    pub rig: String,
+    pub shaker: &'static str,
     pub sample_rate_hz: f64,
     /// Wall-clock time of the drive's stepping loop (s).
     pub wall_time_s: f64,
@@ -218,13 +327,37 @@ pub struct ShakeSummary {
     pub settle_wall_time_s: f64,
     pub threads: usize,
     pub dem: DemTruth,
+    pub measured: Measured,
+    pub warnings: Vec<String>,
     pub files: Vec<String>,
 }
 
 /// Runs the command.
 pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
-    let scene = a.scene.resolve()?;
+    let mut scene = a.scene.resolve()?;
+    if let Some(d) = a.duration_s {
+        let steady = (d * a.freq_hz).ceil().max(2.0) as u32;
+        let transient = scene.drive.cycles - scene.drive.steady_cycles;
+        scene.drive.cycles = transient + steady;
+        scene.drive.steady_cycles = steady;
+    }
     check_drive(&scene, a.freq_hz)?;
+    if scene.drive.steady_cycles < 2 {
+        bail!(
+            "--steady-cycles {} is invalid: the rig's record needs at least 2 whole periods for Yang's method",
+            scene.drive.steady_cycles
+        );
+    }
+    let g = scene.simulation.gravity_mps2;
+    let (rig, kind) = resolve_rig(&a.rig, a.shaker, a.freq_hz, a.gamma, g)?;
+    let calibration = match &a.calibration {
+        Some(path) => {
+            let table = PhaseCalibration::load_json(path)
+                .with_context(|| format!("--calibration {}", path.display()))?;
+            CalibrationSource::Given(table, format!("table {}", path.display()))
+        }
+        None => CalibrationSource::OnTheFly,
+    };
     let out_dir = a.out.clone().unwrap_or_else(|| {
         PathBuf::from("signals").join(format!(
             "{}-{}Hz-G{}",
@@ -235,10 +368,25 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     });
     let made = OutputDir::prepare(&out_dir)?;
     let mut progress = ProgressLine::new("shake", quiet);
-    let result = simulate(&scene, a.freq_hz, a.gamma, &mut progress);
+    let setup = ShakeSetup {
+        rig,
+        shaker: kind,
+        freq_hz: a.freq_hz,
+        gamma: a.gamma,
+        calibration,
+    };
+    let result = simulate(&scene, &setup, &mut progress);
     progress.finish();
-    let (summary, samples) = made.keep_if_ok(result)?;
-    write_outputs(&out_dir, summary, &samples, a.json)
+    let (summary, experiment) = made.keep_if_ok(result)?;
+    write_outputs(
+        &out_dir,
+        summary,
+        &experiment,
+        &scene,
+        &setup,
+        a.json,
+        &mut progress,
+    )
 }
 
 /// An output folder made before a long run, so that an unwritable path fails
@@ -272,63 +420,58 @@ impl OutputDir {
     }
 }
 
-/// Pours, settles and drives; returns the summary and the truth record.
-pub fn simulate(
+/// Pours, settles, drives through the rig and measures.
+fn simulate(
     scene: &Scene,
-    freq_hz: f64,
-    gamma: f64,
+    setup: &ShakeSetup,
     progress: &mut ProgressLine,
-) -> Result<(ShakeSummary, TruthSamples)> {
+) -> Result<(ShakeSummary, ShakeExperiment)> {
     let dt = scene.dt_s();
     let bed =
         settle_bed(scene, dt, &mut |p| progress.update(p)).context("preparing the particle bed")?;
     let mut world = bed.world;
-    let g = scene.simulation.gravity_mps2;
-    let plan = DrivePlan {
-        freq_hz,
-        gamma,
-        gravity_mps2: g,
-        cycles: scene.drive.cycles,
-        steady_cycles: scene.drive.steady_cycles,
-    };
-    let mut drive = SineDrive::new(freq_hz, gamma, g);
-    let mut recorder = TruthRecorder::new(TRUTH_SAMPLE_RATE_HZ, 0.0);
-    let outcome = run_drive(&mut world, &plan, &mut drive, &mut recorder, &mut |p| {
-        progress.update(p)
-    })
-    .context("driving the damper")?;
+    let experiment = run_measured_shake(scene, &mut world, setup, &mut |p| progress.update(p))
+        .context("driving and measuring the damper")?;
+    let outcome = &experiment.outcome;
     let n = world.particles.len();
+    let dem = DemTruth::new(outcome, scene);
+    let mut warnings = experiment.measured.clipping.clone();
+    warnings.extend(dem.warnings(setup.freq_hz));
     let summary = ShakeSummary {
         vlab_version: env!("CARGO_PKG_VERSION"),
         scene: scene.name.clone(),
-        freq_hz,
-        gamma,
+        freq_hz: setup.freq_hz,
+        gamma: setup.gamma,
         orientation: scene.enclosure.orientation.as_str(),
         n_particles: n,
         particle_mass_kg: world.particles.total_mass_kg(),
         fill_ratio: scene.fill_ratio(),
         seed: scene.simulation.seed,
         dt_s: dt,
-        cycles: plan.cycles,
-        steady_cycles: plan.steady_cycles,
+        cycles: scene.drive.cycles,
+        steady_cycles: scene.drive.steady_cycles,
         steps: outcome.steps,
         settle_time_s: bed.settle_time_s,
         steady_start_s: outcome.steady_start_s,
-        sample_rate_hz: TRUTH_SAMPLE_RATE_HZ,
+        rig: setup.rig.name.clone(),
+        shaker: experiment.measured.shaker,
+        sample_rate_hz: setup.rig.daq.sample_rate_hz,
         wall_time_s: outcome.wall_time_s,
         particle_steps_per_s: (n as u64 * outcome.steps) as f64 / outcome.wall_time_s,
         settle_wall_time_s: bed.wall_time_s,
         threads: rayon::current_num_threads(),
-        dem: DemTruth::new(&outcome, scene),
-        files: vec!["summary.json".into(), "kinematics.csv".into()],
+        dem,
+        measured: experiment.measured.clone(),
+        warnings,
+        files: Vec::new(),
     };
-    Ok((summary, recorder.into_samples()))
+    Ok((summary, experiment))
 }
 
 /// The truth record as a trace.
 pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Trace> {
     let start = samples.time_s.first().copied().unwrap_or(0.0);
-    let mut trace = Trace::new(TRUTH_SAMPLE_RATE_HZ, start)?;
+    let mut trace = Trace::new(summary.sample_rate_hz, start)?;
     trace.metadata = TraceMetadata {
         source: format!("vlab {} shake: DEM truth", summary.vlab_version),
         rig: "none (DEM truth, no sensors)".into(),
@@ -356,15 +499,46 @@ pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Tra
 
 fn write_outputs(
     dir: &Path,
-    summary: ShakeSummary,
-    samples: &TruthSamples,
+    mut summary: ShakeSummary,
+    e: &ShakeExperiment,
+    scene: &Scene,
+    setup: &ShakeSetup,
     json: bool,
+    progress: &mut ProgressLine,
 ) -> Result<()> {
-    let trace = truth_trace(samples, &summary)?;
-    write_csv(&dir.join("kinematics.csv"), &trace)?;
+    let truth = truth_trace(&e.truth, &summary)?;
+    write_csv(&dir.join("kinematics.csv"), &truth)?;
+    write_csv(&dir.join("trace.csv"), &e.trace)?;
+    // Full scale of the WAV = the ADC's, so that ADC codes are stored exactly.
+    let full_scale: BTreeMap<String, f64> = if e.daq.ideal_adc {
+        BTreeMap::new()
+    } else {
+        e.daq
+            .full_scale
+            .iter()
+            .map(|(c, v, _)| (c.clone(), *v))
+            .collect()
+    };
+    write_wav_with_full_scale(&dir.join("trace.wav"), &e.trace, &full_scale)?;
+    e.calibration.save_json(&dir.join("calibration.json"))?;
+    plot_record(&dir.join("trace.svg"), &e.trace, scene, setup)?;
+    summary.files = [
+        "summary.json",
+        "trace.csv",
+        "trace.wav",
+        "trace.wav.json",
+        "kinematics.csv",
+        "calibration.json",
+        "trace.svg",
+    ]
+    .map(String::from)
+    .to_vec();
     let text = serde_json::to_string_pretty(&summary)? + "\n";
     write_bytes_atomic(&dir.join("summary.json"), text.as_bytes())
         .with_context(|| format!("writing {}", dir.join("summary.json").display()))?;
+    for w in &summary.warnings {
+        progress.note(&format!("warning: {w}"));
+    }
     if json {
         print!("{text}");
     } else {
@@ -373,8 +547,44 @@ fn write_outputs(
     Ok(())
 }
 
+/// Two cycles of the record as the thesis plots them (Fig. 7.12): the
+/// acceleration and the force divided by the total mass, both in m/s².
+fn plot_record(path: &Path, trace: &Trace, scene: &Scene, setup: &ShakeSetup) -> Result<()> {
+    let a = &trace.channel(vlab::rig::ACCEL_CHANNEL)?.samples;
+    let f = &trace.channel(vlab::rig::FORCE_CHANNEL)?.samples;
+    let m_total = setup.rig.enclosure.mass_kg + scene.particle_mass_kg();
+    let n = ((2.0 * trace.sample_rate_hz / setup.freq_hz).round() as usize).min(a.len());
+    let t = |i: usize| 1e3 * trace.time_s(i);
+    // The static weight is a constant offset of the force; remove its mean.
+    let f_mean = f[..n].iter().sum::<f64>() / n.max(1) as f64;
+    let series = [
+        Series {
+            name: "acceleration".into(),
+            points: (0..n).map(|i| (t(i), a[i])).collect(),
+            style: SeriesStyle::Line,
+        },
+        Series {
+            name: "force / (m_enclosure + m_particles), mean removed".into(),
+            points: (0..n).map(|i| (t(i), (f[i] - f_mean) / m_total)).collect(),
+            style: SeriesStyle::Line,
+        },
+    ];
+    plot_xy_svg(
+        path,
+        &format!(
+            "{} damper, {} Hz, Gamma {}: rig {} record (cf. thesis Fig. 7.12)",
+            scene.name, setup.freq_hz, setup.gamma, setup.rig.name
+        ),
+        "time from the record start (ms)",
+        "m/s^2",
+        &series,
+    )?;
+    Ok(())
+}
+
 fn print_summary(s: &ShakeSummary, dir: &Path) {
     let d = &s.dem;
+    let m = &s.measured;
     let pc = &d.dissipated_per_cycle_j;
     let total = pc.total().max(f64::MIN_POSITIVE);
     println!(
@@ -390,21 +600,46 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         s.seed
     );
     println!(
-        "  energy dissipated per cycle  {:.4e} J   (last {} of {} cycles)",
-        d.energy_per_cycle_j, s.steady_cycles, s.cycles
+        "  DEM truth (last {} of {} cycles):",
+        s.steady_cycles, s.cycles
     );
-    println!("  E_max = 4 (Gamma g / w)^2 M  {:.4e} J", d.e_max_j);
-    println!("  damping efficiency           {:.3}", d.efficiency);
     println!(
-        "  by source: particle-particle normal {:.1} %, tangential {:.1} %; particle-wall normal {:.1} %, tangential {:.1} %",
+        "    energy dissipated per cycle   {:.4e} J",
+        d.energy_per_cycle_j
+    );
+    println!("    E_max = 4 (Gamma g / w)^2 M   {:.4e} J", d.e_max_j);
+    println!("    damping efficiency            {:.3}", d.efficiency);
+    println!(
+        "    by source: particle-particle normal {:.1} %, tangential {:.1} %; particle-wall normal {:.1} %, tangential {:.1} %",
         100.0 * pc.pp_normal / total,
         100.0 * pc.pp_tangential / total,
         100.0 * pc.pw_normal / total,
         100.0 * pc.pw_tangential / total
     );
     println!(
-        "  energy ledger residual       {:.1e} of the dissipated energy",
+        "    energy ledger residual        {:.1e} of the dissipated energy",
         d.ledger_residual_rel
+    );
+    println!(
+        "  measured by rig {} ({} shaker), Yang's method over {} periods:",
+        s.rig, s.shaker, m.n_periods
+    );
+    println!(
+        "    energy per cycle              {:.4e} J  ({:+.2} % vs DEM)",
+        m.energy_per_cycle_j,
+        100.0 * m.error_vs_dem_rel
+    );
+    println!("    damping efficiency            {:.3}", m.efficiency);
+    println!(
+        "    phase correction              {:.3} mrad ({})",
+        1e3 * m.phase_correction_rad,
+        m.calibration
+    );
+    println!(
+        "    without the correction        {:.4e} J  ({:+.2} % vs DEM; predicted leak {:+.2} %)",
+        m.uncorrected_energy_per_cycle_j,
+        100.0 * m.uncorrected_error_vs_dem_rel,
+        100.0 * m.predicted_leak_per_cycle_j / d.energy_per_cycle_j
     );
     println!(
         "  speed {:.2} M particle-steps/s ({} thread{}), drive {:.1} s, settling {:.1} s",

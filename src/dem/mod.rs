@@ -24,4 +24,4 @@ pub use material::Material;
 pub use particles::Particles;
 pub use restitution::RestitutionMode;
 pub use walls::{WallShape, Walls};
-pub use world::{Numerics, World};
+pub use world::{ImpactSpeeds, Numerics, World};

@@ -75,6 +75,8 @@ struct PairOutput {
     approach_mps: f64,
     /// Steps the collision will take, set when the contact opens (else infinite).
     steps_per_collision: f64,
+    /// Normal approach speed when the contact opened this step (else zero).
+    onset_speed_mps: f64,
 }
 
 /// A complete DEM system.
@@ -103,6 +105,16 @@ pub struct World {
     wall_force: DVec3,
     /// Ledger reading the energy check compares against.
     baseline: LedgerSnapshot,
+    /// Largest normal approach speed at contact onset since the last reset (m/s).
+    pub impact_speeds: ImpactSpeeds,
+}
+
+/// Largest normal approach speeds at contact onset (m/s), to hold against the
+/// yield velocity of thesis eq. 5.26 (the model's validity, Section 5.5.4).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ImpactSpeeds {
+    pub particle_particle_mps: f64,
+    pub particle_wall_mps: f64,
 }
 
 impl World {
@@ -131,6 +143,7 @@ impl World {
             pair_out: Vec::new(),
             wall_force: DVec3::ZERO,
             baseline: LedgerSnapshot::default(),
+            impact_speeds: ImpactSpeeds::default(),
         };
         world.reset_contacts();
         world.compute_forces(0.0)?;
@@ -384,6 +397,8 @@ impl World {
                 }
                 if dt > 0.0 && st.delta_prev <= 0.0 {
                     let v_n = v_rel.dot(n).max(0.0);
+                    let fastest = &mut self.impact_speeds.particle_wall_mps;
+                    *fastest = fastest.max(v_n);
                     let t_c = hertz_theory::contact_duration_s(p.mass[i], law.e_star_pa, r, v_n);
                     if t_c < self.numerics.min_steps_per_collision * dt {
                         let contact = format!("particle-{}", self.walls.names[w]);
@@ -459,6 +474,8 @@ impl World {
                     dt_s: self.numerics.dt_s,
                 });
             }
+            let fastest = &mut self.impact_speeds.particle_particle_mps;
+            *fastest = fastest.max(out.onset_speed_mps);
             p.force[i] += out.force_i;
             p.force[j] -= out.force_i;
             p.torque[i] += out.torque_i;
@@ -508,12 +525,17 @@ fn pair_contact(
         normal: n,
         v_rel,
     };
-    let steps_per_collision = if dt > 0.0 && st.delta_prev <= 0.0 {
+    let (steps_per_collision, onset_speed_mps) = if dt > 0.0 && st.delta_prev <= 0.0 {
         let v_n = v_rel.dot(n).max(0.0);
-        hertz_theory::contact_duration_s(geometry.m_star_kg, law.e_star_pa, geometry.r_star_m, v_n)
-            / dt
+        let t_c = hertz_theory::contact_duration_s(
+            geometry.m_star_kg,
+            law.e_star_pa,
+            geometry.r_star_m,
+            v_n,
+        );
+        (t_c / dt, v_n)
     } else {
-        f64::INFINITY
+        (f64::INFINITY, 0.0)
     };
     let out = evaluate_contact(law, &geometry, dt, st);
     PairOutput {
@@ -527,5 +549,6 @@ fn pair_contact(
         overlap_ratio: delta / ri.min(rj),
         approach_mps: v_rel.dot(n),
         steps_per_collision,
+        onset_speed_mps,
     }
 }

@@ -20,7 +20,8 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::dem::{
-    ContactLaw, Dissipation, LedgerBalance, LedgerSnapshot, Numerics, Particles, Walls, World,
+    ContactLaw, Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, Numerics, Particles,
+    Walls, World,
 };
 use crate::scene::file::{Orientation, Scene, SceneError};
 use crate::scene::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
@@ -296,6 +297,12 @@ pub struct DriveOutcome {
     pub energy_per_cycle_j: f64,
     /// Per-cycle dissipation by source in the steady window (J).
     pub dissipated_per_cycle: Dissipation,
+    /// Work the walls did per cycle in the steady window (J): what a
+    /// measurement of input power sees; it differs from the dissipation by the
+    /// change of stored energy over the window.
+    pub work_in_per_cycle_j: f64,
+    /// Length of the steady window (s).
+    pub steady_window_s: f64,
     pub e_max_j: f64,
     pub efficiency: f64,
     pub steps: u64,
@@ -303,6 +310,8 @@ pub struct DriveOutcome {
     /// Start of the steady window, from the drive start (s).
     pub steady_start_s: f64,
     pub largest_speed_mps: f64,
+    /// Largest normal approach speeds at contact onset during the drive (m/s).
+    pub impact_speeds: ImpactSpeeds,
 }
 
 /// Drives a settled world with `motion` for `plan.cycles` cycles.
@@ -319,6 +328,7 @@ pub fn run_drive(
     let t0 = world.time_s;
     let n = world.particles.len() as u64;
     let first_step = world.steps;
+    world.impact_speeds = ImpactSpeeds::default();
     let mut snapshots = vec![world.snapshot()];
     let mut largest_speed: f64 = 0.0;
     let report_every = ((2e-3 / dt).round() as u64).max(1);
@@ -362,6 +372,8 @@ pub fn run_drive(
         steady,
         energy_per_cycle_j,
         dissipated_per_cycle: steady.dissipated.scaled(per_cycle),
+        work_in_per_cycle_j: steady.work_in_j * per_cycle,
+        steady_window_s: window_s,
         e_max_j,
         efficiency: energy_per_cycle_j / e_max_j,
         steps: world.steps - first_step,
@@ -369,5 +381,6 @@ pub fn run_drive(
         steady_start_s: snapshots[steady_first].time_s - t0,
         cycle_snapshots: snapshots,
         largest_speed_mps: largest_speed,
+        impact_speeds: world.impact_speeds,
     })
 }

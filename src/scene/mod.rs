@@ -6,4 +6,5 @@ pub mod damper;
 pub mod file;
 pub mod fill;
 pub mod impact;
+pub mod measurement;
 pub mod record;

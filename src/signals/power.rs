@@ -169,7 +169,7 @@ pub struct WindowPlan {
 }
 
 /// One drive harmonic's share of the power.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct HarmonicPower {
     /// Harmonic number (1 = drive).
     pub harmonic: usize,

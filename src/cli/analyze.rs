@@ -1,0 +1,202 @@
+//! `vlab analyze`: Yang's structure-independent method (thesis eq. 7.8–7.12) on
+//! a force/acceleration record, from vlab or from a real lab (CSV or WAV): the
+//! dissipated power, the energy per cycle, the efficiency (eq. 7.7) when the
+//! particle mass and amplitude are known, and the phase correction used.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use serde::Serialize;
+
+use vlab::signals::{
+    HarmonicPower, PhaseCalibration, PhaseCorrection, PowerOptions, Trace, efficiency, read_csv,
+    read_wav, yang_power_of_trace,
+};
+
+use super::args;
+
+#[derive(Debug, Clone, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct AnalyzeArgs {
+    /// The record: a CSV or a WAV file (with its .json sidecar).
+    #[arg(value_name = "TRACE")]
+    trace: PathBuf,
+    /// Phase-error table (from `vlab calibrate` or a shake run's calibration.json).
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<PathBuf>,
+    /// Drive frequency (Hz) [default: from the trace's metadata].
+    #[arg(long = "freq", value_name = "HZ", value_parser = args::freq_hz)]
+    freq_hz: Option<f64>,
+    /// Amplitude Γ, for the efficiency [default: from the metadata].
+    #[arg(long, value_parser = args::gamma)]
+    gamma: Option<f64>,
+    /// Particle mass (kg), for the efficiency [default: from the metadata].
+    #[arg(long = "particle-mass-kg", value_name = "KG", value_parser = args::positive_kg)]
+    particle_mass_kg: Option<f64>,
+    /// Name of the force channel (N).
+    #[arg(long, default_value = "force")]
+    force_channel: String,
+    /// Name of the acceleration channel (m/s^2).
+    #[arg(long, default_value = "acceleration")]
+    accel_channel: String,
+    /// Print the result as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Analysis {
+    pub drive_freq_hz: f64,
+    pub power_w: f64,
+    pub energy_per_cycle_j: f64,
+    pub efficiency: Option<f64>,
+    pub phase_correction_rad: f64,
+    pub calibration: String,
+    pub n_periods: usize,
+    pub n_samples: usize,
+    pub per_harmonic: Vec<HarmonicPower>,
+    pub warnings: Vec<String>,
+}
+
+/// Reads a CSV or WAV trace, by its extension.
+pub fn read_trace(path: &Path) -> Result<Trace> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("csv") => Ok(read_csv(path)?),
+        Some("wav") => Ok(read_wav(path)?),
+        _ => bail!(
+            "{}: unknown trace format: expected a .csv or a .wav file (with a .wav.json sidecar)",
+            path.display()
+        ),
+    }
+}
+
+/// Samples sitting at a channel's extreme value: a clipped ADC leaves flat tops.
+fn clipping_warning(trace: &Trace, channel: &str) -> Option<String> {
+    let x = &trace.channel(channel).ok()?.samples;
+    let peak = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if peak == 0.0 {
+        return None;
+    }
+    let mut longest = 0;
+    let mut run = 0;
+    let mut at_peak = 0;
+    for v in x {
+        if v.abs() == peak {
+            at_peak += 1;
+            run += 1;
+            longest = longest.max(run);
+        } else {
+            run = 0;
+        }
+    }
+    (longest >= 3).then(|| {
+        format!(
+            "channel '{channel}' looks clipped: {at_peak} samples sit at its extreme value {peak} (runs of up to {longest}): the power is distorted"
+        )
+    })
+}
+
+pub fn analyse(a: &AnalyzeArgs) -> Result<Analysis> {
+    let trace = read_trace(&a.trace)?;
+    let freq = match a.freq_hz.or(trace.metadata.drive_freq_hz) {
+        Some(f) => f,
+        None => bail!(
+            "unknown drive frequency: {} has no drive_freq_hz in its metadata; give --freq (Hz)",
+            a.trace.display()
+        ),
+    };
+    let table = match &a.calibration {
+        Some(p) => Some(
+            PhaseCalibration::load_json(p)
+                .with_context(|| format!("--calibration {}", p.display()))?,
+        ),
+        None => None,
+    };
+    let correction = table
+        .as_ref()
+        .map_or(PhaseCorrection::None, PhaseCorrection::Table);
+    let options = PowerOptions {
+        phase_correction: correction,
+        ..PowerOptions::default()
+    };
+    let r = yang_power_of_trace(&trace, &a.force_channel, &a.accel_channel, freq, &options)
+        .with_context(|| format!("analysing {}", a.trace.display()))?;
+    let extra_f64 = |key: &str| trace.metadata.extra.get(key).and_then(|v| v.as_f64());
+    let gamma = a.gamma.or(trace.metadata.gamma);
+    let mass = a.particle_mass_kg.or(extra_f64("particle_mass_kg"));
+    let g = extra_f64("gravity_mps2").unwrap_or(vlab::signals::STANDARD_GRAVITY_MPS2);
+    let eta = match (gamma, mass) {
+        (Some(gamma), Some(m)) => Some(efficiency(r.energy_per_cycle_j, m, gamma, freq, g)?),
+        _ => None,
+    };
+    let mut warnings: Vec<String> = [&a.force_channel, &a.accel_channel]
+        .iter()
+        .filter_map(|c| clipping_warning(&trace, c))
+        .collect();
+    if eta.is_none() {
+        warnings.push("no efficiency: it needs --gamma and --particle-mass-kg (or both in the trace's metadata)".into());
+    }
+    if table.is_none() {
+        warnings.push("no phase correction: pass --calibration to subtract the rig's phase error (thesis Fig. 7.9)".into());
+    }
+    Ok(Analysis {
+        drive_freq_hz: freq,
+        power_w: r.power_w,
+        energy_per_cycle_j: r.energy_per_cycle_j,
+        efficiency: eta,
+        phase_correction_rad: r.phase_correction_rad,
+        calibration: a
+            .calibration
+            .as_ref()
+            .map_or("none".into(), |p| p.display().to_string()),
+        n_periods: r.n_periods,
+        n_samples: r.n_samples,
+        per_harmonic: r.per_harmonic,
+        warnings,
+    })
+}
+
+pub fn run(a: AnalyzeArgs) -> Result<()> {
+    let r = analyse(&a)?;
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&r)?);
+        return Ok(());
+    }
+    println!(
+        "{}: drive {} Hz, {} whole periods ({} samples)",
+        a.trace.display(),
+        r.drive_freq_hz,
+        r.n_periods,
+        r.n_samples
+    );
+    println!("  dissipated power      {:.4e} W", r.power_w);
+    println!(
+        "  energy per cycle      {:.4e} J  (eq. 7.8)",
+        r.energy_per_cycle_j
+    );
+    match r.efficiency {
+        Some(e) => println!("  damping efficiency    {e:.3}  (eq. 7.7)"),
+        None => println!("  damping efficiency    unknown (needs --gamma and --particle-mass-kg)"),
+    }
+    println!(
+        "  phase correction      {:.3} mrad at the drive frequency ({})",
+        1e3 * r.phase_correction_rad,
+        r.calibration
+    );
+    println!("  harmonic   freq [Hz]   force [N]   velocity [m/s]   power [W]");
+    for h in r.per_harmonic.iter().take(5) {
+        println!(
+            "  {:8}   {:9.1}   {:9.4}   {:14.5}   {:10.3e}",
+            h.harmonic, h.freq_hz, h.force_amp_n, h.velocity_amp_mps, h.power_w
+        );
+    }
+    Ok(())
+}

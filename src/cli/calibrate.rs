@@ -1,0 +1,141 @@
+//! `vlab calibrate`: the rig's phase error measured on the empty enclosure
+//! (thesis Section 7.4.2, Fig. 7.9). No particles, so no DEM is built: only the
+//! shaker, the transducers and the digitiser run. The table (frequency → phase
+//! error, averaged over the amplitudes) is what `vlab shake --calibration` and
+//! `vlab analyze --calibration` subtract.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use serde::Serialize;
+
+use vlab::scene::damper::DrivePlan;
+use vlab::scene::file::Scene;
+use vlab::scene::measurement::calibrate_rig;
+
+use super::args;
+use super::shake::{ShakerChoice, resolve_rig};
+
+#[derive(Debug, Clone, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct CalibrateArgs {
+    /// Drive frequencies (Hz), comma-separated.
+    #[arg(long = "freq", value_name = "LIST", required = true, value_delimiter = ',', value_parser = args::freq_hz)]
+    freqs_hz: Vec<f64>,
+    /// Amplitudes Γ per frequency, comma-separated; averaged, as in Fig. 7.9.
+    #[arg(long, value_name = "LIST", default_value = "2,5,10", value_delimiter = ',', value_parser = args::gamma)]
+    gammas: Vec<f64>,
+    /// The rig: a built-in name or a rig file.
+    #[arg(long, value_name = "NAME|FILE", default_value = vlab::rig::DEFAULT_RIG)]
+    rig: String,
+    /// How the enclosure is moved [default: the rig's own].
+    #[arg(long, value_enum)]
+    shaker: Option<ShakerChoice>,
+    /// Drive cycles per run; the last --record-cycles are recorded, as in a
+    /// damper run.
+    #[arg(long, default_value = "8")]
+    cycles: u32,
+    /// Cycles recorded at the end of each run.
+    #[arg(long, default_value = "5")]
+    record_cycles: u32,
+    /// Time step (s) of the rig model.
+    #[arg(long = "dt-s", value_name = "S", default_value = "1e-6", value_parser = args::seconds)]
+    dt_s: f64,
+    /// Output file [default: signals/calibration-<rig>.json].
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// Print the table as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct Row {
+    freq_hz: f64,
+    phase_error_rad: f64,
+    spread_rad: f64,
+    amplitudes: usize,
+    rig_model_phase_error_rad: f64,
+}
+
+pub fn run(a: CalibrateArgs) -> Result<()> {
+    if a.record_cycles < 2 || a.record_cycles > a.cycles {
+        bail!(
+            "--record-cycles {} is invalid: must lie in [2, --cycles = {}]",
+            a.record_cycles,
+            a.cycles
+        );
+    }
+    let g = Scene::thesis().simulation.gravity_mps2;
+    // Refuse any (frequency, amplitude) the rig cannot do before running anything.
+    let mut rig_and_kind = None;
+    for &f in &a.freqs_hz {
+        for &gamma in &a.gammas {
+            rig_and_kind = Some(resolve_rig(&a.rig, a.shaker, f, gamma, g)?);
+        }
+    }
+    let Some((rig, kind)) = rig_and_kind else {
+        bail!("--freq and --gammas must name at least one value each");
+    };
+    if a.dt_s > 1.0 / rig.daq.sample_rate_hz {
+        bail!(
+            "--dt-s {} is invalid: must be at most one sample period, {} s at {} Hz",
+            a.dt_s,
+            1.0 / rig.daq.sample_rate_hz,
+            rig.daq.sample_rate_hz
+        );
+    }
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("signals").join(format!("calibration-{}.json", rig.name)));
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("cannot create folder {}", parent.display()))?;
+    }
+    let plan = DrivePlan {
+        freq_hz: 0.0,
+        gamma: 0.0,
+        gravity_mps2: g,
+        cycles: a.cycles,
+        steady_cycles: a.record_cycles,
+    };
+    let (table, _points) = calibrate_rig(&rig, kind, &a.freqs_hz, &a.gammas, g, a.dt_s, &plan, 1)
+        .context("running the empty enclosure")?;
+    table.save_json(&out)?;
+    let rows: Vec<Row> = table
+        .points
+        .iter()
+        .map(|e| Row {
+            freq_hz: e.freq_hz,
+            phase_error_rad: e.phase_error_rad,
+            spread_rad: e.spread_rad,
+            amplitudes: e.n_amplitudes,
+            rig_model_phase_error_rad: rig.expected_phase_error_rad(e.freq_hz),
+        })
+        .collect();
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    } else {
+        println!(
+            "rig {} ({} shaker), empty enclosure of {} kg, Gamma {:?}:",
+            rig.name,
+            super::shake_name(kind),
+            rig.enclosure.mass_kg,
+            a.gammas
+        );
+        println!("   freq [Hz]   phase error [deg]   spread [deg]   rig model [deg]");
+        for r in &rows {
+            println!(
+                "  {:9}   {:17.4}   {:12.5}   {:15.4}",
+                r.freq_hz,
+                r.phase_error_rad.to_degrees(),
+                r.spread_rad.to_degrees(),
+                r.rig_model_phase_error_rad.to_degrees()
+            );
+        }
+        println!("  wrote {}", out.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,370 @@
+//! The damper measured the way the thesis rig measured it (Section 7.4.2).
+//!
+//! The rig's shaker moves the enclosure (prescribed, or electrodynamic and
+//! disturbed by the particles); every DEM step the force transducer reads
+//! `m_enc a - F_p + W` and the accelerometer reads `a`, and the rig's channels
+//! digitise both from the start of the steady cycles. Yang's method (eq.
+//! 7.8–7.12) turns the record into dissipated power, less the phase error
+//! calibrated on the empty enclosure (Fig. 7.9), and the result is held against
+//! the DEM's own tally of dissipated energy.
+//!
+//! The calibration runs the same rig with no particles (no DEM is built) at the
+//! same drive frequency, the same number of cycles and the same record window as
+//! the damper run, over a few amplitudes, and averages the phase error over them
+//! as the thesis did.
+
+use std::f64::consts::PI;
+
+use serde::Serialize;
+
+use crate::dem::World;
+use crate::rig::{Daq, DaqReport, RigSpec, Shaker, ShakerKind, ShakerReport, transducer_force_n};
+use crate::scene::damper::{
+    DriveOutcome, DrivePlan, EnclosureMotion, Kinematics, Progress, StepObserver, run_drive,
+};
+use crate::scene::file::{Orientation, Scene, SceneError};
+use crate::scene::record::{TruthRecorder, TruthSamples};
+use crate::signals::{
+    PhaseCalibration, PhaseCorrection, PhaseErrorPoint, PowerOptions, PowerResult, Trace,
+    TraceMetadata, efficiency, estimate_phase_error, yang_power_of_trace,
+};
+
+impl From<crate::rig::RigError> for SceneError {
+    fn from(e: crate::rig::RigError) -> Self {
+        SceneError::Invalid(e.to_string())
+    }
+}
+
+impl From<crate::signals::SignalsError> for SceneError {
+    fn from(e: crate::signals::SignalsError) -> Self {
+        SceneError::Invalid(e.to_string())
+    }
+}
+
+impl EnclosureMotion for Shaker {
+    fn advance(&mut self, t_s: f64, dt_s: f64, particle_force_n: f64) -> f64 {
+        Shaker::advance(self, t_s, dt_s, particle_force_n)
+    }
+
+    fn kinematics(&self) -> Kinematics {
+        let k = Shaker::kinematics(self);
+        Kinematics {
+            displacement_m: k.displacement_m,
+            velocity_mps: k.velocity_mps,
+            acceleration_mps2: k.acceleration_mps2,
+        }
+    }
+}
+
+/// Feeds the rig's DAQ and the truth recorder from every DEM step.
+struct Instruments {
+    truth: TruthRecorder,
+    daq: Daq,
+    enclosure_mass_kg: f64,
+    static_weight_n: f64,
+}
+
+impl StepObserver for Instruments {
+    fn observe(&mut self, t_s: f64, world: &World, enclosure: &Kinematics) {
+        self.truth.observe(t_s, world, enclosure);
+        let particle_force = -world.wall_force().dot(world.walls.axis);
+        let a = enclosure.acceleration_mps2;
+        let f = transducer_force_n(
+            self.enclosure_mass_kg,
+            a,
+            particle_force,
+            self.static_weight_n,
+        );
+        self.daq.push(t_s, a, f);
+    }
+}
+
+/// Where the phase calibration came from.
+#[derive(Debug, Clone)]
+pub enum CalibrationSource {
+    /// A table given by the user (a file path or a description).
+    Given(PhaseCalibration, String),
+    /// Measured now on the empty enclosure of the same rig.
+    OnTheFly,
+}
+
+/// How a measured shake is run.
+#[derive(Debug, Clone)]
+pub struct ShakeSetup {
+    pub rig: RigSpec,
+    pub shaker: ShakerKind,
+    pub freq_hz: f64,
+    pub gamma: f64,
+    pub calibration: CalibrationSource,
+}
+
+/// The measurement of a run and how it compares with the DEM.
+#[derive(Debug, Clone, Serialize)]
+pub struct Measured {
+    pub power_w: f64,
+    pub energy_per_cycle_j: f64,
+    pub efficiency: f64,
+    /// Phase error subtracted at the drive frequency (rad).
+    pub phase_correction_rad: f64,
+    /// (measured − DEM dissipated per cycle) / DEM dissipated per cycle.
+    pub error_vs_dem_rel: f64,
+    /// (measured − DEM work in per cycle) / DEM work in per cycle: the error of
+    /// the measurement chain alone, without the change of stored energy over
+    /// the record.
+    pub error_vs_dem_work_rel: f64,
+    /// Energy per cycle without the phase correction (J).
+    pub uncorrected_energy_per_cycle_j: f64,
+    pub uncorrected_error_vs_dem_rel: f64,
+    /// The false energy per cycle the enclosure mass leaks through the rig's
+    /// phase error, −½ m_enc ω V² sin φ_err / f (J): what the uncorrected error
+    /// should be.
+    pub predicted_leak_per_cycle_j: f64,
+    /// The rig model's own phase error at the drive frequency (rad).
+    pub rig_phase_error_rad: f64,
+    pub calibration: String,
+    pub n_periods: usize,
+    pub rig: String,
+    pub shaker: &'static str,
+    /// Fundamental enclosure acceleration / g over the last cycle.
+    pub achieved_gamma: Option<f64>,
+    pub clipping: Vec<String>,
+}
+
+/// A measured damper run.
+#[derive(Debug, Clone)]
+pub struct ShakeExperiment {
+    pub outcome: DriveOutcome,
+    pub truth: TruthSamples,
+    pub trace: Trace,
+    pub daq: DaqReport,
+    pub shaker: ShakerReport,
+    pub measured: Measured,
+    pub calibration: PhaseCalibration,
+}
+
+/// Name of a shaker kind, as on the command line.
+pub fn shaker_name(kind: ShakerKind) -> &'static str {
+    match kind {
+        ShakerKind::Prescribed => "prescribed",
+        ShakerKind::Electrodynamic => "electrodynamic",
+    }
+}
+
+/// Static weight the force gauge carries along the drive axis (N).
+fn static_weight_n(scene: &Scene, rig: &RigSpec) -> f64 {
+    match scene.enclosure.orientation {
+        Orientation::Vertical => rig.enclosure.mass_kg * scene.simulation.gravity_mps2,
+        Orientation::Horizontal => 0.0,
+    }
+}
+
+/// Drives a settled `world` of `scene` through the rig and measures it.
+pub fn run_measured_shake(
+    scene: &Scene,
+    world: &mut World,
+    setup: &ShakeSetup,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<ShakeExperiment, SceneError> {
+    let g = scene.simulation.gravity_mps2;
+    let rig = &setup.rig;
+    let plan = DrivePlan {
+        freq_hz: setup.freq_hz,
+        gamma: setup.gamma,
+        gravity_mps2: g,
+        cycles: scene.drive.cycles,
+        steady_cycles: scene.drive.steady_cycles,
+    };
+    let particle_mass = world.particles.total_mass_kg();
+    let mut shaker = Shaker::new(
+        rig,
+        setup.shaker,
+        setup.freq_hz,
+        setup.gamma,
+        g,
+        rig.enclosure.mass_kg,
+        particle_mass,
+    )?;
+    let period = 1.0 / setup.freq_hz;
+    let record_start = (plan.cycles - plan.steady_cycles) as f64 * period;
+    let dt = world.dt_s();
+    let mut daq = Daq::new(rig, dt, record_start, scene.simulation.seed)?;
+    daq.reserve(plan.steady_cycles as f64 * period + 0.01);
+    let mut instruments = Instruments {
+        truth: TruthRecorder::new(rig.daq.sample_rate_hz, 0.0),
+        daq,
+        enclosure_mass_kg: rig.enclosure.mass_kg,
+        static_weight_n: static_weight_n(scene, rig),
+    };
+    let outcome = run_drive(world, &plan, &mut shaker, &mut instruments, progress)?;
+    let metadata = trace_metadata(scene, setup, particle_mass, g);
+    let (trace, daq_report) = instruments.daq.finish(metadata)?;
+
+    let calibration = match &setup.calibration {
+        CalibrationSource::Given(table, _) => table.clone(),
+        CalibrationSource::OnTheFly => {
+            let gammas = [0.5 * setup.gamma, setup.gamma];
+            calibrate_rig(
+                rig,
+                setup.shaker,
+                &[setup.freq_hz],
+                &gammas,
+                g,
+                dt,
+                &plan,
+                scene.simulation.seed,
+            )?
+            .0
+        }
+    };
+    let source = match &setup.calibration {
+        CalibrationSource::Given(_, s) => s.clone(),
+        CalibrationSource::OnTheFly => format!(
+            "measured on the fly: empty enclosure of rig {} at {} Hz, Gamma {} and {}, averaged",
+            rig.name,
+            setup.freq_hz,
+            0.5 * setup.gamma,
+            setup.gamma
+        ),
+    };
+    let corrected = analyse(&trace, setup.freq_hz, PhaseCorrection::Table(&calibration))?;
+    let raw = analyse(&trace, setup.freq_hz, PhaseCorrection::None)?;
+    let truth = outcome.energy_per_cycle_j;
+    let work_truth = outcome.work_in_per_cycle_j;
+    let omega = 2.0 * PI * setup.freq_hz;
+    let v = setup.gamma * g / omega;
+    let phi = rig.expected_phase_error_rad(setup.freq_hz);
+    let shaker_report = shaker.report();
+    let measured = Measured {
+        power_w: corrected.power_w,
+        energy_per_cycle_j: corrected.energy_per_cycle_j,
+        efficiency: efficiency(
+            corrected.energy_per_cycle_j,
+            particle_mass,
+            setup.gamma,
+            setup.freq_hz,
+            g,
+        )?,
+        phase_correction_rad: corrected.phase_correction_rad,
+        error_vs_dem_rel: corrected.energy_per_cycle_j / truth - 1.0,
+        error_vs_dem_work_rel: corrected.energy_per_cycle_j / work_truth - 1.0,
+        uncorrected_energy_per_cycle_j: raw.energy_per_cycle_j,
+        uncorrected_error_vs_dem_rel: raw.energy_per_cycle_j / truth - 1.0,
+        predicted_leak_per_cycle_j: -0.5 * rig.enclosure.mass_kg * omega * v * v * phi.sin()
+            / setup.freq_hz,
+        rig_phase_error_rad: phi,
+        calibration: source,
+        n_periods: corrected.n_periods,
+        rig: rig.name.clone(),
+        shaker: shaker_name(setup.shaker),
+        achieved_gamma: shaker_report.achieved_gamma,
+        clipping: daq_report.clipping_warnings(),
+    };
+    Ok(ShakeExperiment {
+        truth: std::mem::take(&mut instruments.truth.samples),
+        outcome,
+        trace,
+        daq: daq_report,
+        shaker: shaker_report,
+        measured,
+        calibration,
+    })
+}
+
+/// Yang's power of a rig trace over all its whole drive periods.
+pub fn analyse(
+    trace: &Trace,
+    freq_hz: f64,
+    correction: PhaseCorrection<'_>,
+) -> Result<PowerResult, SceneError> {
+    let options = PowerOptions {
+        phase_correction: correction,
+        ..PowerOptions::default()
+    };
+    Ok(yang_power_of_trace(
+        trace,
+        crate::rig::FORCE_CHANNEL,
+        crate::rig::ACCEL_CHANNEL,
+        freq_hz,
+        &options,
+    )?)
+}
+
+fn trace_metadata(
+    scene: &Scene,
+    setup: &ShakeSetup,
+    particle_mass_kg: f64,
+    g: f64,
+) -> TraceMetadata {
+    let mut extra = std::collections::BTreeMap::new();
+    extra.insert(
+        "particle_mass_kg".to_string(),
+        serde_json::json!(particle_mass_kg),
+    );
+    extra.insert("gravity_mps2".to_string(), serde_json::json!(g));
+    extra.insert("scene".to_string(), serde_json::json!(scene.name));
+    extra.insert(
+        "shaker".to_string(),
+        serde_json::json!(shaker_name(setup.shaker)),
+    );
+    extra.insert("seed".to_string(), serde_json::json!(scene.simulation.seed));
+    TraceMetadata {
+        source: format!(
+            "vlab {} shake: {} damper through rig {}",
+            env!("CARGO_PKG_VERSION"),
+            scene.name,
+            setup.rig.name
+        ),
+        rig: setup.rig.name.clone(),
+        drive_freq_hz: Some(setup.freq_hz),
+        gamma: Some(setup.gamma),
+        extra,
+        ..Default::default()
+    }
+}
+
+/// Runs the empty enclosure of `rig` at every frequency and amplitude, with the
+/// cycle plan of a damper run, and estimates the phase error of each record
+/// (true force/velocity phase exactly 90°). Returns the amplitude-averaged table
+/// and the individual points.
+#[allow(clippy::too_many_arguments)]
+pub fn calibrate_rig(
+    rig: &RigSpec,
+    kind: ShakerKind,
+    freqs_hz: &[f64],
+    gammas: &[f64],
+    g_mps2: f64,
+    dt_s: f64,
+    plan: &DrivePlan,
+    seed: u64,
+) -> Result<(PhaseCalibration, Vec<PhaseErrorPoint>), SceneError> {
+    let mut points = Vec::new();
+    for &f in freqs_hz {
+        for &gamma in gammas {
+            let mut shaker = Shaker::new(rig, kind, f, gamma, g_mps2, rig.enclosure.mass_kg, 0.0)?;
+            let period = 1.0 / f;
+            let record_start = (plan.cycles - plan.steady_cycles) as f64 * period;
+            let mut daq = Daq::new(rig, dt_s, record_start, seed)?;
+            daq.reserve(plan.steady_cycles as f64 * period + 0.01);
+            let steps = (plan.cycles as f64 * period / dt_s).round() as u64;
+            // The empty enclosure carries only itself; the rig model sees no
+            // particle force (a vertical rig's static weight is DC, outside the method).
+            let weight = rig.enclosure.mass_kg * g_mps2;
+            for k in 1..=steps {
+                let t = k as f64 * dt_s;
+                shaker.advance(t, dt_s, 0.0);
+                let a = shaker.kinematics().acceleration_mps2;
+                daq.push(
+                    t,
+                    a,
+                    transducer_force_n(rig.enclosure.mass_kg, a, 0.0, weight),
+                );
+            }
+            let (trace, _) = daq.finish(TraceMetadata::default())?;
+            let force = &trace.channel(crate::rig::FORCE_CHANNEL)?.samples;
+            let accel = &trace.channel(crate::rig::ACCEL_CHANNEL)?.samples;
+            points.push(estimate_phase_error(force, accel, trace.sample_rate_hz, f)?);
+        }
+    }
+    let table = PhaseCalibration::from_points(rig.name.clone(), &points)?;
+    Ok((table, points))
+}
