@@ -1,0 +1,303 @@
+//! `vlab shake` through the rig, `vlab analyze`, `vlab calibrate`, end to end.
+
+mod common;
+
+use common::{Scratch, files_below, json, stderr, vlab};
+
+/// A small, quick damper: enough to produce real records.
+const SMALL_SCENE: &str = r#"
+[particles]
+count = 150
+[simulation]
+settle_s = 0.02
+[drive]
+cycles = 5
+steady_cycles = 3
+"#;
+
+fn analyze_json(dir: &Scratch, trace: &str) -> serde_json::Value {
+    let out = vlab(
+        &dir.0,
+        &[
+            "analyze",
+            trace,
+            "--calibration",
+            "run/calibration.json",
+            "--json",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    serde_json::from_slice(&out.stdout).expect("JSON")
+}
+
+/// CSV -> analyze and WAV -> analyze give the in-memory result of the run.
+#[test]
+fn csv_and_wav_analysis_equal_the_run() {
+    let dir = Scratch::new("measure");
+    dir.write("small.toml", SMALL_SCENE);
+    let out = vlab(
+        &dir.0,
+        &[
+            "--quiet",
+            "shake",
+            "--scene",
+            "small.toml",
+            "--freq",
+            "40",
+            "--gamma",
+            "10",
+            "--out",
+            "run",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let s = json(&dir.path("run/summary.json"));
+    let measured = s["measured"]["energy_per_cycle_j"]
+        .as_f64()
+        .expect("measured");
+    for key in [
+        "power_w",
+        "energy_per_cycle_j",
+        "efficiency",
+        "phase_correction_rad",
+        "error_vs_dem_rel",
+    ] {
+        assert!(s["measured"][key].is_f64(), "measured.{key} missing");
+    }
+    for file in [
+        "trace.csv",
+        "trace.wav",
+        "trace.wav.json",
+        "kinematics.csv",
+        "calibration.json",
+        "trace.svg",
+    ] {
+        assert!(dir.path(&format!("run/{file}")).is_file(), "{file} missing");
+    }
+    for trace in ["run/trace.csv", "run/trace.wav"] {
+        let a = analyze_json(&dir, trace);
+        let e = a["energy_per_cycle_j"].as_f64().expect("energy");
+        assert!(
+            (e / measured - 1.0).abs() < 1e-12,
+            "{trace}: {e} vs in-memory {measured}"
+        );
+        let eta = a["efficiency"].as_f64().expect("efficiency from metadata");
+        assert!((eta - s["measured"]["efficiency"].as_f64().expect("eta")).abs() < 1e-12);
+    }
+}
+
+/// `vlab calibrate` recovers the rig model's own phase error at each frequency.
+#[test]
+fn calibrate_recovers_the_rig_phase_error() {
+    let dir = Scratch::new("calibrate");
+    let out = vlab(
+        &dir.0,
+        &[
+            "calibrate",
+            "--freq",
+            "20,40,160",
+            "--out",
+            "cal.json",
+            "--json",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let rows = rows.as_array().expect("rows");
+    assert_eq!(rows.len(), 3);
+    for r in rows {
+        let est = r["phase_error_rad"].as_f64().expect("estimate");
+        let model = r["rig_model_phase_error_rad"].as_f64().expect("model");
+        assert!(
+            (est - model).abs() < 1e-4,
+            "{}: {est} vs {model}",
+            r["freq_hz"]
+        );
+        assert!(
+            est > 0.002 && est < 0.01,
+            "a fraction of a degree, got {est} rad"
+        );
+    }
+    assert!(dir.path("cal.json").is_file());
+}
+
+/// Refuses `args` in a folder prepared by `setup`; nothing new is written.
+fn refuses(setup: impl Fn(&Scratch), args: &[&str], must_mention: &[&str]) {
+    let dir = Scratch::new("measure-errors");
+    setup(&dir);
+    let before = files_below(&dir.0);
+    let out = vlab(&dir.0, args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    let first = stderr(&out).lines().next().unwrap_or("").to_string();
+    assert!(first.starts_with("error:"), "{args:?}: {first}");
+    for w in must_mention {
+        assert!(first.contains(w), "{args:?}: '{first}' lacks '{w}'");
+    }
+    assert_eq!(files_below(&dir.0), before, "{args:?} wrote files");
+}
+
+const GOOD_HEADER: &str = "# sample_rate_hz: 1000\ntime [s],force [N],acceleration [m/s^2]\n";
+
+fn good_csv(periods: usize) -> String {
+    let mut s = GOOD_HEADER.to_string();
+    let n = periods * 100;
+    for i in 0..n {
+        let t = i as f64 / 1000.0;
+        let w = 2.0 * std::f64::consts::PI * 10.0;
+        s += &format!("{t},{},{}\n", (w * t).cos(), (w * t).sin());
+    }
+    s
+}
+
+#[test]
+fn analyze_refuses_bad_records() {
+    let none = |_: &Scratch| {};
+    refuses(
+        none,
+        &["analyze", "missing.csv", "--freq", "10"],
+        &["missing.csv"],
+    );
+    refuses(
+        |d: &Scratch| {
+            d.write("t.txt", "x");
+        },
+        &["analyze", "t.txt", "--freq", "10"],
+        &[".csv or a .wav"],
+    );
+    refuses(
+        |d: &Scratch| {
+            d.write("t.csv", "time [s],force [N]\n0,1\n0.001,2\n0.002,3\n");
+        },
+        &["analyze", "t.csv", "--freq", "10"],
+        &["acceleration"],
+    );
+    refuses(
+        |d: &Scratch| {
+            d.write(
+                "t.csv",
+                &(GOOD_HEADER.to_string() + "0,1,2\n0.001,abc,3\n0.002,1,1\n"),
+            );
+        },
+        &["analyze", "t.csv", "--freq", "10"],
+        &["abc"],
+    );
+    refuses(
+        |d: &Scratch| {
+            d.write(
+                "t.csv",
+                &(GOOD_HEADER.to_string() + "0,1,2\n0.001,NaN,3\n0.002,1,1\n"),
+            );
+        },
+        &["analyze", "t.csv", "--freq", "10"],
+        &["NaN"],
+    );
+    // Fewer than two drive periods.
+    refuses(
+        |d: &Scratch| {
+            d.write("t.csv", &good_csv(1));
+        },
+        &["analyze", "t.csv", "--freq", "10"],
+        &["2 whole periods"],
+    );
+    // No drive frequency anywhere.
+    refuses(
+        |d: &Scratch| {
+            d.write("t.csv", &good_csv(4));
+        },
+        &["analyze", "t.csv"],
+        &["drive frequency", "--freq"],
+    );
+}
+
+#[test]
+fn analyze_refuses_bad_wav_files() {
+    let mono = |d: &Scratch| {
+        // A mono WAV whose sidecar names only the force.
+        let spec = hound::WavSpec {
+            channels: 1,
+            sample_rate: 1000,
+            bits_per_sample: 32,
+            sample_format: hound::SampleFormat::Float,
+        };
+        let mut w = hound::WavWriter::create(d.path("m.wav"), spec).expect("wav");
+        for i in 0..400 {
+            w.write_sample((i as f32 * 0.1).sin()).expect("sample");
+        }
+        w.finalize().expect("finalize");
+        d.write(
+            "m.wav.json",
+            r#"{"format":"vlab-wav-sidecar","version":1,"sample_rate_hz":1000.0,"start_time_s":0.0,"n_samples":400,"channels":[{"name":"force","unit":"N","full_scale":1.0}],"metadata":{}}"#,
+        );
+    };
+    refuses(
+        mono,
+        &["analyze", "m.wav", "--freq", "10"],
+        &["acceleration"],
+    );
+    let wrong_rate = |d: &Scratch| {
+        mono(d);
+        d.write(
+            "m.wav.json",
+            r#"{"format":"vlab-wav-sidecar","version":1,"sample_rate_hz":2000.0,"start_time_s":0.0,"n_samples":400,"channels":[{"name":"force","unit":"N","full_scale":1.0}],"metadata":{}}"#,
+        );
+    };
+    refuses(
+        wrong_rate,
+        &["analyze", "m.wav", "--freq", "10"],
+        &["sample rate"],
+    );
+}
+
+#[test]
+fn analyze_warns_loudly_about_clipping() {
+    let dir = Scratch::new("clip");
+    let mut s = GOOD_HEADER.to_string();
+    for i in 0..400 {
+        let t = i as f64 / 1000.0;
+        let w = 2.0 * std::f64::consts::PI * 10.0;
+        s += &format!(
+            "{t},{},{}\n",
+            (2.0 * (w * t).cos()).clamp(-1.0, 1.0),
+            (w * t).sin()
+        );
+    }
+    dir.write("c.csv", &s);
+    let out = vlab(&dir.0, &["analyze", "c.csv", "--freq", "10"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("clipped"), "{}", stderr(&out));
+}
+
+#[test]
+fn shake_refuses_what_the_rig_cannot_do() {
+    let none = |_: &Scratch| {};
+    refuses(
+        none,
+        &["shake", "--freq", "20", "--gamma", "15"],
+        &["stroke", "--rig ideal"],
+    );
+    refuses(
+        none,
+        &["shake", "--freq", "40", "--gamma", "45"],
+        &["--rig ideal"],
+    );
+    refuses(
+        none,
+        &["shake", "--rig", "nonexistent-rig"],
+        &["nonexistent-rig"],
+    );
+    refuses(
+        none,
+        &["shake", "--rig", "ideal", "--shaker", "electrodynamic"],
+        &["electrodynamic"],
+    );
+    refuses(
+        none,
+        &["shake", "--calibration", "nope.json"],
+        &["nope.json"],
+    );
+    refuses(
+        none,
+        &["calibrate", "--freq", "20", "--gammas", "15"],
+        &["--rig ideal"],
+    );
+}
