@@ -69,6 +69,15 @@ fn prescribed_thesis_rig_recovers_dem_dissipation() {
         );
         let m = &e.measured;
         let truth = e.outcome.energy_per_cycle_j;
+        eprintln!(
+            "{freq} Hz, Gamma {gamma}, {cycles} cycles ({steady} recorded): DEM {truth:.4e} J/cycle, measured {:+.3} % (vs input work {:+.3} %), uncorrected {:+.2} % (predicted leak {:+.2} %), efficiency DEM {:.3} measured {:.3}",
+            100.0 * m.error_vs_dem_rel,
+            100.0 * m.error_vs_dem_work_rel,
+            100.0 * m.uncorrected_error_vs_dem_rel,
+            100.0 * m.predicted_leak_per_cycle_j / truth,
+            e.outcome.efficiency,
+            m.efficiency
+        );
         assert!(
             m.error_vs_dem_rel.abs() < 0.02,
             "{freq} Hz, Gamma {gamma}: measured {:.4e} J vs DEM {truth:.4e} J ({:+.2} %)",
