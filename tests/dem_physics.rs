@@ -111,32 +111,25 @@ fn elastic_frictionless_gas_conserves_energy() {
     }
 }
 
+/// A 5 mm steel sphere hitting a steel plate at 5 m/s, integrated with a step
+/// of 20 µs, far too coarse for its ~10 µs collision; returns the first error.
+fn coarse_steel_impact(numerics: Numerics) -> DemError {
+    let m = Material::STEEL;
+    let law = ContactLaw::new(&m, &m, 0.9, 0.5, RestitutionMode::Exact);
+    let mut p = Particles::default();
+    let (x, v) = (DVec3::new(0.0, 0.0, 1.1 * R), DVec3::new(0.0, 0.0, -5.0));
+    p.push(x, v, DVec3::ZERO, R, m.density_kgm3);
+    let mut world = World::new(p, Walls::plate(), law, law, DVec3::ZERO, numerics).expect("world");
+    (0..100)
+        .try_for_each(|_| world.step(0.0))
+        .expect_err("the coarse run must fail")
+}
+
 /// A time step far too large for the impact is diagnosed, not integrated into NaNs
 /// or into a rebound faster than the impact.
 #[test]
 fn unstable_run_stops_with_a_diagnosis() {
-    let m = Material::STEEL;
-    let law = ContactLaw::new(&m, &m, 0.9, 0.5, RestitutionMode::Exact);
-    let mut p = Particles::default();
-    p.push(
-        DVec3::new(0.0, 0.0, 1.1 * R),
-        DVec3::new(0.0, 0.0, -5.0),
-        DVec3::ZERO,
-        R,
-        m.density_kgm3,
-    );
-    let mut world = World::new(
-        p,
-        Walls::plate(),
-        law,
-        law,
-        DVec3::ZERO,
-        Numerics::with_dt(2e-5),
-    )
-    .expect("world");
-    let err = (0..100)
-        .try_for_each(|_| world.step(0.0))
-        .expect_err("must fail");
+    let err = coarse_steel_impact(Numerics::with_dt(2e-5));
     match &err {
         DemError::UnresolvedCollision { .. }
         | DemError::ExcessiveOverlap { .. }
@@ -154,22 +147,9 @@ fn unstable_run_stops_with_a_diagnosis() {
 /// energy a far too coarse integration creates.
 #[test]
 fn energy_check_catches_what_slips_past_the_onset_check() {
-    let m = Material::STEEL;
-    let law = ContactLaw::new(&m, &m, 0.9, 0.5, RestitutionMode::Exact);
-    let mut p = Particles::default();
-    p.push(
-        DVec3::new(0.0, 0.0, 1.1 * R),
-        DVec3::new(0.0, 0.0, -5.0),
-        DVec3::ZERO,
-        R,
-        m.density_kgm3,
-    );
     let mut numerics = Numerics::with_dt(2e-5);
     numerics.min_steps_per_collision = 0.0;
     numerics.energy_check_steps = 10;
-    let mut world = World::new(p, Walls::plate(), law, law, DVec3::ZERO, numerics).expect("world");
-    let err = (0..100)
-        .try_for_each(|_| world.step(0.0))
-        .expect_err("must fail");
+    let err = coarse_steel_impact(numerics);
     assert!(matches!(err, DemError::EnergyNotConserved { .. }), "{err}");
 }

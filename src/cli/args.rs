@@ -1,17 +1,33 @@
 //! Parsers for command-line values that state their unit and valid range when
 //! they refuse something.
 
-/// A positive, finite number.
-fn positive(s: &str, unit: &str) -> Result<f64, String> {
+/// Parses a number and checks it with `valid`, or says what `valid` wants.
+fn number(s: &str, valid: impl Fn(f64) -> bool, wants: &str) -> Result<f64, String> {
     let v: f64 = s
         .trim()
         .parse()
-        .map_err(|_| format!("'{s}' is not a number ({unit})"))?;
-    if v > 0.0 && v.is_finite() {
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if valid(v) {
         Ok(v)
     } else {
-        Err(format!("must be positive and finite ({unit})"))
+        Err(wants.to_string())
     }
+}
+
+/// A positive, finite number.
+fn positive(s: &str, unit: &str) -> Result<f64, String> {
+    number(
+        s,
+        |v| v > 0.0 && v.is_finite(),
+        &format!("must be positive and finite ({unit})"),
+    )
+    .map_err(|e| {
+        if e.ends_with("a number") {
+            format!("{e} ({unit})")
+        } else {
+            e
+        }
+    })
 }
 
 /// Frequency in Hz, positive and finite.
@@ -56,54 +72,34 @@ pub fn density(s: &str) -> Result<f64, String> {
 
 /// Coefficient of restitution in (0, 1].
 pub fn restitution(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
-    if v > 0.0 && v <= 1.0 {
-        Ok(v)
-    } else {
-        Err("the coefficient of restitution must lie in (0, 1] (dimensionless)".into())
-    }
+    number(
+        s,
+        |v| v > 0.0 && v <= 1.0,
+        "the coefficient of restitution must lie in (0, 1] (dimensionless)",
+    )
 }
 
 /// Coefficient of friction, ≥ 0 and finite.
 pub fn friction(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
-    if v >= 0.0 && v.is_finite() {
-        Ok(v)
-    } else {
-        Err("the coefficient of friction must be >= 0 and finite (dimensionless)".into())
-    }
+    number(
+        s,
+        |v| v >= 0.0 && v.is_finite(),
+        "the coefficient of friction must be >= 0 and finite (dimensionless)",
+    )
 }
 
 /// Poisson's ratio in (-1, 0.5).
 pub fn poisson(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
-    if v > -1.0 && v < 0.5 {
-        Ok(v)
-    } else {
-        Err("Poisson's ratio must lie in (-1, 0.5) (dimensionless)".into())
-    }
+    number(
+        s,
+        |v| v > -1.0 && v < 0.5,
+        "Poisson's ratio must lie in (-1, 0.5) (dimensionless)",
+    )
 }
 
 /// A finite number (any sign).
 pub fn finite(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err("must be finite".into())
-    }
+    number(s, |v| v.is_finite(), "must be finite")
 }
 
 /// At least one thread.
