@@ -46,6 +46,12 @@ impl NeighbourList {
         self.skin_m
     }
 
+    /// Changes the skin; takes effect at the next [`Self::rebuild`], which keeps
+    /// the state of every pair still listed.
+    pub fn set_skin_m(&mut self, skin_m: f64) {
+        self.skin_m = skin_m;
+    }
+
     /// How many times the list was built.
     pub fn rebuilds(&self) -> u64 {
         self.rebuilds

@@ -46,13 +46,15 @@ pub struct Numerics {
 }
 
 impl Numerics {
-    /// Defaults for a given time step: skin 0.2 R, overlap limit 10 % of R,
+    /// Defaults for a given time step: skin 0.5 R, so that the cells of the
+    /// neighbour grid are 2.5 R wide as in the thesis (Section 3.4; physics does
+    /// not depend on the skin, and 0.1–0.5 R ran equally fast), overlap limit 10 % of R,
     /// parallel pair loop from 16384 pairs, at least 5 steps per collision, energy
     /// books checked every 2000 steps.
     pub fn with_dt(dt_s: f64) -> Self {
         Numerics {
             dt_s,
-            skin_ratio: 0.2,
+            skin_ratio: 0.5,
             max_overlap_ratio: 0.10,
             parallel_min_pairs: 16384,
             min_steps_per_collision: 5.0,
@@ -198,6 +200,16 @@ impl World {
                     .push(ContactState::apart(self.particles.radius[i] - dist));
             }
         }
+    }
+
+    /// Changes the Verlet skin (a fraction of the largest radius) and rebuilds the
+    /// pair list, keeping every contact's history.
+    pub fn set_skin_ratio(&mut self, skin_ratio: f64) {
+        self.numerics.skin_ratio = skin_ratio;
+        self.neighbours
+            .set_skin_m(skin_ratio * self.particles.max_radius_m());
+        self.neighbours
+            .rebuild(&self.particles.position, &self.particles.radius);
     }
 
     /// Re-reads the gap to every wall a particle does not touch, after walls were
