@@ -35,6 +35,12 @@
 //! (eq. 7.3-7.4), so each triple of impacts gives `e = T_{k+1} / T_k`
 //! (eq. 7.5). `cor_per_triple[k]` pairs with `impact_speeds_mps[k]`, the
 //! speed at the middle impact of the triple, for "COR vs impact velocity".
+//!
+//! A bouncing particle's gaps only shrink, so a triple with `e > 1`
+//! ([`CorEstimate::growing_gaps`]) means the detector missed an impact (its
+//! two gaps were counted as one) or took ringing or noise for one; such an
+//! estimate should not be trusted. Missed impacts happen when the record
+//! samples an impact's short pulse too coarsely for it to cross the threshold.
 
 use super::error::{Result, SignalsError, all_finite, positive_finite};
 use super::trace::Trace;
@@ -124,6 +130,19 @@ pub struct CorEstimate {
     pub cor_mean: f64,
     /// Sample standard deviation (n - 1) of `cor_per_triple`; 0 for one triple.
     pub cor_std: f64,
+}
+
+impl CorEstimate {
+    /// Indices of the triples whose second gap is longer than the first
+    /// (`e > 1`): a sign of a missed or a false impact (module docs).
+    pub fn growing_gaps(&self) -> Vec<usize> {
+        self.cor_per_triple
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| **e > 1.0)
+            .map(|(k, _)| k)
+            .collect()
+    }
 }
 
 /// Impacts and restitution of one drop-test record.
@@ -457,6 +476,33 @@ mod tests {
         assert!(d.impacts.len() > 3, "{}", d.impacts.len());
         let d = detect_impacts(&x, FS, 0.0, &ImpactParams::default()).expect("detect");
         assert_eq!(d.impacts.len(), 3);
+    }
+
+    #[test]
+    fn a_missed_impact_shows_as_a_growing_gap() {
+        // The fourth impact is too weak for a 10 N threshold: gaps 3 and 4
+        // merge, triple 2 reads e + e^2 = 1.71 and is flagged.
+        let (onsets, mut peaks) = schedule(6, 0.9, 1.0);
+        peaks[3] = 5.0;
+        let x = drop_record(&onsets, &peaks, onsets[5] + 0.01, 0.2);
+        let mut trace = Trace::new(FS, 0.0).expect("trace");
+        trace.add_channel("force", "N", x).expect("force");
+        let params = ImpactParams {
+            threshold_n: Some(10.0),
+            ..ImpactParams::default()
+        };
+        let r = estimate_cor(&trace, "force", &params, G).expect("cor");
+        assert_eq!(r.detection.impacts.len(), 5);
+        assert!((r.cor.cor_per_triple[1] - 1.71).abs() < 0.01);
+        assert_eq!(r.cor.growing_gaps(), vec![1]);
+        // Found, it is an ordinary bounce.
+        let params = ImpactParams {
+            threshold_n: Some(2.0),
+            ..params
+        };
+        let r = estimate_cor(&trace, "force", &params, G).expect("cor");
+        assert_eq!(r.detection.impacts.len(), 6);
+        assert!(r.cor.growing_gaps().is_empty());
     }
 
     #[test]
