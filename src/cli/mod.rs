@@ -5,6 +5,8 @@
 
 mod args;
 mod bench;
+mod cor;
+mod drop;
 mod impact;
 mod progress;
 mod scene_cmd;
@@ -44,6 +46,10 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Measure speed: particle-steps per second on the thesis scene.
     Bench(bench::BenchArgs),
+    /// Drop test: bounce a sphere on the drop rig, record the force, estimate the restitution.
+    Drop(drop::DropArgs),
+    /// Estimate the restitution from a force record of a drop test (CSV or WAV).
+    Cor(cor::CorArgs),
 }
 
 /// Runs the command line and maps errors to an exit status.
@@ -92,5 +98,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Scene(a) => scene_cmd::run(a),
         Command::Sweep(a) => sweep::run(a, quiet),
         Command::Bench(a) => bench::run(a, quiet),
+        Command::Drop(a) => drop::run(a),
+        Command::Cor(a) => cor::run(a),
     })
 }
