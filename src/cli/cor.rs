@@ -68,6 +68,12 @@ struct CorReport {
 }
 
 fn read_trace(path: &std::path::Path) -> Result<Trace> {
+    if !path.is_file() {
+        bail!(
+            "TRACE {}: no such file (a .csv or .wav force record)",
+            path.display()
+        );
+    }
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

@@ -75,6 +75,12 @@ pub struct DropArgs {
     /// Drop rig file (TOML) [default: the built-in drop-test rig].
     #[arg(long, value_name = "FILE")]
     pub rig: Option<PathBuf>,
+    /// Impact detection threshold (N) [default: 10 % of the largest peak].
+    #[arg(long = "threshold-n", value_name = "N", value_parser = args::newtons)]
+    pub threshold_n: Option<f64>,
+    /// No re-trigger for this long after an impact starts (s), to ignore ringing [default: 0.002].
+    #[arg(long = "holdoff-s", value_name = "S", value_parser = args::non_negative_seconds)]
+    pub holdoff_s: Option<f64>,
     /// Seed of the transducer noise.
     #[arg(long, default_value = "1")]
     pub seed: u64,
@@ -220,7 +226,12 @@ pub fn run(a: DropArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("signals").join(format!("drop-{}", first.particle_name)));
     let made = OutputDir::prepare(&out_dir)?;
-    let result = simulate(&setups);
+    let params = ImpactParams {
+        threshold_n: a.threshold_n,
+        holdoff_s: a.holdoff_s,
+        ..ImpactParams::default()
+    };
+    let result = simulate(&setups, &params);
     let runs = made.keep_if_ok(result)?;
 
     let g = DROP_GRAVITY_MPS2;
@@ -246,7 +257,8 @@ pub fn run(a: DropArgs) -> Result<()> {
         if !grown.is_empty() {
             warnings.push(format!(
                 "height {} m: triple(s) {} have a second gap longer than the first (COR > 1): an \
-                 impact was missed or ringing taken for one; that estimate is not to be trusted",
+                 impact was missed or ringing taken for one; that estimate is not to be trusted \
+                 (try a lower --threshold-n)",
                 s.height_m,
                 grown
                     .iter()
@@ -260,14 +272,17 @@ pub fn run(a: DropArgs) -> Result<()> {
     write_outputs(&out_dir, &setups, &runs, summary, a.json)
 }
 
-fn simulate(setups: &[DropSetup]) -> Result<Vec<(DropOutcome, DropEstimate)>> {
+fn simulate(
+    setups: &[DropSetup],
+    params: &ImpactParams,
+) -> Result<Vec<(DropOutcome, DropEstimate)>> {
     setups
         .par_iter()
         .map(|s| {
             let out =
                 run_drop(s).with_context(|| format!("dropping from {} m", s.height_m))?;
             let est = out
-                .estimate(&ImpactParams::default(), s.gravity_mps2)
+                .estimate(params, s.gravity_mps2)
                 .with_context(|| {
                     format!(
                         "height {} m: estimating the restitution from the force record ({} DEM contacts)",
