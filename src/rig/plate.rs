@@ -13,7 +13,7 @@
 //! (negative while it pushes the plate down). The transducer carries the spring
 //! and damper force; its reading is the force the plate puts on it, positive in
 //! compression, so impacts read positive. Because the plate's period (99 us on
-//! the built-in rig) is longer than a contact (30-45 us), the transducer mostly
+//! the built-in rig) is longer than a contact (30-65 us), the transducer mostly
 //! records the plate's ring, not the contact force itself.
 //!
 //! **Integration.** Exact zero-order-hold discretisation, as the electrodynamic
