@@ -380,16 +380,34 @@ fn bad_records() {
     force_csv(&dir, "two.csv", &bounce_onsets(2), 10.0, 0.02, None);
     force_csv(&dir, "noise.csv", &[], 10.0, 0.02, None);
     force_csv(&dir, "nan.csv", &bounce_onsets(4), 10.0, 0.02, Some(1234));
+    // A digitised quiet record: most samples on code 0, some on +-1, one on 2.
+    let q = 0.0136;
+    let mut quiet = String::from("time [s],force [N]\n");
+    for i in 0..20_000usize {
+        let h = (i * 7919) % 1000;
+        let code = match h {
+            0 => 2.0,
+            1..50 => 1.0,
+            50..100 => -1.0,
+            _ => 0.0,
+        };
+        writeln!(quiet, "{},{}", i as f64 / 50_000.0, code * q).expect("format");
+    }
+    dir.write("quiet.csv", &quiet);
     dir.write("notes.txt", "not a record\n");
     dir.write(
         "pair.csv",
         "time [s],a [N],b [N]\n0,1,2\n0.00002,1,2\n0.00004,1,2\n",
     );
-    let cases: [(&[&str], &[&str]); 9] = [
+    let cases: [(&[&str], &[&str]); 10] = [
         (&["cor", "missing.wav"], &["missing.wav", "no such file"]),
         (&["cor", "notes.txt"], &["notes.txt", ".csv", ".wav"]),
         (&["cor", "nan.csv"], &["nan.csv", "line 1236", "not finite"]),
         (&["cor", "noise.csv"], &["no impacts"]),
+        (
+            &["cor", "quiet.csv"],
+            &["no impacts", "noise standard deviations"],
+        ),
         (&["cor", "two.csv"], &["found 2 impacts", "at least 3"]),
         (
             &["cor", "bounce.csv", "--channel", "nope"],

@@ -26,7 +26,12 @@
 //! the record must hold something that stands out from the noise: the
 //! threshold must be at least [`MIN_THRESHOLD_TO_NOISE`] noise standard
 //! deviations (estimated robustly as 1.4826 x the median absolute deviation),
-//! otherwise the result is [`SignalsError::NoImpacts`].
+//! otherwise the result is [`SignalsError::NoImpacts`]. The estimate is never
+//! below the quantisation noise `q / sqrt(12)` of the record's own step `q`
+//! (the smallest gap between two distinct sample values): a digitised quiet
+//! record whose noise is below one ADC step has most samples on one code and
+//! a median absolute deviation of zero, and without that floor its 1-LSB
+//! flickers would pass for impacts.
 //!
 //! # Restitution ([`restitution_from_impact_times`])
 //!
@@ -299,15 +304,27 @@ fn parabolic_offset(y: &[f64], p: usize) -> f64 {
     (0.5 * (a - c) / curvature).clamp(-0.5, 0.5)
 }
 
-/// 1.4826 x the median absolute deviation: the standard deviation of the
-/// Gaussian part of a record that is mostly quiet.
+/// 1.4826 x the median absolute deviation, the standard deviation of the
+/// Gaussian part of a record that is mostly quiet; at least `q / sqrt(12)`
+/// for the record's quantisation step `q` (module docs).
 fn robust_std(x: &[f64]) -> f64 {
     let mut v = x.to_vec();
-    let med = median_in_place(&mut v);
+    v.sort_unstable_by(f64::total_cmp);
+    let step = v
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let quantisation = if step.is_finite() {
+        step / 12f64.sqrt()
+    } else {
+        0.0
+    };
+    let med = v[v.len() / 2];
     for e in v.iter_mut() {
         *e = (*e - med).abs();
     }
-    1.4826 * median_in_place(&mut v)
+    (1.4826 * median_in_place(&mut v)).max(quantisation)
 }
 
 fn median_in_place(v: &mut [f64]) -> f64 {
@@ -543,6 +560,34 @@ mod tests {
             detect_impacts(&x, FS, 0.0, &params),
             Err(SignalsError::NoImpacts { .. })
         ));
+    }
+
+    #[test]
+    fn a_quantised_quiet_record_is_no_impacts() {
+        // Noise of 0.37 LSB rms on a 16-bit-like grid: most samples on code 0,
+        // MAD 0, the largest flicker 2-3 steps. Found before the quantisation
+        // floor: hundreds of "impacts".
+        let q = 0.0136;
+        let mut r = rng(5);
+        let quiet: Vec<f64> = (0..100_000)
+            .map(|_| (0.005 * gaussian(&mut r) / q).round() * q)
+            .collect();
+        let err = detect_impacts(&quiet, FS, 0.0, &ImpactParams::default()).expect_err("quiet");
+        assert!(matches!(err, SignalsError::NoImpacts { .. }), "{err}");
+        // The same grid with bounces on it: found, noise at the floor q / sqrt(12).
+        let (onsets, peaks) = schedule(4, 0.9, 1.0);
+        let mut r = rng(6);
+        let x: Vec<f64> = drop_record(&onsets, &peaks, onsets[3] + 0.01, 0.0)
+            .into_iter()
+            .map(|v| ((v + 0.005 * gaussian(&mut r)) / q).round() * q)
+            .collect();
+        let d = detect_impacts(&x, FS, 0.0, &ImpactParams::default()).expect("bounces");
+        assert_eq!(d.impacts.len(), 4);
+        assert!(
+            (d.noise_std_n - q / 12f64.sqrt()).abs() < 1e-12,
+            "{}",
+            d.noise_std_n
+        );
     }
 
     #[test]
