@@ -366,6 +366,24 @@ fn bad_drop_parameters() {
     refuses(&["drop", "--diameter-m", "0"], &["--diameter-m", "(m)"]);
     refuses(&["drop", "--particle", "glass"], &["--particle", "glass"]);
     refuses(&["drop", "--rig", "missing.toml"], &["missing.toml"]);
+    let dir = Scratch::new("drop-rig");
+    let rig =
+        vlab::rig::DROP_RIG_TOML.replace("sample_rate_hz = 200000.0", "sample_rate_hz = 100000.5");
+    dir.write("odd.toml", &rig);
+    refuses_in(
+        &dir,
+        &["drop", "--rig", "odd.toml"],
+        &["daq.sample_rate_hz = 100000.5 Hz", "whole number"],
+    );
+    dir.write(
+        "shaker.toml",
+        vlab::rig::RigSpec::builtin_toml("ideal").expect("built in"),
+    );
+    refuses_in(
+        &dir,
+        &["drop", "--rig", "shaker.toml"],
+        &["shaker.toml", "unknown field"],
+    );
     // Runs, but the bounces die out too fast to estimate: nothing is written.
     refuses(
         &["drop", "--cor", "0.3"],

@@ -179,6 +179,13 @@ fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
     if let Some(fs) = a.sample_rate_hz {
         rig.daq.sample_rate_hz = fs;
     }
+    let fs = rig.daq.sample_rate_hz;
+    if fs.fract() != 0.0 || fs > 1e6 {
+        bail!(
+            "daq.sample_rate_hz = {fs} Hz in the rig file: must be a whole number of hertz, at most \
+             1000000 (the record is also written as WAV)"
+        );
+    }
     let heights = a.heights.clone().unwrap_or_else(|| vec![a.height_m]);
     let mut seen = Vec::new();
     for &h in &heights {

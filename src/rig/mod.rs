@@ -41,7 +41,7 @@ pub mod transducer;
 pub use channel::{Adc, MeasurementChannel};
 pub use daq::{ACCEL_CHANNEL, Daq, DaqReport, FORCE_CHANNEL};
 pub use drop_rig::{DROP_FORCE_CHANNEL, DropRig, DropRigReport};
-pub use drop_spec::{DROP_RIG, DropRigSpec, MountSpec, PlateSpec, RecordSpec};
+pub use drop_spec::{DROP_RIG, DROP_RIG_TOML, DropRigSpec, MountSpec, PlateSpec, RecordSpec};
 pub use error::{Result, RigError};
 pub use plate::Plate;
 pub use shaker::{Shaker, ShakerKinematics, ShakerReport, check_limits};
