@@ -47,8 +47,9 @@
 //!
 //! - `bounce_cor`, the sphere's own rebound / impact speed: eq. 7.2's
 //!   definition, what the gaps between impacts measure (the plate is at rest
-//!   again long before the next impact), and what [`DropOutcome::realised_cor`]
-//!   reports as the model's realised restitution;
+//!   again long before the next impact): the model's realised restitution,
+//!   which [`DropEstimate::realised_per_triple`] pairs with each triple's
+//!   estimate (its middle impact) and [`DropOutcome::realised_cor`] averages;
 //! - `contact_cor`, the same relative to the plate: the contact law's own
 //!   restitution. The two differ by the plate's speed when the sphere leaves
 //!   (the plate is still ringing), at most `m (1 + e) / (e m_plate)`, 0.17 %
