@@ -115,6 +115,39 @@ pub fn threads(s: &str) -> Result<usize, String> {
     }
 }
 
+/// A sample rate in Hz: a positive whole number (WAV headers hold whole
+/// hertz), at most 1 MHz (a drop record of 2 s is then 2 M samples).
+pub fn sample_rate_hz(s: &str) -> Result<f64, String> {
+    let v = positive(s, "Hz")?;
+    if v.fract() != 0.0 || v > 1e6 {
+        return Err("must be a whole number of hertz, at most 1000000 (Hz)".into());
+    }
+    Ok(v)
+}
+
+/// An acceleration in m/s^2, positive and finite.
+pub fn acceleration(s: &str) -> Result<f64, String> {
+    positive(s, "m/s^2")
+}
+
+/// A force in N, positive and finite.
+pub fn newtons(s: &str) -> Result<f64, String> {
+    positive(s, "N")
+}
+
+/// A duration in seconds, zero or positive and finite.
+pub fn non_negative_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number (s)"))?;
+    if v >= 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err("must be zero or positive, and finite (s)".into())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -126,5 +159,9 @@ mod tests {
         assert!(freq_hz("abc").unwrap_err().contains("not a number"));
         assert!(restitution("1.2").unwrap_err().contains("(0, 1]"));
         assert!(friction("-0.1").unwrap_err().contains(">= 0"));
+        assert!(sample_rate_hz("2e5").is_ok());
+        assert!(sample_rate_hz("200000.5").unwrap_err().contains("whole"));
+        assert!(sample_rate_hz("2e7").unwrap_err().contains("1000000 (Hz)"));
+        assert!(non_negative_seconds("-1").unwrap_err().contains("(s)"));
     }
 }

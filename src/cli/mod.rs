@@ -7,6 +7,8 @@ mod analyze;
 mod args;
 mod bench;
 mod calibrate;
+mod cor;
+mod drop;
 mod impact;
 mod progress;
 mod scene_cmd;
@@ -51,6 +53,10 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// Measure speed: particle-steps per second on the thesis scene.
     Bench(bench::BenchArgs),
+    /// Drop test: bounce a sphere on the drop rig, record the force, estimate the restitution.
+    Drop(drop::DropArgs),
+    /// Estimate the restitution from a force record of a drop test (CSV or WAV).
+    Cor(cor::CorArgs),
 }
 
 /// Name of a shaker kind, as on the command line.
@@ -106,5 +112,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Scene(a) => scene_cmd::run(a),
         Command::Sweep(a) => sweep::run(a, quiet),
         Command::Bench(a) => bench::run(a, quiet),
+        Command::Drop(a) => drop::run(a),
+        Command::Cor(a) => cor::run(a),
     })
 }

@@ -11,6 +11,9 @@
 //! - [`channel`]: one channel: sensitivity, gain, AC coupling, anti-alias
 //!   filter, sampling with skew, noise, ADC;
 //! - [`daq`]: both channels sampled into a [`crate::signals::Trace`];
+//! - [`drop_spec`]: the drop-test rig file (`rig/drop-test.toml`, built in);
+//! - [`plate`]: the drop rig's base plate ringing on its force transducer;
+//! - [`drop_rig`]: plate and force channel on one clock, recording a drop test;
 //! - [`filter`], [`discretise`], [`noise`]: the numerical pieces.
 //!
 //! The rig sees the damper only as the axial force the particles exert on the
@@ -25,16 +28,22 @@
 pub mod channel;
 pub mod daq;
 pub mod discretise;
+pub mod drop_rig;
+pub mod drop_spec;
 pub mod error;
 pub mod filter;
 pub mod noise;
+pub mod plate;
 pub mod shaker;
 pub mod spec;
 pub mod transducer;
 
 pub use channel::{Adc, MeasurementChannel};
 pub use daq::{ACCEL_CHANNEL, Daq, DaqReport, FORCE_CHANNEL};
+pub use drop_rig::{DROP_FORCE_CHANNEL, DropRig, DropRigReport};
+pub use drop_spec::{DROP_RIG, DROP_RIG_TOML, DropRigSpec, MountSpec, PlateSpec, RecordSpec};
 pub use error::{Result, RigError};
+pub use plate::Plate;
 pub use shaker::{Shaker, ShakerKinematics, ShakerReport, check_limits};
 pub use spec::{
     AccelerometerSpec, ChannelParams, DEFAULT_RIG, DaqSpec, ElectrodynamicSpec, EnclosureSpec,

@@ -26,7 +26,12 @@
 //! the record must hold something that stands out from the noise: the
 //! threshold must be at least [`MIN_THRESHOLD_TO_NOISE`] noise standard
 //! deviations (estimated robustly as 1.4826 x the median absolute deviation),
-//! otherwise the result is [`SignalsError::NoImpacts`].
+//! otherwise the result is [`SignalsError::NoImpacts`]. The estimate is never
+//! below the quantisation noise `q / sqrt(12)` of the record's own step `q`
+//! (the smallest gap between two distinct sample values): a digitised quiet
+//! record whose noise is below one ADC step has most samples on one code and
+//! a median absolute deviation of zero, and without that floor its 1-LSB
+//! flickers would pass for impacts.
 //!
 //! # Restitution ([`restitution_from_impact_times`])
 //!
@@ -35,6 +40,12 @@
 //! (eq. 7.3-7.4), so each triple of impacts gives `e = T_{k+1} / T_k`
 //! (eq. 7.5). `cor_per_triple[k]` pairs with `impact_speeds_mps[k]`, the
 //! speed at the middle impact of the triple, for "COR vs impact velocity".
+//!
+//! A bouncing particle's gaps only shrink, so a triple with `e > 1`
+//! ([`CorEstimate::growing_gaps`]) means the detector missed an impact (its
+//! two gaps were counted as one) or took ringing or noise for one; such an
+//! estimate should not be trusted. Missed impacts happen when the record
+//! samples an impact's short pulse too coarsely for it to cross the threshold.
 
 use super::error::{Result, SignalsError, all_finite, positive_finite};
 use super::trace::Trace;
@@ -124,6 +135,19 @@ pub struct CorEstimate {
     pub cor_mean: f64,
     /// Sample standard deviation (n - 1) of `cor_per_triple`; 0 for one triple.
     pub cor_std: f64,
+}
+
+impl CorEstimate {
+    /// Indices of the triples whose second gap is longer than the first
+    /// (`e > 1`): a sign of a missed or a false impact (module docs).
+    pub fn growing_gaps(&self) -> Vec<usize> {
+        self.cor_per_triple
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| **e > 1.0)
+            .map(|(k, _)| k)
+            .collect()
+    }
 }
 
 /// Impacts and restitution of one drop-test record.
@@ -280,15 +304,27 @@ fn parabolic_offset(y: &[f64], p: usize) -> f64 {
     (0.5 * (a - c) / curvature).clamp(-0.5, 0.5)
 }
 
-/// 1.4826 x the median absolute deviation: the standard deviation of the
-/// Gaussian part of a record that is mostly quiet.
+/// 1.4826 x the median absolute deviation, the standard deviation of the
+/// Gaussian part of a record that is mostly quiet; at least `q / sqrt(12)`
+/// for the record's quantisation step `q` (module docs).
 fn robust_std(x: &[f64]) -> f64 {
     let mut v = x.to_vec();
-    let med = median_in_place(&mut v);
+    v.sort_unstable_by(f64::total_cmp);
+    let step = v
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let quantisation = if step.is_finite() {
+        step / 12f64.sqrt()
+    } else {
+        0.0
+    };
+    let med = v[v.len() / 2];
     for e in v.iter_mut() {
         *e = (*e - med).abs();
     }
-    1.4826 * median_in_place(&mut v)
+    (1.4826 * median_in_place(&mut v)).max(quantisation)
 }
 
 fn median_in_place(v: &mut [f64]) -> f64 {
@@ -460,6 +496,33 @@ mod tests {
     }
 
     #[test]
+    fn a_missed_impact_shows_as_a_growing_gap() {
+        // The fourth impact is too weak for a 10 N threshold: gaps 3 and 4
+        // merge, triple 2 reads e + e^2 = 1.71 and is flagged.
+        let (onsets, mut peaks) = schedule(6, 0.9, 1.0);
+        peaks[3] = 5.0;
+        let x = drop_record(&onsets, &peaks, onsets[5] + 0.01, 0.2);
+        let mut trace = Trace::new(FS, 0.0).expect("trace");
+        trace.add_channel("force", "N", x).expect("force");
+        let params = ImpactParams {
+            threshold_n: Some(10.0),
+            ..ImpactParams::default()
+        };
+        let r = estimate_cor(&trace, "force", &params, G).expect("cor");
+        assert_eq!(r.detection.impacts.len(), 5);
+        assert!((r.cor.cor_per_triple[1] - 1.71).abs() < 0.01);
+        assert_eq!(r.cor.growing_gaps(), vec![1]);
+        // Found, it is an ordinary bounce.
+        let params = ImpactParams {
+            threshold_n: Some(2.0),
+            ..params
+        };
+        let r = estimate_cor(&trace, "force", &params, G).expect("cor");
+        assert_eq!(r.detection.impacts.len(), 6);
+        assert!(r.cor.growing_gaps().is_empty());
+    }
+
+    #[test]
     fn two_impacts_are_not_enough() {
         let (onsets, peaks) = schedule(2, 0.9, 1.0);
         let mut trace = Trace::new(FS, 0.0).expect("trace");
@@ -497,6 +560,34 @@ mod tests {
             detect_impacts(&x, FS, 0.0, &params),
             Err(SignalsError::NoImpacts { .. })
         ));
+    }
+
+    #[test]
+    fn a_quantised_quiet_record_is_no_impacts() {
+        // Noise of 0.37 LSB rms on a 16-bit-like grid: most samples on code 0,
+        // MAD 0, the largest flicker 2-3 steps. Found before the quantisation
+        // floor: hundreds of "impacts".
+        let q = 0.0136;
+        let mut r = rng(5);
+        let quiet: Vec<f64> = (0..100_000)
+            .map(|_| (0.005 * gaussian(&mut r) / q).round() * q)
+            .collect();
+        let err = detect_impacts(&quiet, FS, 0.0, &ImpactParams::default()).expect_err("quiet");
+        assert!(matches!(err, SignalsError::NoImpacts { .. }), "{err}");
+        // The same grid with bounces on it: found, noise at the floor q / sqrt(12).
+        let (onsets, peaks) = schedule(4, 0.9, 1.0);
+        let mut r = rng(6);
+        let x: Vec<f64> = drop_record(&onsets, &peaks, onsets[3] + 0.01, 0.0)
+            .into_iter()
+            .map(|v| ((v + 0.005 * gaussian(&mut r)) / q).round() * q)
+            .collect();
+        let d = detect_impacts(&x, FS, 0.0, &ImpactParams::default()).expect("bounces");
+        assert_eq!(d.impacts.len(), 4);
+        assert!(
+            (d.noise_std_n - q / 12f64.sqrt()).abs() < 1e-12,
+            "{}",
+            d.noise_std_n
+        );
     }
 
     #[test]
