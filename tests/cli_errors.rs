@@ -138,3 +138,33 @@ fn bad_impact_parameters() {
         &["--dt-s", "too coarse"],
     );
 }
+
+/// A run that fails half-way (a step the Rayleigh check lets through, 8e-6 s,
+/// but too coarse for the spheres' collisions) stops with a diagnosis and
+/// leaves no folder behind.
+#[test]
+fn failed_run_leaves_no_folders() {
+    let dir = Scratch::new("failed-run");
+    dir.write("coarse.toml", "[simulation]\ndt_s = 8e-6\n");
+    let out = vlab(
+        &dir.0,
+        &[
+            "--quiet",
+            "shake",
+            "--scene",
+            "coarse.toml",
+            "--out",
+            "deep/run",
+        ],
+    );
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(
+        err.contains("numerical instability") && err.contains("time step"),
+        "{err}"
+    );
+    assert!(
+        !dir.path("deep").exists(),
+        "the failed run left deep/ behind"
+    );
+}

@@ -390,10 +390,10 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
 }
 
 /// An output folder made before a long run, so that an unwritable path fails
-/// at once; removed again if the run fails before anything is written into it.
+/// at once; if the run fails, every folder it made is removed again (innermost
+/// first, and only while empty).
 pub struct OutputDir {
-    path: PathBuf,
-    created: bool,
+    created: Vec<PathBuf>,
 }
 
 impl OutputDir {
@@ -401,20 +401,24 @@ impl OutputDir {
         if path.is_file() {
             bail!("--out {} is a file, not a folder", path.display());
         }
-        let created = !path.exists();
+        let created: Vec<PathBuf> = path
+            .ancestors()
+            .take_while(|p| !p.as_os_str().is_empty() && !p.exists())
+            .map(Path::to_path_buf)
+            .collect();
         std::fs::create_dir_all(path)
             .with_context(|| format!("cannot create output folder {}", path.display()))?;
-        Ok(OutputDir {
-            path: path.to_path_buf(),
-            created,
-        })
+        Ok(OutputDir { created })
     }
 
-    /// Passes `result` through; on error removes the folder if this run made it
-    /// and it is still empty.
+    /// Passes `result` through; on error removes the folders this run made.
     pub fn keep_if_ok<T>(&self, result: Result<T>) -> Result<T> {
-        if result.is_err() && self.created {
-            let _ = std::fs::remove_dir(&self.path);
+        if result.is_err() {
+            for dir in &self.created {
+                if std::fs::remove_dir(dir).is_err() {
+                    break;
+                }
+            }
         }
         result
     }
