@@ -28,7 +28,7 @@ pub enum DemError {
         dt_s: f64,
     },
     #[error(
-        "numerical instability at t = {time_s:.6} s (step {step}): a {contact} collision at {speed_mps:.2} m/s lasts {duration_s:.2e} s (Hertz, thesis eq. 5.10), only {steps:.1} time steps of {dt_s:.3e} s; use a time step of at most {suggested_dt_s:.2e} s"
+        "numerical instability at t = {time_s:.6} s (step {step}): a {contact} collision at {speed_mps:.2} m/s lasts {duration_s:.2e} s (Hertz, thesis eq. 5.10), only {steps:.2} time steps of {dt_s:.3e} s; use a time step of at most {suggested_dt_s:.2e} s"
     )]
     UnresolvedCollision {
         time_s: f64,
