@@ -11,6 +11,7 @@ mod cor;
 mod drop;
 mod impact;
 mod progress;
+mod rig_cmd;
 mod scene_cmd;
 mod shake;
 mod sweep;
@@ -49,6 +50,8 @@ enum Command {
     Impact(impact::ImpactArgs),
     /// Show the built-in scene (or a scene file merged over it).
     Scene(scene_cmd::SceneArgs),
+    /// List the built-in rigs, or show one (--print: its TOML file).
+    Rig(rig_cmd::RigArgs),
     /// Efficiency over a list of amplitudes and seeds at one frequency.
     Sweep(sweep::SweepArgs),
     /// Measure speed: particle-steps per second on the thesis scene.
@@ -110,6 +113,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analyze(a) => analyze::run(a),
         Command::Impact(a) => impact::run(a),
         Command::Scene(a) => scene_cmd::run(a),
+        Command::Rig(a) => rig_cmd::run(a),
         Command::Sweep(a) => sweep::run(a, quiet),
         Command::Bench(a) => bench::run(a, quiet),
         Command::Drop(a) => drop::run(a),
