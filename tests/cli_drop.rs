@@ -9,26 +9,7 @@ mod common;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use common::{Scratch, files_below, json, stderr, vlab};
-
-/// Runs `args` in `dir` and checks the failure: first line of standard error
-/// starts with `error:` and mentions every word; nothing new in `dir`.
-fn refuses_in(dir: &Scratch, args: &[&str], must_mention: &[&str]) -> String {
-    let before = files_below(&dir.0);
-    let out = vlab(&dir.0, args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    let err = stderr(&out);
-    let first = err.lines().next().unwrap_or("").to_string();
-    assert!(first.starts_with("error:"), "{args:?}: {err}");
-    for word in must_mention {
-        assert!(
-            first.contains(word),
-            "{args:?}: '{first}' does not mention '{word}'"
-        );
-    }
-    assert_eq!(files_below(&dir.0), before, "{args:?} wrote files");
-    first
-}
+use common::{Scratch, json, refuses_in, stderr, vlab};
 
 fn refuses(args: &[&str], must_mention: &[&str]) -> String {
     refuses_in(&Scratch::new("drop-errors"), args, must_mention)

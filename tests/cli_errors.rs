@@ -3,29 +3,16 @@
 
 mod common;
 
-use common::{Scratch, files_below, stderr, vlab};
+use common::{Scratch, refuses_in, stderr, vlab};
 
 /// Runs `args` in a fresh folder holding `scene.toml` (if given) and checks the
-/// failure; returns the first line of standard error.
+/// refusal; returns the first line of standard error.
 fn refuses(args: &[&str], scene: Option<&str>, must_mention: &[&str]) -> String {
     let dir = Scratch::new("errors");
     if let Some(text) = scene {
         dir.write("scene.toml", text);
     }
-    let before = files_below(&dir.0);
-    let out = vlab(&dir.0, args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    let err = stderr(&out);
-    let first = err.lines().next().unwrap_or("").to_string();
-    assert!(first.starts_with("error:"), "{args:?}: {err}");
-    for word in must_mention {
-        assert!(
-            first.contains(word),
-            "{args:?}: '{first}' does not mention '{word}'"
-        );
-    }
-    assert_eq!(files_below(&dir.0), before, "{args:?} wrote files");
-    first
+    refuses_in(&dir, args, must_mention)
 }
 
 #[test]

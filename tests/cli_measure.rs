@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{Scratch, files_below, json, stderr, vlab};
+use common::{Scratch, json, refuses_in, stderr, vlab};
 
 /// A small, quick damper: enough to produce real records.
 const SMALL_SCENE: &str = r#"
@@ -125,15 +125,7 @@ fn calibrate_recovers_the_rig_phase_error() {
 fn refuses(setup: impl Fn(&Scratch), args: &[&str], must_mention: &[&str]) {
     let dir = Scratch::new("measure-errors");
     setup(&dir);
-    let before = files_below(&dir.0);
-    let out = vlab(&dir.0, args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    let first = stderr(&out).lines().next().unwrap_or("").to_string();
-    assert!(first.starts_with("error:"), "{args:?}: {first}");
-    for w in must_mention {
-        assert!(first.contains(w), "{args:?}: '{first}' lacks '{w}'");
-    }
-    assert_eq!(files_below(&dir.0), before, "{args:?} wrote files");
+    refuses_in(&dir, args, must_mention);
 }
 
 const GOOD_HEADER: &str = "# sample_rate_hz: 1000\ntime [s],force [N],acceleration [m/s^2]\n";
@@ -162,7 +154,7 @@ fn analyze_refuses_bad_records() {
             d.write("t.txt", "x");
         },
         &["analyze", "t.txt", "--freq", "10"],
-        &[".csv or a .wav"],
+        &["t.txt", "unknown kind", ".csv", ".wav"],
     );
     refuses(
         |d: &Scratch| {

@@ -3,15 +3,15 @@
 //! dissipated power, the energy per cycle, the efficiency (eq. 7.7) when the
 //! particle mass and amplitude are known, and the phase correction used.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::Serialize;
 
 use vlab::signals::{
-    HarmonicPower, PhaseCalibration, PhaseCorrection, PowerOptions, Trace, efficiency, read_csv,
-    read_wav, yang_power_of_trace,
+    HarmonicPower, PhaseCalibration, PhaseCorrection, PowerOptions, Trace, efficiency, read_trace,
+    yang_power_of_trace,
 };
 
 use super::args;
@@ -57,22 +57,6 @@ pub struct Analysis {
     pub n_samples: usize,
     pub per_harmonic: Vec<HarmonicPower>,
     pub warnings: Vec<String>,
-}
-
-/// Reads a CSV or WAV trace, by its extension.
-pub fn read_trace(path: &Path) -> Result<Trace> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("csv") => Ok(read_csv(path)?),
-        Some("wav") => Ok(read_wav(path)?),
-        _ => bail!(
-            "{}: unknown trace format: expected a .csv or a .wav file (with a .wav.json sidecar)",
-            path.display()
-        ),
-    }
 }
 
 /// Samples sitting at a channel's extreme value: a clipped ADC leaves flat tops.

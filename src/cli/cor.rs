@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::Serialize;
 
-use vlab::signals::{ImpactParams, Trace, estimate_cor, read_csv, read_wav};
+use vlab::signals::{ImpactParams, Trace, estimate_cor};
 
 use super::args;
 
@@ -74,22 +74,9 @@ fn read_trace(path: &std::path::Path) -> Result<Trace> {
             path.display()
         );
     }
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("csv") => Ok(read_csv(path)?),
-        Some("wav") => Ok(read_wav(path)?),
-        _ => bail!(
-            "TRACE {}: unknown kind of file; vlab cor reads .csv (a time column first) and .wav \
-             (with its .wav.json sidecar)",
-            path.display()
-        ),
-    }
+    Ok(vlab::signals::read_trace(path)?)
 }
 
-/// Runs the command.
 pub fn run(a: CorArgs) -> Result<()> {
     let trace = read_trace(&a.trace)?;
     let name = match &a.channel {

@@ -116,25 +116,7 @@ impl DropRigSpec {
     /// Parses and validates a drop rig from TOML text; `origin` names the
     /// source in messages.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<DropRigSpec, RigError> {
-        if let Ok(table) = text.parse::<toml::Table>()
-            && let Some(v) = table.get("version").and_then(toml::Value::as_integer)
-            && v != i64::from(RIG_VERSION)
-        {
-            return Err(RigError::Version {
-                origin: origin.to_string(),
-                found: u32::try_from(v).unwrap_or(u32::MAX),
-                supported: RIG_VERSION,
-            });
-        }
-        let spec: DropRigSpec = toml::from_str(text).map_err(|e| RigError::Parse {
-            origin: origin.to_string(),
-            message: e.to_string().trim_end().to_string(),
-        })?;
-        spec.validate().map_err(|e| RigError::Parse {
-            origin: origin.to_string(),
-            message: e.to_string(),
-        })?;
-        Ok(spec)
+        super::spec::parse_versioned(text, origin, DropRigSpec::validate)
     }
 
     /// The rig as TOML (parses back to an equal rig).

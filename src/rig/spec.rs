@@ -372,6 +372,42 @@ impl ChannelParams {
     }
 }
 
+/// Parses a versioned rig file of type `T` and validates it with `validate`.
+/// The version is checked first, so that a file of another version is not
+/// blamed for keys this version does not know; errors name `origin`.
+pub(crate) fn parse_versioned<T: serde::de::DeserializeOwned>(
+    text: &str,
+    origin: &str,
+    validate: impl Fn(&T) -> Result<(), RigError>,
+) -> Result<T, RigError> {
+    if let Ok(table) = text.parse::<toml::Table>()
+        && let Some(v) = table.get("version").and_then(toml::Value::as_integer)
+        && v != i64::from(RIG_VERSION)
+    {
+        return Err(RigError::Version {
+            origin: origin.to_string(),
+            found: u32::try_from(v).unwrap_or(u32::MAX),
+            supported: RIG_VERSION,
+        });
+    }
+    let spec: T = toml::from_str(text).map_err(|e| RigError::Parse {
+        origin: origin.to_string(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    validate(&spec).map_err(|e| match e {
+        RigError::Version { found, .. } => RigError::Version {
+            origin: origin.to_string(),
+            found,
+            supported: RIG_VERSION,
+        },
+        other => RigError::Parse {
+            origin: origin.to_string(),
+            message: other.to_string(),
+        },
+    })?;
+    Ok(spec)
+}
+
 impl RigSpec {
     /// Names of the built-in rigs; the first is the default.
     pub fn names() -> Vec<&'static str> {
@@ -420,34 +456,7 @@ impl RigSpec {
     /// Parses and validates a rig from TOML text; `origin` names the source in
     /// messages.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<RigSpec, RigError> {
-        // Check the version first so a version-2 file is not blamed for keys
-        // this version does not know.
-        if let Ok(table) = text.parse::<toml::Table>()
-            && let Some(v) = table.get("version").and_then(toml::Value::as_integer)
-            && v != i64::from(RIG_VERSION)
-        {
-            return Err(RigError::Version {
-                origin: origin.to_string(),
-                found: u32::try_from(v).unwrap_or(u32::MAX),
-                supported: RIG_VERSION,
-            });
-        }
-        let spec: RigSpec = toml::from_str(text).map_err(|e| RigError::Parse {
-            origin: origin.to_string(),
-            message: e.to_string().trim_end().to_string(),
-        })?;
-        spec.validate().map_err(|e| match e {
-            RigError::Version { found, .. } => RigError::Version {
-                origin: origin.to_string(),
-                found,
-                supported: RIG_VERSION,
-            },
-            other => RigError::Parse {
-                origin: origin.to_string(),
-                message: other.to_string(),
-            },
-        })?;
-        Ok(spec)
+        parse_versioned(text, origin, RigSpec::validate)
     }
 
     /// The rig as TOML (parses back to an equal rig).

@@ -136,6 +136,12 @@ pub enum SignalsError {
         /// What is wrong.
         reason: String,
     },
+    /// A trace file whose kind cannot be told from its name.
+    #[error("{}: unknown kind of trace file: expected .csv (a time column first) or .wav (with its .wav.json sidecar)", path.display())]
+    UnknownTraceFormat {
+        /// The file.
+        path: PathBuf,
+    },
     /// Reading or writing a file failed at the OS level.
     #[error("{}: {source}", path.display())]
     Io {

@@ -9,6 +9,7 @@
 //!   and the damping efficiency, eq. 7.7 / 6.10;
 //! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
 //! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
+//! - [`trace_file`]: either format, told apart by the file's extension;
 //! - [`plot`]: small SVG plots;
 //! - [`bench`](mod@bench): a timing hook for `vlab bench`.
 //!
@@ -24,6 +25,7 @@ pub mod plot;
 pub mod power;
 pub mod spectrum;
 pub mod trace;
+pub mod trace_file;
 pub mod wav;
 
 #[cfg(test)]
@@ -45,6 +47,7 @@ pub use power::{
 };
 pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
 pub use trace::{Channel, Sensitivity, Trace, TraceMetadata};
+pub use trace_file::read_trace;
 pub use wav::{
     WavChannelInfo, WavSidecar, read_wav, read_wav_with, sidecar_path, write_wav,
     write_wav_with_full_scale,

@@ -71,3 +71,23 @@ pub fn files_below(dir: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+/// Runs `args` in `dir` and checks the refusal: a non-zero exit, a first line of
+/// standard error that starts with `error:` and mentions every word of
+/// `must_mention`, and no new file in `dir`. Returns that line.
+pub fn refuses_in(dir: &Scratch, args: &[&str], must_mention: &[&str]) -> String {
+    let before = files_below(&dir.0);
+    let out = vlab(&dir.0, args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    let err = stderr(&out);
+    let first = err.lines().next().unwrap_or("").to_string();
+    assert!(first.starts_with("error:"), "{args:?}: {err}");
+    for word in must_mention {
+        assert!(
+            first.contains(word),
+            "{args:?}: '{first}' does not mention '{word}'"
+        );
+    }
+    assert_eq!(files_below(&dir.0), before, "{args:?} wrote files");
+    first
+}
