@@ -1,7 +1,9 @@
 //! # vlab — a virtual granular-damper laboratory
 //!
-//! vlab replays the granular-damper test rig of Yazici's thesis (Chapters 3, 5, 6.2
-//! and 7) as a signal-level simulator: a discrete-element model of spheres in a
+//! vlab replays the granular-damper test rig of Furkan Terzioglu's PhD thesis,
+//! "Vibrational energy dissipation mechanisms in granular dampers" (Department of
+//! Mechanical Engineering, The University of Sheffield, 2023; Chapters 3, 5, 6.2
+//! and 7), as a signal-level simulator: a discrete-element model of spheres in a
 //! vibrated cylinder, inside a model of the shaker rig, emitting the records a lab
 //! would; the lab's own post-processing then recovers the physics from them.
 //!
@@ -18,3 +20,4 @@ pub mod dem;
 pub mod rig;
 pub mod scene;
 pub mod signals;
+pub mod validation;

@@ -1,150 +1,193 @@
-//! Parsers for command-line values that state their unit and valid range when
-//! they refuse something.
+//! Command-line values: parsers that refuse a value with the crate's one
+//! [`InvalidParameter`], and the renaming of library keys to the flags that set
+//! them, so that a bad flag reads like a bad key in a scene or rig file:
+//!
+//! ```text
+//! error: --freq = -40 Hz: must be positive and finite
+//! error: particles.diameter_m = -0.005 m: must be positive and finite
+//! ```
 
-/// Parses a number and checks it with `valid`, or says what `valid` wants.
-fn number(s: &str, valid: impl Fn(f64) -> bool, wants: &str) -> Result<f64, String> {
+use std::process::ExitCode;
+
+use clap::error::{ContextKind, ContextValue, ErrorKind};
+use vlab::validation::{Bound, InvalidParameter, in_range};
+
+/// Placeholder key of a refused flag value; [`parse_error`] puts the flag there.
+const FLAG: &str = "value";
+
+/// Parses a number and checks it against `lo`..`hi`.
+fn number(s: &str, unit: &str, lo: Bound, hi: Bound) -> Result<f64, InvalidParameter> {
     let v: f64 = s
         .trim()
         .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
-    if valid(v) {
-        Ok(v)
-    } else {
-        Err(wants.to_string())
-    }
+        .map_err(|_| InvalidParameter::new(FLAG, format!("'{s}'"), unit, "a number"))?;
+    in_range(FLAG, v, unit, lo, hi)
 }
 
-/// A positive, finite number.
-fn positive(s: &str, unit: &str) -> Result<f64, String> {
-    number(
-        s,
-        |v| v > 0.0 && v.is_finite(),
-        &format!("must be positive and finite ({unit})"),
-    )
-    .map_err(|e| {
-        if e.ends_with("a number") {
-            format!("{e} ({unit})")
-        } else {
-            e
-        }
-    })
+/// A positive, finite number in `unit`.
+fn positive(s: &str, unit: &str) -> Result<f64, InvalidParameter> {
+    number(s, unit, Bound::Open(0.0), Bound::Unbounded)
 }
 
 /// Frequency in Hz, positive and finite.
-pub fn freq_hz(s: &str) -> Result<f64, String> {
+pub fn freq_hz(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "Hz")
 }
 
-/// Dimensionless acceleration amplitude Γ, positive and finite.
-pub fn gamma(s: &str) -> Result<f64, String> {
-    positive(s, "dimensionless, peak acceleration / g")
+/// Dimensionless acceleration amplitude Γ (peak acceleration / g), positive.
+pub fn gamma(s: &str) -> Result<f64, InvalidParameter> {
+    positive(s, "")
 }
 
 /// A length in metres, positive and finite.
-pub fn metres(s: &str) -> Result<f64, String> {
+pub fn metres(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "m")
 }
 
 /// A time in seconds, positive and finite.
-pub fn seconds(s: &str) -> Result<f64, String> {
+pub fn seconds(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "s")
 }
 
+/// A duration in seconds, zero or positive and finite.
+pub fn non_negative_seconds(s: &str) -> Result<f64, InvalidParameter> {
+    number(s, "s", Bound::Closed(0.0), Bound::Unbounded)
+}
+
 /// A speed in m/s, positive and finite.
-pub fn speed_mps(s: &str) -> Result<f64, String> {
+pub fn speed_mps(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "m/s")
 }
 
 /// A pressure or modulus in Pa, positive and finite.
-pub fn pascals(s: &str) -> Result<f64, String> {
+pub fn pascals(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "Pa")
 }
 
 /// A mass in kg, positive and finite.
-pub fn positive_kg(s: &str) -> Result<f64, String> {
+pub fn positive_kg(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "kg")
 }
 
 /// A density in kg/m³, positive and finite.
-pub fn density(s: &str) -> Result<f64, String> {
+pub fn density(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "kg/m^3")
 }
 
-/// Coefficient of restitution in (0, 1].
-pub fn restitution(s: &str) -> Result<f64, String> {
-    number(
-        s,
-        |v| v > 0.0 && v <= 1.0,
-        "the coefficient of restitution must lie in (0, 1] (dimensionless)",
-    )
-}
-
-/// Coefficient of friction, ≥ 0 and finite.
-pub fn friction(s: &str) -> Result<f64, String> {
-    number(
-        s,
-        |v| v >= 0.0 && v.is_finite(),
-        "the coefficient of friction must be >= 0 and finite (dimensionless)",
-    )
-}
-
-/// Poisson's ratio in (-1, 0.5).
-pub fn poisson(s: &str) -> Result<f64, String> {
-    number(
-        s,
-        |v| v > -1.0 && v < 0.5,
-        "Poisson's ratio must lie in (-1, 0.5) (dimensionless)",
-    )
-}
-
-/// A finite number (any sign).
-pub fn finite(s: &str) -> Result<f64, String> {
-    number(s, |v| v.is_finite(), "must be finite")
-}
-
-/// At least one thread.
-pub fn threads(s: &str) -> Result<usize, String> {
-    let v: usize = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a whole number of threads"))?;
-    if v >= 1 {
-        Ok(v)
-    } else {
-        Err("must be at least 1 thread".into())
-    }
-}
-
-/// A sample rate in Hz: a positive whole number (WAV headers hold whole
-/// hertz), at most 1 MHz (a drop record of 2 s is then 2 M samples).
-pub fn sample_rate_hz(s: &str) -> Result<f64, String> {
-    let v = positive(s, "Hz")?;
-    if v.fract() != 0.0 || v > 1e6 {
-        return Err("must be a whole number of hertz, at most 1000000 (Hz)".into());
-    }
-    Ok(v)
-}
-
 /// An acceleration in m/s^2, positive and finite.
-pub fn acceleration(s: &str) -> Result<f64, String> {
+pub fn acceleration(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "m/s^2")
 }
 
 /// A force in N, positive and finite.
-pub fn newtons(s: &str) -> Result<f64, String> {
+pub fn newtons(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "N")
 }
 
-/// A duration in seconds, zero or positive and finite.
-pub fn non_negative_seconds(s: &str) -> Result<f64, String> {
-    let v: f64 = s
+/// Coefficient of restitution in (0, 1].
+pub fn restitution(s: &str) -> Result<f64, InvalidParameter> {
+    number(s, "", Bound::Open(0.0), Bound::Closed(1.0))
+}
+
+/// Coefficient of friction, >= 0 and finite.
+pub fn friction(s: &str) -> Result<f64, InvalidParameter> {
+    number(s, "", Bound::Closed(0.0), Bound::Unbounded)
+}
+
+/// Poisson's ratio in (-1, 0.5).
+pub fn poisson(s: &str) -> Result<f64, InvalidParameter> {
+    number(s, "", Bound::Open(-1.0), Bound::Open(0.5))
+}
+
+/// A finite number (any sign).
+pub fn finite(s: &str) -> Result<f64, InvalidParameter> {
+    number(s, "", Bound::Unbounded, Bound::Unbounded)
+}
+
+/// A sample rate in Hz: a positive whole number (WAV headers hold whole
+/// hertz), at most 1 MHz (a drop record of 2 s is then 2 M samples).
+pub fn sample_rate_hz(s: &str) -> Result<f64, InvalidParameter> {
+    let v = positive(s, "Hz")?;
+    if v.fract() != 0.0 || v > 1e6 {
+        return Err(InvalidParameter::new(
+            FLAG,
+            v,
+            "Hz",
+            "a whole number of hertz, at most 1000000",
+        ));
+    }
+    Ok(v)
+}
+
+/// At least one thread.
+pub fn threads(s: &str) -> Result<usize, InvalidParameter> {
+    let v: usize = s
         .trim()
         .parse()
-        .map_err(|_| format!("'{s}' is not a number (s)"))?;
-    if v >= 0.0 && v.is_finite() {
-        Ok(v)
-    } else {
-        Err("must be zero or positive, and finite (s)".into())
+        .map_err(|_| InvalidParameter::new(FLAG, format!("'{s}'"), "", "a whole number"))?;
+    vlab::validation::count_in(FLAG, v, "", 1, None)
+}
+
+/// Prints a command-line error and gives the exit status (2, a usage error).
+/// A value one of the parsers above refused is printed with its flag as the
+/// key, in the crate's one shape; everything else as clap words it.
+pub fn parse_error(e: clap::Error) -> ExitCode {
+    let refused = std::error::Error::source(&e).and_then(|s| s.downcast_ref::<InvalidParameter>());
+    let flag = match e.get(ContextKind::InvalidArg) {
+        Some(ContextValue::String(arg)) => arg.split([' ', '=']).next().map(str::to_string),
+        _ => None,
+    };
+    match (e.kind(), refused, flag) {
+        (ErrorKind::ValueValidation, Some(p), Some(flag)) => {
+            eprintln!("error: {}", p.renamed(&flag));
+            ExitCode::from(2)
+        }
+        _ => {
+            // Help and version print to standard output and exit 0.
+            let code = e.exit_code();
+            let _ = e.print();
+            ExitCode::from(u8::try_from(code).unwrap_or(2))
+        }
+    }
+}
+
+/// Library keys that this run's flags set: a refusal the library words with
+/// the key (`drive.cycles`) is shown with the flag (`--cycles`).
+#[derive(Debug, Clone, Default)]
+pub struct FlagKeys(Vec<(String, String)>);
+
+impl FlagKeys {
+    /// No flag maps to a key.
+    pub fn new() -> Self {
+        FlagKeys::default()
+    }
+
+    /// `key` was set by `flag` (when `given`).
+    pub fn set(mut self, given: bool, key: &str, flag: &str) -> Self {
+        if given {
+            self.0.push((key.to_string(), flag.to_string()));
+        }
+        self
+    }
+
+    /// The flag that set `key`, if any.
+    fn flag(&self, key: &str) -> Option<&str> {
+        self.0
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, f)| f.as_str())
+    }
+
+    /// The error, with a refused key renamed to its flag.
+    pub fn name_flags(&self, err: anyhow::Error) -> anyhow::Error {
+        let renamed = err
+            .chain()
+            .find_map(|c| c.downcast_ref::<InvalidParameter>())
+            .and_then(|p| self.flag(&p.key).map(|f| p.renamed(f)));
+        match renamed {
+            Some(p) => anyhow::Error::new(p),
+            None => err,
+        }
     }
 }
 
@@ -154,14 +197,40 @@ mod tests {
 
     #[test]
     fn messages_state_unit_and_range() {
-        assert!(freq_hz("-3").unwrap_err().contains("Hz"));
-        assert!(freq_hz("nan").unwrap_err().contains("positive and finite"));
-        assert!(freq_hz("abc").unwrap_err().contains("not a number"));
-        assert!(restitution("1.2").unwrap_err().contains("(0, 1]"));
-        assert!(friction("-0.1").unwrap_err().contains(">= 0"));
+        let shown = |r: Result<f64, InvalidParameter>| r.unwrap_err().renamed("--x").to_string();
+        assert_eq!(
+            shown(freq_hz("-3")),
+            "--x = -3 Hz: must be positive and finite"
+        );
+        assert!(shown(freq_hz("nan")).contains("positive and finite"));
+        assert_eq!(shown(freq_hz("abc")), "--x = 'abc' Hz: must be a number");
+        assert!(shown(restitution("1.2")).contains("(0, 1]"));
+        assert!(shown(friction("-0.1")).contains(">= 0"));
         assert!(sample_rate_hz("2e5").is_ok());
-        assert!(sample_rate_hz("200000.5").unwrap_err().contains("whole"));
-        assert!(sample_rate_hz("2e7").unwrap_err().contains("1000000 (Hz)"));
-        assert!(non_negative_seconds("-1").unwrap_err().contains("(s)"));
+        assert!(shown(sample_rate_hz("200000.5")).contains("whole"));
+        assert!(shown(sample_rate_hz("2e7")).contains("1000000"));
+        assert!(shown(non_negative_seconds("-1")).contains(" s: "));
+    }
+
+    #[test]
+    fn library_keys_are_shown_as_the_flags_that_set_them() {
+        let flags = FlagKeys::new().set(true, "drive.cycles", "--cycles").set(
+            false,
+            "simulation.seed",
+            "--seed",
+        );
+        let err = anyhow::Error::new(InvalidParameter::new("drive.cycles", 0, "", "at least 1"))
+            .context("resolving the scene");
+        assert_eq!(
+            flags.name_flags(err).to_string(),
+            "--cycles = 0: must be at least 1"
+        );
+        let err = anyhow::Error::new(InvalidParameter::new("simulation.seed", 0, "", "odd"));
+        assert!(
+            flags
+                .name_flags(err)
+                .to_string()
+                .starts_with("simulation.seed")
+        );
     }
 }

@@ -170,6 +170,15 @@ fn millimetres(h_m: f64) -> String {
     format!("{}", (h_m * 1e6).round() / 1e3)
 }
 
+/// The flag the heights came from.
+fn height_flag(a: &DropArgs) -> &'static str {
+    if a.heights.is_some() {
+        "--heights"
+    } else {
+        "--height-m"
+    }
+}
+
 fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
     let preset = a.particle.preset();
     let mut rig = match &a.rig {
@@ -194,6 +203,15 @@ fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
         }
         seen.push(millimetres(h));
     }
+    let flags = args::FlagKeys::new()
+        .set(true, "diameter_m", "--diameter-m")
+        .set(a.cor.is_some(), "restitution", "--cor")
+        .set(true, "height_m", height_flag(a))
+        .set(
+            a.sample_rate_hz.is_some(),
+            "daq.sample_rate_hz",
+            "--sample-rate-hz",
+        );
     heights
         .iter()
         .map(|&height_m| {
@@ -209,7 +227,7 @@ fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
                 seed: a.seed,
                 numerics: DropNumerics::default(),
             };
-            s.validate()?;
+            s.validate().map_err(|e| flags.name_flags(e.into()))?;
             Ok(s)
         })
         .collect()

@@ -121,6 +121,28 @@ struct ImpactReport<'a> {
 }
 
 impl ImpactArgs {
+    /// The flags that set each field of [`ImpactSetup`].
+    fn flags() -> args::FlagKeys {
+        [
+            ("material.youngs_pa", "--youngs-pa"),
+            ("material.poisson", "--poisson"),
+            ("material.density_kgm3", "--density-kgm3"),
+            ("target.youngs_pa", "--wall-youngs-pa"),
+            ("target.poisson", "--wall-poisson"),
+            ("radius_m", "--radius-m"),
+            ("speed_mps", "--speed-mps"),
+            ("angle_deg", "--angle-deg"),
+            ("spin_rad_s", "--spin-rad-s"),
+            ("restitution", "--cor"),
+            ("friction", "--mu"),
+            ("dt_s", "--dt-s"),
+        ]
+        .into_iter()
+        .fold(args::FlagKeys::new(), |f, (key, flag)| {
+            f.set(true, key, flag)
+        })
+    }
+
     fn setup(&self) -> Result<ImpactSetup> {
         let name = match self.material {
             MaterialName::Acrylic => "acrylic",
@@ -169,7 +191,9 @@ impl ImpactArgs {
             },
             dt_s: self.dt_s,
         };
-        setup.validate().map_err(anyhow::Error::msg)?;
+        setup
+            .validate()
+            .map_err(|e| Self::flags().name_flags(e.into()))?;
         if let Some(dt) = self.dt_s {
             let t_c = setup.hertz_duration_s();
             if dt > t_c / 10.0 {

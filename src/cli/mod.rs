@@ -69,7 +69,10 @@ pub fn shake_name(kind: vlab::rig::ShakerKind) -> &'static str {
 
 /// Runs the command line and maps errors to an exit status.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return args::parse_error(e),
+    };
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {

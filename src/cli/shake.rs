@@ -518,9 +518,9 @@ fn write_outputs(
         BTreeMap::new()
     } else {
         e.daq
-            .full_scale
+            .channels
             .iter()
-            .map(|(c, v, _)| (c.clone(), *v))
+            .map(|c| (c.name.clone(), c.full_scale))
             .collect()
     };
     write_wav_with_full_scale(&dir.join("trace.wav"), &e.trace, &full_scale)?;

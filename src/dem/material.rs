@@ -8,6 +8,10 @@
 
 use serde::{Deserialize, Serialize};
 
+#[cfg(doc)]
+use crate::validation::InvalidParameter;
+use crate::validation::{Bound, Checked, in_range, positive};
+
 /// An isotropic elastic material.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -71,39 +75,23 @@ impl Material {
         (2.0 - self.poisson) / self.shear_modulus_pa()
     }
 
-    /// Checks that the constants are physical; the message names the field and range.
-    pub fn validate(&self, what: &str) -> Result<(), String> {
-        let e = self.youngs_pa;
-        if !is_positive_finite(e) {
-            return Err(format!(
-                "{what}: Young's modulus {e} Pa is invalid: must be positive and finite (Pa)"
-            ));
-        }
-        let nu = self.poisson;
-        if !(nu > -1.0 && nu < 0.5) {
-            return Err(format!(
-                "{what}: Poisson's ratio {nu} is invalid: must lie in (-1, 0.5)"
-            ));
-        }
-        let rho = self.density_kgm3;
-        if !is_positive_finite(rho) {
-            return Err(format!(
-                "{what}: density {rho} kg/m^3 is invalid: must be positive and finite (kg/m^3)"
-            ));
-        }
+    /// Checks that the constants are physical; a refusal names the field (add
+    /// the key of the table it sits in with [`InvalidParameter::within`]).
+    pub fn validate(&self) -> Checked<()> {
+        positive("youngs_pa", self.youngs_pa, "Pa")?;
+        in_range(
+            "poisson",
+            self.poisson,
+            "",
+            Bound::Open(-1.0),
+            Bound::Open(0.5),
+        )?;
+        positive("density_kgm3", self.density_kgm3, "kg/m^3")?;
         if let Some(y) = self.yield_strength_pa {
-            if !is_positive_finite(y) {
-                return Err(format!(
-                    "{what}: yield strength {y} Pa is invalid: must be positive and finite (Pa)"
-                ));
-            }
+            positive("yield_strength_pa", y, "Pa")?;
         }
         Ok(())
     }
-}
-
-fn is_positive_finite(x: f64) -> bool {
-    x.is_finite() && x > 0.0
 }
 
 /// Equivalent Young's modulus E* of eq. 5.6 (corrected: `1 - ν²`), in Pa.
@@ -167,10 +155,10 @@ mod tests {
     fn validation_names_field_and_range() {
         let mut m = Material::ACRYLIC;
         m.poisson = 0.7;
-        let err = m.validate("particle material").unwrap_err();
-        assert!(
-            err.contains("Poisson") && err.contains("(-1, 0.5)"),
-            "{err}"
+        let err = m.validate().unwrap_err().within("particles.material");
+        assert_eq!(
+            err.to_string(),
+            "particles.material.poisson = 0.7: must be in (-1, 0.5)"
         );
     }
 }

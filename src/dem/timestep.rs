@@ -7,6 +7,7 @@
 //! acrylic, whose Δt_R is 8.3e-6 s).
 
 use super::material::Material;
+use crate::validation::{Bound, Checked, InvalidParameter, in_range};
 
 /// Rayleigh time step (s) of eq. 3.31 for spheres of radius `radius_min_m`.
 pub fn rayleigh_time_step_s(material: &Material, radius_min_m: f64) -> f64 {
@@ -18,20 +19,17 @@ pub fn rayleigh_time_step_s(material: &Material, radius_min_m: f64) -> f64 {
 /// Default safety factor on the Rayleigh step when a scene does not fix Δt.
 pub const DEFAULT_SAFETY_FACTOR: f64 = 0.2;
 
-/// Checks an explicit time step against the Rayleigh limit; the error message
-/// names the parameter, the unit and the valid range.
-pub fn check_time_step(dt_s: f64, limit_s: f64) -> Result<(), String> {
-    if !(dt_s > 0.0 && dt_s.is_finite()) {
-        return Err(format!(
-            "time step {dt_s} s is invalid: must be positive and finite, at most {limit_s:.3e} s (Rayleigh limit, thesis eq. 3.31)"
-        ));
-    }
-    if dt_s > limit_s {
-        return Err(format!(
-            "time step {dt_s:.3e} s is above the stability limit {limit_s:.3e} s (Rayleigh estimate, thesis eq. 3.31): use at most {limit_s:.3e} s (the thesis used 1e-6 s for 5 mm acrylic)"
-        ));
-    }
-    Ok(())
+/// Checks an explicit time step `dt_s`, named `key`, against the Rayleigh
+/// limit `limit_s`.
+pub fn check_time_step(key: &str, dt_s: f64, limit_s: f64) -> Checked<f64> {
+    in_range(key, dt_s, "s", Bound::Open(0.0), Bound::Closed(limit_s)).map_err(|e| {
+        InvalidParameter {
+            valid: format!(
+                "positive and at most the stability limit {limit_s:.3e} s (Rayleigh estimate, thesis eq. 3.31; the thesis used 1e-6 s for 5 mm acrylic)"
+            ),
+            ..e
+        }
+    })
 }
 
 #[cfg(test)]
@@ -47,12 +45,16 @@ mod tests {
 
     #[test]
     fn refuses_step_above_limit() {
-        let err = check_time_step(1e-5, 8.3e-6).unwrap_err();
+        let err = check_time_step("dt_s", 1e-5, 8.3e-6)
+            .unwrap_err()
+            .to_string();
         assert!(
-            err.contains("stability limit") && err.contains(" s"),
+            err.starts_with(
+                "dt_s = 0.00001 s: must be positive and at most the stability limit 8.300e-6 s"
+            ),
             "{err}"
         );
-        assert!(check_time_step(1e-6, 8.3e-6).is_ok());
-        assert!(check_time_step(f64::NAN, 8.3e-6).is_err());
+        assert!(check_time_step("dt_s", 1e-6, 8.3e-6).is_ok());
+        assert!(check_time_step("dt_s", f64::NAN, 8.3e-6).is_err());
     }
 }

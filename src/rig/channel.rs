@@ -31,7 +31,7 @@
 //! [`MeasurementChannel::push`] does O(1) work and does not allocate once
 //! [`MeasurementChannel::reserve`] has sized the record.
 
-use super::error::{RigError, positive};
+use super::error::{InvalidParameter, RigError, positive};
 use super::filter::{Biquad, Cascade};
 use super::noise::GaussianNoise;
 use super::spec::{ChannelParams, DaqSpec, Sampling};
@@ -120,15 +120,15 @@ impl MeasurementChannel {
         if let Some(lp) = params.low_pass {
             let nyquist = 0.5 / dem_dt_s;
             if lp.cutoff_hz >= nyquist {
-                return Err(RigError::InvalidParameter {
-                    key: format!("{}.low_pass.cutoff_hz", params.section),
-                    value: lp.cutoff_hz.to_string(),
-                    unit: "Hz",
-                    valid: format!(
+                return Err(RigError::from(InvalidParameter::new(
+                    format!("{}.low_pass.cutoff_hz", params.section),
+                    lp.cutoff_hz,
+                    "Hz",
+                    format!(
                         "below half the DEM step rate, 1 / (2 dem_dt_s) = {nyquist} Hz, to be \
                          simulated at dem_dt_s = {dem_dt_s} s"
                     ),
-                });
+                )));
             }
             filters.push_butterworth(lp.order, lp.cutoff_hz, dem_dt_s);
         }

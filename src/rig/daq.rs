@@ -13,7 +13,7 @@
 use serde_json::json;
 
 use super::channel::MeasurementChannel;
-use super::error::{RigError, finite, positive};
+use super::error::{InvalidParameter, RigError, finite, positive};
 use super::noise::GaussianNoise;
 use super::spec::{ChannelParams, RigSpec, Sampling};
 use crate::signals::{Sensitivity, Trace, TraceMetadata};
@@ -32,38 +32,44 @@ pub struct DaqReport {
     pub sample_rate_hz: f64,
     /// Time of the first sample after the record start, s.
     pub start_time_s: f64,
-    /// Clipped samples per channel (every channel listed).
-    pub clipped: Vec<(String, u64)>,
-    /// Largest |ADC input| per channel as a fraction of full scale.
-    pub peak_fraction_of_full_scale: Vec<(String, f64)>,
-    /// ADC full scale per channel in physical units.
-    pub full_scale: Vec<(String, f64, String)>,
+    /// Every channel, in trace order.
+    pub channels: Vec<ChannelReport>,
     /// True when the ADC is ideal (no quantisation, no clipping).
     pub ideal_adc: bool,
+}
+
+/// How one channel used its ADC.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelReport {
+    /// Trace channel name.
+    pub name: String,
+    /// Physical unit of the channel.
+    pub unit: String,
+    /// Samples clipped at the ADC's limits.
+    pub clipped: u64,
+    /// Largest |ADC input| as a fraction of full scale.
+    pub peak_fraction_of_full_scale: f64,
+    /// ADC full scale in the channel's physical unit.
+    pub full_scale: f64,
 }
 
 impl DaqReport {
     /// True when any sample was clipped.
     pub fn any_clipped(&self) -> bool {
-        self.clipped.iter().any(|(_, n)| *n > 0)
+        self.channels.iter().any(|c| c.clipped > 0)
     }
 
     /// One sentence per clipped channel, for a loud warning.
     pub fn clipping_warnings(&self) -> Vec<String> {
-        self.clipped
+        self.channels
             .iter()
-            .filter(|(_, n)| *n > 0)
-            .map(|(name, n)| {
-                let fs = self
-                    .full_scale
-                    .iter()
-                    .find(|(c, _, _)| c == name)
-                    .map(|(_, v, unit)| format!(" (full scale {v:.4} {unit})"))
-                    .unwrap_or_default();
+            .filter(|c| c.clipped > 0)
+            .map(|c| {
                 format!(
-                    "{name}: {n} of {} samples clipped at the ADC's limits{fs}: the record is \
-                     distorted; lower the conditioner gain in the rig file or lower --gamma",
-                    self.samples
+                    "{}: {} of {} samples clipped at the ADC's limits (full scale {:.4} {}): the \
+                     record is distorted; lower the conditioner gain in the rig file or the \
+                     drive amplitude",
+                    c.name, c.clipped, self.samples, c.full_scale, c.unit
                 )
             })
             .collect()
@@ -99,16 +105,16 @@ impl Daq {
         positive("dem_dt_s", dem_dt_s, "s")?;
         finite("record_start_s", record_start_s, "s")?;
         if record_start_s < 0.0 {
-            return Err(super::error::invalid(
+            return Err(RigError::from(InvalidParameter::new(
                 "record_start_s",
                 record_start_s,
                 "s",
                 "zero or positive (time from the drive start)",
-            ));
+            )));
         }
         let period = 1.0 / spec.daq.sample_rate_hz;
         if dem_dt_s > period {
-            return Err(super::error::invalid(
+            return Err(RigError::from(InvalidParameter::new(
                 "dem_dt_s",
                 dem_dt_s,
                 "s",
@@ -116,7 +122,7 @@ impl Daq {
                     "at most one sample period, {period} s at daq.sample_rate_hz = {} Hz",
                     spec.daq.sample_rate_hz
                 ),
-            ));
+            )));
         }
         let make = |p: &ChannelParams, stream| {
             MeasurementChannel::new(
@@ -217,22 +223,14 @@ impl Daq {
             samples: trace.len(),
             sample_rate_hz: self.spec.daq.sample_rate_hz,
             start_time_s,
-            clipped: channels
+            channels: channels
                 .iter()
-                .map(|c| (c.params().name.to_string(), c.clipped()))
-                .collect(),
-            peak_fraction_of_full_scale: channels
-                .iter()
-                .map(|c| (c.params().name.to_string(), c.peak_fraction_of_full_scale()))
-                .collect(),
-            full_scale: channels
-                .iter()
-                .map(|c| {
-                    (
-                        c.params().name.to_string(),
-                        c.full_scale_units(),
-                        c.params().unit.to_string(),
-                    )
+                .map(|c| ChannelReport {
+                    name: c.params().name.to_string(),
+                    unit: c.params().unit.to_string(),
+                    clipped: c.clipped(),
+                    peak_fraction_of_full_scale: c.peak_fraction_of_full_scale(),
+                    full_scale: c.full_scale_units(),
                 })
                 .collect(),
             ideal_adc: self.spec.daq.ideal_adc,

@@ -17,7 +17,7 @@ use serde_json::json;
 
 use super::channel::MeasurementChannel;
 use super::drop_spec::DropRigSpec;
-use super::error::{RigError, invalid, positive};
+use super::error::{InvalidParameter, RigError, positive};
 use super::noise::GaussianNoise;
 use super::plate::Plate;
 use super::spec::Sampling;
@@ -65,7 +65,7 @@ impl DropRig {
         positive("tick_s", tick_s, "s")?;
         let period = 1.0 / spec.daq.sample_rate_hz;
         if tick_s > period {
-            return Err(invalid(
+            return Err(RigError::from(InvalidParameter::new(
                 "tick_s",
                 tick_s,
                 "s",
@@ -73,7 +73,7 @@ impl DropRig {
                     "at most one sample period, {period} s at daq.sample_rate_hz = {} Hz",
                     spec.daq.sample_rate_hz
                 ),
-            ));
+            )));
         }
         let mut channel = MeasurementChannel::new(
             &spec.force_channel(),

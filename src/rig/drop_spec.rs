@@ -15,7 +15,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::error::{RigError, invalid, positive};
+use super::error::{InvalidParameter, RigError, positive};
 use super::spec::{ChannelParams, DaqSpec, ForceSpec, RIG_VERSION};
 
 /// Name of the built-in drop rig.
@@ -152,18 +152,23 @@ impl DropRigSpec {
             });
         }
         if self.name.trim().is_empty() {
-            return Err(RigError::InvalidParameter {
-                key: "name".into(),
-                value: "\"\"".into(),
-                unit: "1",
-                valid: "a non-empty rig name".into(),
-            });
+            return Err(RigError::from(InvalidParameter::new(
+                "name",
+                "\"\"",
+                "",
+                "a non-empty rig name",
+            )));
         }
         let p = &self.plate;
         positive("plate.mass_kg", p.mass_kg, "kg")?;
         positive("plate.youngs_pa", p.youngs_pa, "Pa")?;
         if !(p.poisson > -1.0 && p.poisson < 0.5) {
-            return Err(invalid("plate.poisson", p.poisson, "1", "in (-1, 0.5)"));
+            return Err(RigError::from(InvalidParameter::new(
+                "plate.poisson",
+                p.poisson,
+                "",
+                "in (-1, 0.5)",
+            )));
         }
         if let Some(y) = p.yield_strength_pa {
             positive("plate.yield_strength_pa", y, "Pa")?;
@@ -175,23 +180,23 @@ impl DropRigSpec {
         )?;
         let z = self.mount.damping_ratio;
         if !(0.0..1.0).contains(&z) {
-            return Err(invalid(
+            return Err(RigError::from(InvalidParameter::new(
                 "mount.damping_ratio",
                 z,
-                "1",
+                "",
                 "in [0, 1) (an underdamped plate, as a transducer mount is)",
-            ));
+            )));
         }
         self.daq.validate()?;
         self.force_channel().validate(self.daq.sample_rate_hz)?;
         let len = self.record.length_s;
         if !(len.is_finite() && len > 0.0 && len <= MAX_RECORD_LENGTH_S) {
-            return Err(invalid(
+            return Err(RigError::from(InvalidParameter::new(
                 "record.length_s",
                 len,
                 "s",
                 &format!("positive, at most {MAX_RECORD_LENGTH_S} s"),
-            ));
+            )));
         }
         Ok(())
     }

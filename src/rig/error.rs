@@ -1,29 +1,23 @@
 //! The one error type of the `rig` module.
 //!
-//! Every fallible function in `rig` returns [`RigError`]. Messages name the
-//! parameter (as its rig-file key where there is one), its unit and the valid
-//! range; a refusal because the lab hardware cannot do what was asked names the
+//! Every fallible function in `rig` returns [`RigError`]. A refused value is
+//! the crate's one [`InvalidParameter`] (its rig-file key where there is one,
+//! its unit and the valid range); a refusal because the lab hardware cannot do what was asked names the
 //! limit and suggests the `ideal` rig, which has none.
 
 use std::path::PathBuf;
 
 use crate::signals::SignalsError;
+pub use crate::validation::InvalidParameter;
+pub(crate) use crate::validation::{finite, non_negative, positive};
 
 /// Everything that can go wrong in `rig`.
 #[derive(Debug, thiserror::Error)]
 pub enum RigError {
-    /// A parameter is out of its valid range.
-    #[error("{key} = {value} {unit}: must be {valid}")]
-    InvalidParameter {
-        /// Rig-file key (e.g. `daq.sample_rate_hz`) or API argument name.
-        key: String,
-        /// The offending value, as written.
-        value: String,
-        /// Its unit (`Hz`, `V/N`, `1` when dimensionless, ...).
-        unit: &'static str,
-        /// What would have been valid, in words.
-        valid: String,
-    },
+    /// A parameter is out of its valid range (named by its rig-file key, e.g.
+    /// `daq.sample_rate_hz`, or by its API argument name).
+    #[error("{0}")]
+    Invalid(#[from] InvalidParameter),
     /// The requested motion needs more stroke than the shaker has.
     #[error(
         "Gamma {gamma} at {freq_hz} Hz needs {needed_mm:.1} mm peak-to-peak stroke; the {rig} rig \
@@ -132,40 +126,3 @@ pub enum RigError {
 
 /// Result alias used throughout `rig`.
 pub type Result<T, E = RigError> = std::result::Result<T, E>;
-
-/// An [`RigError::InvalidParameter`] for a number.
-pub(crate) fn invalid(key: &str, value: f64, unit: &'static str, valid: &str) -> RigError {
-    RigError::InvalidParameter {
-        key: key.to_string(),
-        value: value.to_string(),
-        unit,
-        valid: valid.to_string(),
-    }
-}
-
-/// Checks that `value` is positive and finite.
-pub(crate) fn positive(key: &str, value: f64, unit: &'static str) -> Result<f64> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        Err(invalid(key, value, unit, "positive and finite"))
-    }
-}
-
-/// Checks that `value` is zero or positive, and finite.
-pub(crate) fn non_negative(key: &str, value: f64, unit: &'static str) -> Result<f64> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(value)
-    } else {
-        Err(invalid(key, value, unit, "zero or positive, and finite"))
-    }
-}
-
-/// Checks that `value` is finite.
-pub(crate) fn finite(key: &str, value: f64, unit: &'static str) -> Result<f64> {
-    if value.is_finite() {
-        Ok(value)
-    } else {
-        Err(invalid(key, value, unit, "finite"))
-    }
-}

@@ -39,7 +39,7 @@ pub mod spec;
 pub mod transducer;
 
 pub use channel::{Adc, MeasurementChannel};
-pub use daq::{ACCEL_CHANNEL, Daq, DaqReport, FORCE_CHANNEL};
+pub use daq::{ACCEL_CHANNEL, ChannelReport, Daq, DaqReport, FORCE_CHANNEL};
 pub use drop_rig::{DROP_FORCE_CHANNEL, DropRig, DropRigReport};
 pub use drop_spec::{DROP_RIG, DROP_RIG_TOML, DropRigSpec, MountSpec, PlateSpec, RecordSpec};
 pub use error::{Result, RigError};

@@ -26,7 +26,7 @@ use std::f64::consts::PI;
 
 use super::discretise::zero_order_hold;
 use super::drop_spec::DropRigSpec;
-use super::error::{RigError, invalid, positive};
+use super::error::{InvalidParameter, RigError, positive};
 
 /// The plate on its mount.
 #[derive(Debug, Clone)]
@@ -49,12 +49,12 @@ impl Plate {
         positive("plate.mass_kg", mass_kg, "kg")?;
         positive("mount.stiffness_n_per_m", stiffness_n_per_m, "N/m")?;
         if !(0.0..1.0).contains(&damping_ratio) {
-            return Err(invalid(
+            return Err(RigError::from(InvalidParameter::new(
                 "mount.damping_ratio",
                 damping_ratio,
-                "1",
+                "",
                 "in [0, 1)",
-            ));
+            )));
         }
         let c = 2.0 * damping_ratio * (stiffness_n_per_m * mass_kg).sqrt();
         let a = [

@@ -99,7 +99,7 @@ pub struct ShakerReport {
 /// peak acceleration `Gamma g`).
 pub fn check_limits(spec: &RigSpec, freq_hz: f64, gamma: f64, g_mps2: f64) -> Result<(), RigError> {
     positive("freq_hz", freq_hz, "Hz")?;
-    non_negative("gamma", gamma, "1")?;
+    non_negative("gamma", gamma, "")?;
     positive("g_mps2", g_mps2, "m/s^2")?;
     let w = 2.0 * PI * freq_hz;
     let tidy = |x: f64| (x * 1e6).round() / 1e6;

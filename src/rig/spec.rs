@@ -24,7 +24,7 @@ use std::path::Path;
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use super::error::{RigError, finite, invalid, non_negative, positive};
+use super::error::{InvalidParameter, RigError, finite, non_negative, positive};
 use super::filter::{MAX_LOW_PASS_ORDER, butterworth_response, high_pass_response};
 use crate::signals::wrap_phase_rad;
 
@@ -334,15 +334,15 @@ impl ChannelParams {
         if let Some(lp) = self.low_pass {
             positive(&key("low_pass.cutoff_hz"), lp.cutoff_hz, "Hz")?;
             if !(1..=MAX_LOW_PASS_ORDER).contains(&lp.order) {
-                return Err(RigError::InvalidParameter {
-                    key: key("low_pass.order"),
-                    value: lp.order.to_string(),
-                    unit: "1",
-                    valid: format!("an integer in 1..={MAX_LOW_PASS_ORDER}"),
-                });
+                return Err(RigError::from(InvalidParameter::new(
+                    key("low_pass.order"),
+                    lp.order,
+                    "",
+                    format!("an integer in 1..={MAX_LOW_PASS_ORDER}"),
+                )));
             }
             if lp.cutoff_hz <= self.high_pass_hz {
-                return Err(invalid(
+                return Err(RigError::from(InvalidParameter::new(
                     &key("low_pass.cutoff_hz"),
                     lp.cutoff_hz,
                     "Hz",
@@ -351,13 +351,13 @@ impl ChannelParams {
                         self.high_pass_hz,
                         key("high_pass_hz")
                     ),
-                ));
+                )));
             }
         }
         finite(&key("sample_skew_s"), self.sample_skew_s, "s")?;
         let period = 1.0 / sample_rate_hz;
         if self.sample_skew_s.abs() >= 0.5 * period {
-            return Err(invalid(
+            return Err(RigError::from(InvalidParameter::new(
                 &key("sample_skew_s"),
                 self.sample_skew_s,
                 "s",
@@ -366,7 +366,7 @@ impl ChannelParams {
                     0.5 * period,
                     sample_rate_hz
                 ),
-            ));
+            )));
         }
         Ok(())
     }
@@ -525,12 +525,12 @@ impl RigSpec {
             });
         }
         if self.name.trim().is_empty() {
-            return Err(RigError::InvalidParameter {
-                key: "name".into(),
-                value: "\"\"".into(),
-                unit: "1",
-                valid: "a non-empty rig name".into(),
-            });
+            return Err(RigError::from(InvalidParameter::new(
+                "name",
+                "\"\"",
+                "",
+                "a non-empty rig name",
+            )));
         }
         positive("enclosure.mass_kg", self.enclosure.mass_kg, "kg")?;
         let s = &self.shaker;
@@ -565,12 +565,12 @@ impl DaqSpec {
     pub fn validate(&self) -> Result<(), RigError> {
         positive("daq.sample_rate_hz", self.sample_rate_hz, "Hz")?;
         if !(1..=32).contains(&self.bits) {
-            return Err(RigError::InvalidParameter {
-                key: "daq.bits".into(),
-                value: self.bits.to_string(),
-                unit: "bits",
-                valid: "an integer in 1..=32".into(),
-            });
+            return Err(RigError::from(InvalidParameter::new(
+                "daq.bits",
+                self.bits,
+                "bits",
+                "an integer in 1..=32",
+            )));
         }
         positive("daq.full_scale_v", self.full_scale_v, "V")?;
         Ok(())
@@ -600,16 +600,21 @@ impl ElectrodynamicSpec {
             "V/V",
         )?;
         if !(self.loop_gain > 0.0 && self.loop_gain <= 1.0) {
-            return Err(invalid(&k("loop_gain"), self.loop_gain, "1", "in (0, 1]"));
+            return Err(RigError::from(InvalidParameter::new(
+                &k("loop_gain"),
+                self.loop_gain,
+                "",
+                "in (0, 1]",
+            )));
         }
         let f = self.feedforward_particle_fraction;
         if !(0.0..=1.0).contains(&f) {
-            return Err(invalid(
+            return Err(RigError::from(InvalidParameter::new(
                 &k("feedforward_particle_fraction"),
                 f,
-                "1",
+                "",
                 "in [0, 1]",
-            ));
+            )));
         }
         Ok(())
     }
@@ -644,7 +649,7 @@ mod tests {
 
     #[test]
     fn every_checked_in_rig_file_parses() {
-        // rig/ also holds scenes (thesis-damper.toml); a rig has a [shaker].
+        // Every file in rig/ is a rig: shaker rigs have a [shaker] section.
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("rig");
         let mut rigs = 0;
         for entry in std::fs::read_dir(&dir).expect("rig/ exists") {

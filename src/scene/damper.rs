@@ -172,8 +172,7 @@ pub fn settle_bed(
     let column =
         (n as f64 * scene.particle_volume_m3() / (COLUMN_FILL * PI * cyl_r * cyl_r)).max(length);
     let mut rng = SceneRng::new(scene.simulation.seed);
-    let positions = insert_in_cylinder(n, radius, cyl_r, column, 1e-3 * radius, &mut rng)
-        .map_err(SceneError::Invalid)?;
+    let positions = insert_in_cylinder(n, radius, cyl_r, column, 1e-3 * radius, &mut rng)?;
     let density = scene.particle_material().density_kgm3;
     let mut particles = Particles::default();
     for p in positions {
@@ -205,11 +204,10 @@ pub fn settle_bed(
         .map(|i| world.particles.position[i].z + world.particles.radius[i])
         .fold(0.0, f64::max);
     if top > length {
-        return Err(SceneError::Invalid(format!(
-            "the settled bed is {:.1} mm high, taller than the enclosure (enclosure.inner_length_m = {} m): reduce particles.count or lengthen the enclosure",
-            top * 1e3,
-            length
-        )));
+        return Err(SceneError::BedTooTall {
+            height_mm: top * 1e3,
+            length_m: length,
+        });
     }
     world.walls.move_plane(2, DVec3::new(0.0, 0.0, length));
     world.refresh_wall_gaps();

@@ -77,6 +77,7 @@ use crate::scene::validity::sphere_wall_yield_velocity_mps;
 use crate::signals::{
     DropTestResult, ImpactParams, SignalsError, Trace, TraceMetadata, estimate_cor,
 };
+use crate::validation::{self, Bound, InvalidParameter, in_range, non_negative, positive, require};
 
 /// Gravity of the drop scene, m/s^2 (as the thesis scene).
 pub const DROP_GRAVITY_MPS2: f64 = 9.81;
@@ -210,50 +211,11 @@ pub struct DropSetup {
 /// Errors of the drop scene.
 #[derive(Debug, thiserror::Error)]
 pub enum DropError {
-    /// A set-up value out of range; the message names the flag, unit and range.
+    /// A set-up value out of range, named as the field of [`DropSetup`] (or
+    /// the rig key) that holds it. The sample rate or height refused because
+    /// the record could not hold the impacts is one too: its valid range says why.
     #[error("{0}")]
-    Invalid(String),
-    /// The sample rate is too low for the record to hold an impact's pulse.
-    #[error(
-        "--sample-rate-hz {sample_rate_hz} Hz cannot resolve the impacts: a contact of the {pair} \
-         at {speed_mps:.3} m/s lasts {contact_us:.1} us (Hertz, thesis eq. 5.10) and the \
-         transducer's first pulse {pulse_us:.1} us (the plate rings at {ring_khz:.1} kHz); one \
-         sample per pulse needs at least {min_rate_hz:.0} Hz (the thesis used 200000 Hz)"
-    )]
-    SampleRateTooLow {
-        /// Rate asked for, Hz.
-        sample_rate_hz: f64,
-        /// The sphere-plate pair.
-        pair: String,
-        /// Fastest impact, m/s.
-        speed_mps: f64,
-        /// Its contact duration, us.
-        contact_us: f64,
-        /// The transducer's first pulse, us.
-        pulse_us: f64,
-        /// Plate ring frequency, kHz.
-        ring_khz: f64,
-        /// Lowest rate, Hz.
-        min_rate_hz: f64,
-    },
-    /// The record is too short for four impacts from this height.
-    #[error(
-        "--height-m {height_m} m is too high for the {length_s} s record (record.length_s of rig \
-         '{rig}'): the fourth impact would come at {fourth_s:.3} s, and the estimator needs four \
-         impacts for two triples; use at most {max_height_m:.3} m"
-    )]
-    RecordTooShort {
-        /// Height asked for, m.
-        height_m: f64,
-        /// Record length, s.
-        length_s: f64,
-        /// Rig name.
-        rig: String,
-        /// Predicted fourth impact (configured e), s.
-        fourth_s: f64,
-        /// Highest height that fits, m.
-        max_height_m: f64,
-    },
+    Invalid(#[from] InvalidParameter),
     /// The engine stopped.
     #[error(transparent)]
     Dem(#[from] DemError),
@@ -396,63 +358,53 @@ impl DropSetup {
         out
     }
 
-    /// Checks every value; messages name the flag, the unit and the range.
+    /// Checks every value; a refusal names the field (or rig key), its unit
+    /// and valid range.
     pub fn validate(&self) -> Result<(), DropError> {
-        let bad = |s: String| Err(DropError::Invalid(s));
-        self.material
-            .validate("sphere material")
-            .map_err(DropError::Invalid)?;
-        let d = self.diameter_m;
-        if !(d.is_finite() && d > 0.0 && d <= 0.1) {
-            return bad(format!(
-                "--diameter-m {d} is invalid: the sphere diameter must be positive and at most 0.1 m (m)"
-            ));
-        }
-        let e = self.restitution;
-        if !(e > 0.0 && e <= 1.0) {
-            return bad(format!(
-                "--cor {e} is invalid: the coefficient of restitution must lie in (0, 1] (dimensionless)"
-            ));
-        }
-        if !(self.friction >= 0.0 && self.friction.is_finite()) {
-            return bad(format!(
-                "friction {} is invalid: must be >= 0 and finite (dimensionless)",
-                self.friction
-            ));
-        }
-        let h = self.height_m;
-        if !(h.is_finite() && h > 0.0) {
-            return bad(format!(
-                "--height-m {h} is invalid: the drop height must be positive and finite (m)"
-            ));
-        }
-        if h < MIN_HEIGHT_M {
-            return bad(format!(
-                "--height-m {h} is invalid: the drop height must be at least {MIN_HEIGHT_M} m (m): \
-                 lower bounces come faster than the estimator's 2 ms hold-off and sink into the \
-                 transducer noise"
-            ));
-        }
-        let g = self.gravity_mps2;
-        if !(g.is_finite() && g > 0.0) {
-            return bad(format!(
-                "gravity {g} m/s^2 is invalid: must be positive and finite (m/s^2)"
-            ));
-        }
+        self.material.validate().map_err(|e| e.within("material"))?;
+        in_range(
+            "diameter_m",
+            self.diameter_m,
+            "m",
+            Bound::Open(0.0),
+            Bound::Closed(0.1),
+        )?;
+        let e = validation::restitution("restitution", self.restitution)?;
+        validation::friction("friction", self.friction)?;
+        let h = positive("height_m", self.height_m, "m")?;
+        require(
+            h >= MIN_HEIGHT_M,
+            "height_m",
+            h,
+            "m",
+            format!(
+                "at least {MIN_HEIGHT_M} m: lower bounces come faster than the estimator's 2 ms \
+                 hold-off and sink into the transducer noise"
+            ),
+        )?;
+        let g = positive("gravity_mps2", self.gravity_mps2, "m/s^2")?;
         self.rig.validate()?;
         let fs = self.rig.daq.sample_rate_hz;
         let (pulse, min_rate) = self.min_sample_rate_hz()?;
         if fs < min_rate {
             let v = self.first_impact_speed_mps();
-            return Err(DropError::SampleRateTooLow {
-                sample_rate_hz: fs,
-                pair: self.pair_label(),
-                speed_mps: v,
-                contact_us: 1e6 * self.contact_duration_s(v),
-                pulse_us: 1e6 * pulse,
-                ring_khz: Plate::from_spec(&self.rig)?.ring_freq_hz() / 1e3,
-                min_rate_hz: min_rate.ceil(),
-            });
+            return Err(InvalidParameter::new(
+                "daq.sample_rate_hz",
+                fs,
+                "Hz",
+                format!(
+                    "at least {:.0} Hz to resolve the impacts: a contact of the {} at {v:.3} m/s \
+                     lasts {:.1} us (Hertz, thesis eq. 5.10) and the transducer's first pulse \
+                     {:.1} us (the plate rings at {:.1} kHz); one sample per pulse is the least \
+                     (the thesis used 200000 Hz)",
+                    min_rate.ceil(),
+                    self.pair_label(),
+                    1e6 * self.contact_duration_s(v),
+                    1e6 * pulse,
+                    Plate::from_spec(&self.rig)?.ring_freq_hz() / 1e3,
+                ),
+            )
+            .into());
         }
         // Four impacts, the last at least 5 ms before the end of the record.
         let length = self.rig.record.length_s;
@@ -462,22 +414,27 @@ impl DropSetup {
             // t_4 = sqrt(2 h / g) (1 + 2 (e + e^2 + e^3)).
             let factor = 1.0 + 2.0 * (e + e * e + e * e * e);
             let max_height_m = 0.5 * g * (room.max(0.0) / factor).powi(2);
-            return Err(DropError::RecordTooShort {
-                height_m: h,
-                length_s: length,
-                rig: self.rig.name.clone(),
-                fourth_s: fourth,
-                max_height_m,
-            });
+            return Err(InvalidParameter::new(
+                "height_m",
+                h,
+                "m",
+                format!(
+                    "at most {max_height_m:.3} m: from higher the fourth impact would come at \
+                     {fourth:.3} s, too late for the {length} s record (record.length_s of rig \
+                     '{}'), and the estimator needs four impacts for two triples",
+                    self.rig.name
+                ),
+            )
+            .into());
         }
         let n = self.numerics;
-        if !(n.steps_per_contact >= 20.0 && n.steps_per_ring_period >= 20.0) {
-            return bad("drop numerics: at least 20 steps per contact and per ring period".into());
-        }
-        if !(n.approach_margin_m > 0.0 && n.max_flight_step_s > 0.0 && n.rest_speed_fraction >= 0.0)
-        {
-            return bad("drop numerics: margin and flight step must be positive".into());
-        }
+        let at_least_20 =
+            |key: &str, x: f64| in_range(key, x, "", Bound::Closed(20.0), Bound::Unbounded);
+        at_least_20("numerics.steps_per_contact", n.steps_per_contact)?;
+        at_least_20("numerics.steps_per_ring_period", n.steps_per_ring_period)?;
+        positive("numerics.approach_margin_m", n.approach_margin_m, "m")?;
+        positive("numerics.max_flight_step_s", n.max_flight_step_s, "s")?;
+        non_negative("numerics.rest_speed_fraction", n.rest_speed_fraction, "")?;
         Ok(())
     }
 }

@@ -1,6 +1,6 @@
 //! Scene files: the damper, its particles, contacts and run length, in TOML.
 //!
-//! The built-in thesis preset is `rig/thesis-damper.toml`, embedded in the binary.
+//! The built-in thesis preset is `scenes/thesis-damper.toml`, embedded in the binary.
 //! A user scene file is merged over the preset key by key, so it only needs the
 //! keys it changes; unknown keys are errors, and `version` must be 1. Every value
 //! is checked with its unit and valid range before anything runs.
@@ -16,10 +16,14 @@ use crate::dem::material::{
 };
 use crate::dem::timestep::{check_time_step, rayleigh_time_step_s};
 use crate::dem::{DemError, RestitutionMode, hertz_theory};
-use crate::scene::impact::{check_friction, check_restitution};
+use crate::rig::RigError;
+use crate::signals::SignalsError;
+use crate::validation::{
+    self, Bound, InvalidParameter, count_in, in_range, non_negative, positive, require,
+};
 
 /// The embedded thesis damper preset.
-pub const THESIS_DAMPER_TOML: &str = include_str!("../../rig/thesis-damper.toml");
+pub const THESIS_DAMPER_TOML: &str = include_str!("../../scenes/thesis-damper.toml");
 
 /// Densest fill a random packing of spheres reaches (random close packing).
 pub const MAX_FILL: f64 = 0.64;
@@ -32,12 +36,58 @@ pub enum SceneError {
         path: String,
         source: std::io::Error,
     },
+    /// Not TOML, an unknown key, a missing key or a wrong type.
     #[error("scene file {path} is not valid: {message}")]
     Parse { path: String, message: String },
+    /// A value of the file is out of range, or the scene it describes cannot be.
+    #[error("scene file {path} is not valid: {source}")]
+    File {
+        path: String,
+        #[source]
+        source: Box<SceneError>,
+    },
+    /// A value out of its range, named by its scene key or parameter name.
     #[error("{0}")]
-    Invalid(String),
+    Invalid(#[from] InvalidParameter),
+    /// More particles than the enclosure can hold.
+    #[error(
+        "particles.count = {count} spheres of {diameter_m} m fill {fill:.3} of the enclosure, above random close packing ({MAX_FILL}): the enclosure cannot hold them (at most {max_count} fit)"
+    )]
+    Overfull {
+        count: usize,
+        diameter_m: f64,
+        fill: f64,
+        max_count: usize,
+    },
+    /// A particle as large as the enclosure.
+    #[error(
+        "the enclosure ({diameter_m} m x {length_m} m) must be larger than a particle ({particle_m} m) in both directions"
+    )]
+    ParticleTooLarge {
+        diameter_m: f64,
+        length_m: f64,
+        particle_m: f64,
+    },
+    /// Random insertion could not place every sphere in the pouring column.
+    #[error(
+        "random insertion placed only {placed} of {count} spheres in the pouring column ({column_m:.4} m high)"
+    )]
+    Insertion {
+        placed: usize,
+        count: usize,
+        column_m: f64,
+    },
+    /// The settled bed does not fit under the lid.
+    #[error(
+        "the settled bed is {height_mm:.1} mm high, taller than the enclosure (enclosure.inner_length_m = {length_m} m): reduce particles.count or lengthen the enclosure"
+    )]
+    BedTooTall { height_mm: f64, length_m: f64 },
     #[error(transparent)]
     Dem(#[from] DemError),
+    #[error(transparent)]
+    Rig(#[from] RigError),
+    #[error(transparent)]
+    Signals(#[from] SignalsError),
 }
 
 /// A material given by preset name or inline constants.
@@ -49,16 +99,19 @@ pub enum MaterialSpec {
 }
 
 impl MaterialSpec {
-    /// Resolves the spec; `what` names the key in messages.
-    pub fn resolve(&self, what: &str) -> Result<Material, String> {
+    /// Resolves the spec; `key` names it in messages (`particles.material`).
+    pub fn resolve(&self, key: &str) -> Result<Material, InvalidParameter> {
         match self {
             MaterialSpec::Inline(m) => {
-                m.validate(what)?;
+                m.validate().map_err(|e| e.within(key))?;
                 Ok(*m)
             }
             MaterialSpec::Named(name) => material_preset(name).ok_or_else(|| {
-                format!(
-                    "{what} = \"{name}\" is unknown: use acrylic, steel, aluminium, rigid, or an inline table {{ youngs_pa, poisson, density_kgm3 }}"
+                InvalidParameter::new(
+                    key,
+                    format!("\"{name}\""),
+                    "",
+                    "acrylic, steel, aluminium, rigid, or an inline table { youngs_pa, poisson, density_kgm3 }",
                 )
             }),
         }
@@ -196,7 +249,10 @@ impl Scene {
         };
         let scene: Scene =
             toml::from_str(text).map_err(|e| error(one_line(&e, own_text.then_some(text))))?;
-        scene.validate().map_err(error)?;
+        scene.validate().map_err(|e| SceneError::File {
+            path: origin.to_string(),
+            source: Box::new(e),
+        })?;
         Ok(scene)
     }
 
@@ -233,94 +289,84 @@ impl Scene {
         toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot print scene: {e}\n"))
     }
 
-    /// Checks every value; the message names the key, its unit and valid range.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Checks every value; a refusal names the key, its unit and valid range.
+    pub fn validate(&self) -> Result<(), SceneError> {
         if self.version != 1 {
-            return Err(format!(
-                "version = {} is not supported: this vlab reads scene files of version 1",
-                self.version
-            ));
+            return Err(InvalidParameter::new(
+                "version",
+                self.version,
+                "",
+                "1 (the scene-file version this vlab reads)",
+            )
+            .into());
         }
         let p = &self.particles;
         positive("particles.diameter_m", p.diameter_m, "m")?;
         let particle = p.material.resolve("particles.material")?;
-        if !particle.youngs_pa.is_finite() {
-            return Err(
-                "particles.material = \"rigid\" is invalid: particles must be elastic".into(),
-            );
-        }
+        require(
+            particle.youngs_pa.is_finite(),
+            "particles.material",
+            "\"rigid\"",
+            "",
+            "an elastic material: particles cannot be rigid",
+        )?;
         let e = &self.enclosure;
         positive("enclosure.inner_diameter_m", e.inner_diameter_m, "m")?;
         positive("enclosure.inner_length_m", e.inner_length_m, "m")?;
         e.material.resolve("enclosure.material")?;
         if e.inner_diameter_m <= p.diameter_m || e.inner_length_m <= p.diameter_m {
-            return Err(format!(
-                "the enclosure ({} m x {} m) must be larger than a particle ({} m) in both directions",
-                e.inner_diameter_m, e.inner_length_m, p.diameter_m
-            ));
+            return Err(SceneError::ParticleTooLarge {
+                diameter_m: e.inner_diameter_m,
+                length_m: e.inner_length_m,
+                particle_m: p.diameter_m,
+            });
         }
         let fill = self.fill_ratio();
         if fill > MAX_FILL {
-            return Err(format!(
-                "particles.count = {} spheres of {} m fill {:.3} of the enclosure, above random close packing ({MAX_FILL}): the enclosure cannot hold them (at most {} fit)",
-                p.count,
-                p.diameter_m,
+            return Err(SceneError::Overfull {
+                count: p.count,
+                diameter_m: p.diameter_m,
                 fill,
-                self.max_particles()
-            ));
+                max_count: self.max_particles(),
+            });
         }
         let c = &self.contact;
-        check_restitution(
-            "contact.particle_particle.restitution",
-            c.particle_particle.restitution,
-        )?;
-        check_friction(
-            "contact.particle_particle.friction",
-            c.particle_particle.friction,
-        )?;
-        check_restitution(
-            "contact.particle_wall.restitution",
-            c.particle_wall.restitution,
-        )?;
-        check_friction("contact.particle_wall.friction", c.particle_wall.friction)?;
+        for (key, pair) in [
+            ("contact.particle_particle", c.particle_particle),
+            ("contact.particle_wall", c.particle_wall),
+        ] {
+            validation::restitution(&format!("{key}.restitution"), pair.restitution)?;
+            validation::friction(&format!("{key}.friction"), pair.friction)?;
+        }
         let s = &self.simulation;
-        let f = s.rayleigh_safety_factor;
-        if !(f > 0.0 && f <= 1.0) {
-            return Err(format!(
-                "simulation.rayleigh_safety_factor = {f} is invalid: must lie in (0, 1] (dimensionless; 0.1-0.4 is typical)"
-            ));
-        }
+        in_range(
+            "simulation.rayleigh_safety_factor",
+            s.rayleigh_safety_factor,
+            "",
+            Bound::Open(0.0),
+            Bound::Closed(1.0),
+        )?;
         if let TimeStepSpec::Rule(rule) = &s.dt_s {
-            if rule != "rayleigh" {
-                return Err(format!(
-                    "simulation.dt_s = \"{rule}\" is invalid: give a time step in seconds or \"rayleigh\""
-                ));
-            }
+            require(
+                rule == "rayleigh",
+                "simulation.dt_s",
+                format!("\"{rule}\""),
+                "",
+                "a time step in seconds or \"rayleigh\"",
+            )?;
         }
-        check_time_step(self.dt_s(), self.rayleigh_limit_s())
-            .map_err(|m| format!("simulation.dt_s: {m}"))?;
-        if !(s.settle_s >= 0.0 && s.settle_s.is_finite()) {
-            return Err(format!(
-                "simulation.settle_s = {} is invalid: must be >= 0 and finite (s)",
-                s.settle_s
-            ));
-        }
-        if !(s.gravity_mps2 >= 0.0 && s.gravity_mps2.is_finite()) {
-            return Err(format!(
-                "simulation.gravity_mps2 = {} is invalid: must be >= 0 and finite (m/s^2)",
-                s.gravity_mps2
-            ));
-        }
+        check_time_step("simulation.dt_s", self.dt_s(), self.rayleigh_limit_s())?;
+        non_negative("simulation.settle_s", s.settle_s, "s")?;
+        non_negative("simulation.gravity_mps2", s.gravity_mps2, "m/s^2")?;
         let d = &self.drive;
-        if d.cycles == 0 {
-            return Err("drive.cycles = 0 is invalid: must be at least 1".into());
-        }
-        if d.steady_cycles == 0 || d.steady_cycles > d.cycles {
-            return Err(format!(
-                "drive.steady_cycles = {} is invalid: must lie in [1, drive.cycles = {}]",
-                d.steady_cycles, d.cycles
-            ));
-        }
+        count_in("drive.cycles", d.cycles, "", 1, None)?;
+        count_in(
+            "drive.steady_cycles",
+            d.steady_cycles,
+            "",
+            1,
+            Some(d.cycles),
+        )?;
         Ok(())
     }
 
@@ -421,16 +467,6 @@ fn one_line(e: &toml::de::Error, text: Option<&str>) -> String {
     }
 }
 
-fn positive(name: &str, value: f64, unit: &str) -> Result<(), String> {
-    if value > 0.0 && value.is_finite() {
-        Ok(())
-    } else {
-        Err(format!(
-            "{name} = {value} is invalid: must be positive and finite ({unit})"
-        ))
-    }
-}
-
 /// Recursively overlays `top` onto `base`: tables merge, everything else replaces.
 fn merge_tables(base: &mut toml::Table, top: toml::Table) {
     for (key, value) in top {
@@ -463,7 +499,7 @@ mod tests {
     #[test]
     fn every_checked_in_rig_toml_that_is_a_scene_parses() {
         // The scene preset is a file in rig/; it must parse on its own.
-        let s = Scene::from_toml_str(THESIS_DAMPER_TOML, "rig/thesis-damper.toml");
+        let s = Scene::from_toml_str(THESIS_DAMPER_TOML, "scenes/thesis-damper.toml");
         assert!(s.is_ok(), "{:?}", s.err());
     }
 

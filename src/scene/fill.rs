@@ -11,6 +11,8 @@ use glam::DVec3;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
+use super::file::SceneError;
+
 /// Fill ratio of the insertion column, safely below the jamming of random
 /// sequential insertion (about 0.38).
 pub const COLUMN_FILL: f64 = 0.30;
@@ -46,13 +48,15 @@ pub fn insert_in_cylinder(
     height_m: f64,
     clearance_m: f64,
     rng: &mut SceneRng,
-) -> Result<Vec<DVec3>, String> {
+) -> Result<Vec<DVec3>, SceneError> {
     let reach = cylinder_radius_m - radius_m - clearance_m;
     let (z_lo, z_hi) = (radius_m + clearance_m, height_m - radius_m - clearance_m);
     if reach <= 0.0 || z_hi <= z_lo {
-        return Err(format!(
-            "spheres of radius {radius_m} m do not fit in a cylinder of radius {cylinder_radius_m} m and height {height_m} m"
-        ));
+        return Err(SceneError::ParticleTooLarge {
+            diameter_m: 2.0 * cylinder_radius_m,
+            length_m: height_m,
+            particle_m: 2.0 * radius_m,
+        });
     }
     // Hash grid with cells one diameter wide: overlap checks look at 27 cells.
     let min_dist = 2.0 * radius_m + clearance_m;
@@ -76,10 +80,11 @@ pub fn insert_in_cylinder(
     while placed.len() < count {
         attempts += 1;
         if attempts > max_attempts {
-            return Err(format!(
-                "random insertion placed only {} of {count} spheres in the column (fill too high)",
-                placed.len()
-            ));
+            return Err(SceneError::Insertion {
+                placed: placed.len(),
+                count,
+                column_m: height_m,
+            });
         }
         let (x, y) = (rng.range(-reach, reach), rng.range(-reach, reach));
         if x * x + y * y > reach * reach {

@@ -16,7 +16,9 @@ use crate::dem::hertz_theory;
 use crate::dem::material::{
     Material, effective_mass_kg, effective_radius_m, effective_youngs_pa, sphere_mass_kg,
 };
-use crate::dem::{ContactLaw, DemError, Numerics, Particles, RestitutionMode, Walls, World};
+use crate::dem::{ContactLaw, Numerics, Particles, RestitutionMode, Walls, World};
+use crate::scene::file::SceneError;
+use crate::validation::{self, Bound, InvalidParameter, finite, in_range, positive};
 
 /// What the sphere hits.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -80,32 +82,29 @@ pub struct ImpactOutcome {
 }
 
 impl ImpactSetup {
-    /// Checks every parameter; the message names it, its unit and valid range.
-    pub fn validate(&self) -> Result<(), String> {
-        self.material.validate("sphere material")?;
+    /// Checks every parameter; a refusal names it (as the field of this
+    /// struct), its unit and valid range.
+    pub fn validate(&self) -> Result<(), InvalidParameter> {
+        self.material.validate().map_err(|e| e.within("material"))?;
         if let Target::Wall(w) = &self.target {
             if w.youngs_pa.is_finite() {
-                w.validate("wall material")?;
+                w.validate().map_err(|e| e.within("target"))?;
             }
         }
-        positive("--radius-m", self.radius_m, "m")?;
-        positive("--speed-mps", self.speed_mps, "m/s")?;
-        if !(self.angle_deg >= 0.0 && self.angle_deg < 90.0) {
-            return Err(format!(
-                "--angle-deg {} is invalid: the incidence angle from the normal must lie in [0, 90) degrees",
-                self.angle_deg
-            ));
-        }
-        if !self.spin_rad_s.is_finite() {
-            return Err(format!(
-                "--spin-rad-s {} is invalid: must be finite (rad/s)",
-                self.spin_rad_s
-            ));
-        }
-        check_restitution("--cor", self.restitution)?;
-        check_friction("--mu", self.friction)?;
+        positive("radius_m", self.radius_m, "m")?;
+        positive("speed_mps", self.speed_mps, "m/s")?;
+        in_range(
+            "angle_deg",
+            self.angle_deg,
+            "degrees",
+            Bound::Closed(0.0),
+            Bound::Open(90.0),
+        )?;
+        finite("spin_rad_s", self.spin_rad_s, "rad/s")?;
+        validation::restitution("restitution", self.restitution)?;
+        validation::friction("friction", self.friction)?;
         if let Some(dt) = self.dt_s {
-            positive("--dt-s", dt, "s")?;
+            positive("dt_s", dt, "s")?;
         }
         Ok(())
     }
@@ -138,8 +137,8 @@ impl ImpactSetup {
 pub const STEPS_PER_CONTACT: f64 = 400.0;
 
 /// Runs the collision to separation.
-pub fn run_impact(setup: &ImpactSetup) -> Result<ImpactOutcome, DemError> {
-    setup.validate().map_err(DemError::Invalid)?;
+pub fn run_impact(setup: &ImpactSetup) -> Result<ImpactOutcome, SceneError> {
+    setup.validate()?;
     let (m_star, e_star, r_star) = setup.pair_constants();
     let v_n = setup.normal_speed_mps();
     let hertz_duration_s = hertz_theory::contact_duration_s(m_star, e_star, r_star, v_n);
@@ -232,9 +231,12 @@ pub fn run_impact(setup: &ImpactSetup) -> Result<ImpactOutcome, DemError> {
         prev = (world.time_s, d);
     }
     let (Some(t0), Some(t1)) = (started_at, ended_at) else {
-        return Err(DemError::Invalid(
-            "the spheres never separated: the contact is overdamped for this --cor".to_string(),
-        ));
+        return Err(SceneError::Invalid(InvalidParameter::new(
+            "restitution",
+            setup.restitution,
+            "",
+            "large enough for the bodies to separate: this contact is overdamped and never lets go",
+        )));
     };
     let end = world.snapshot();
     let v_after = relative_velocity(&world);
@@ -270,34 +272,4 @@ fn crossing((t0, d0): (f64, f64), (t1, d1): (f64, f64)) -> f64 {
         return t1;
     }
     t0 + (t1 - t0) * d0 / (d0 - d1)
-}
-
-pub(crate) fn positive(name: &str, value: f64, unit: &str) -> Result<(), String> {
-    if value > 0.0 && value.is_finite() {
-        Ok(())
-    } else {
-        Err(format!(
-            "{name} {value} is invalid: must be positive and finite ({unit})"
-        ))
-    }
-}
-
-pub(crate) fn check_restitution(name: &str, e: f64) -> Result<(), String> {
-    if e > 0.0 && e <= 1.0 {
-        Ok(())
-    } else {
-        Err(format!(
-            "{name} {e} is invalid: the coefficient of restitution must lie in (0, 1] (dimensionless)"
-        ))
-    }
-}
-
-pub(crate) fn check_friction(name: &str, mu: f64) -> Result<(), String> {
-    if mu >= 0.0 && mu.is_finite() {
-        Ok(())
-    } else {
-        Err(format!(
-            "{name} {mu} is invalid: the coefficient of friction must be >= 0 and finite (dimensionless)"
-        ))
-    }
 }

@@ -29,18 +29,6 @@ use crate::signals::{
     TraceMetadata, efficiency, estimate_phase_error, yang_power_of_trace,
 };
 
-impl From<crate::rig::RigError> for SceneError {
-    fn from(e: crate::rig::RigError) -> Self {
-        SceneError::Invalid(e.to_string())
-    }
-}
-
-impl From<crate::signals::SignalsError> for SceneError {
-    fn from(e: crate::signals::SignalsError) -> Self {
-        SceneError::Invalid(e.to_string())
-    }
-}
-
 impl EnclosureMotion for Shaker {
     fn advance(&mut self, t_s: f64, dt_s: f64, particle_force_n: f64) -> f64 {
         Shaker::advance(self, t_s, dt_s, particle_force_n)

@@ -5,7 +5,7 @@
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use super::error::{Result, SignalsError, positive_finite};
+use super::error::{InvalidParameter, Result, SignalsError, positive_finite};
 use super::power::{PowerOptions, YangPower, yang_power};
 
 /// Timings of [`bench_yang_power`], in s.
@@ -40,12 +40,12 @@ pub fn bench_yang_power(
     positive_finite("sample_rate_hz", sample_rate_hz, "Hz")?;
     positive_finite("drive_freq_hz", drive_freq_hz, "Hz")?;
     if repeats == 0 {
-        return Err(SignalsError::InvalidParameter {
-            name: "repeats",
-            value: 0.0,
-            unit: "1",
-            valid: "at least 1".into(),
-        });
+        return Err(SignalsError::from(InvalidParameter::new(
+            "repeats",
+            0.0,
+            "",
+            "at least 1",
+        )));
     }
     let n = (duration_s * sample_rate_hz).round() as usize;
     let w = 2.0 * PI * drive_freq_hz;

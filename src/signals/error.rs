@@ -9,24 +9,18 @@
 use std::io;
 use std::path::PathBuf;
 
+pub use crate::validation::InvalidParameter;
+
 /// Result alias used throughout `signals`.
 pub type Result<T, E = SignalsError> = std::result::Result<T, E>;
 
 /// Everything that can go wrong in `signals`.
 #[derive(Debug, thiserror::Error)]
 pub enum SignalsError {
-    /// A scalar parameter is out of its valid range.
-    #[error("{name} = {value} {unit}: must be {valid}")]
-    InvalidParameter {
-        /// Parameter name as it appears in the API, e.g. `sample_rate_hz`.
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-        /// Its unit (`Hz`, `s`, `N`, ... or `1` when dimensionless).
-        unit: &'static str,
-        /// What would have been valid, in words.
-        valid: String,
-    },
+    /// A scalar parameter is out of its valid range (named as in the API,
+    /// e.g. `sample_rate_hz`).
+    #[error("{0}")]
+    Invalid(#[from] InvalidParameter),
     /// A sample is NaN or infinite.
     #[error("channel '{channel}' sample {index} is {value}: samples must be finite")]
     NonFiniteSample {
@@ -354,17 +348,8 @@ pub enum WavErrorKind {
 }
 
 /// Checks that `value` is positive and finite; names the parameter otherwise.
-pub(crate) fn positive_finite(name: &'static str, value: f64, unit: &'static str) -> Result<f64> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        Err(SignalsError::InvalidParameter {
-            name,
-            value,
-            unit,
-            valid: "positive and finite".into(),
-        })
-    }
+pub(crate) fn positive_finite(name: &str, value: f64, unit: &str) -> Result<f64> {
+    Ok(crate::validation::positive(name, value, unit)?)
 }
 
 /// Checks that every sample is finite; names the input and index otherwise.

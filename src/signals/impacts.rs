@@ -47,7 +47,7 @@
 //! estimate should not be trusted. Missed impacts happen when the record
 //! samples an impact's short pulse too coarsely for it to cross the threshold.
 
-use super::error::{Result, SignalsError, all_finite, positive_finite};
+use super::error::{InvalidParameter, Result, SignalsError, all_finite, positive_finite};
 use super::trace::Trace;
 
 /// Default threshold as a fraction of the largest peak.
@@ -211,24 +211,24 @@ pub fn detect_impacts(
     let release_n = match params.release_n {
         Some(r) if r.is_finite() && r < threshold_n => r,
         Some(r) => {
-            return Err(SignalsError::InvalidParameter {
-                name: "release_n",
-                value: r,
-                unit: "N",
-                valid: format!("finite and below threshold_n = {threshold_n} N"),
-            });
+            return Err(SignalsError::from(InvalidParameter::new(
+                "release_n",
+                r,
+                "N",
+                format!("finite and below threshold_n = {threshold_n} N"),
+            )));
         }
         None => DEFAULT_RELEASE_FRACTION_OF_THRESHOLD * threshold_n,
     };
     let holdoff_s = match params.holdoff_s {
         Some(h) if h.is_finite() && h >= 0.0 => h,
         Some(h) => {
-            return Err(SignalsError::InvalidParameter {
-                name: "holdoff_s",
-                value: h,
-                unit: "s",
-                valid: "finite and >= 0".into(),
-            });
+            return Err(SignalsError::from(InvalidParameter::new(
+                "holdoff_s",
+                h,
+                "s",
+                "finite and >= 0",
+            )));
         }
         None => DEFAULT_HOLDOFF_S,
     };

@@ -44,7 +44,7 @@ use std::f64::consts::PI;
 use realfft::num_complex::Complex64;
 
 use super::calibration::PhaseCalibration;
-use super::error::{Result, SignalsError, all_finite, positive_finite};
+use super::error::{InvalidParameter, Result, SignalsError, all_finite, positive_finite};
 use super::spectrum::{SpectrumPlan, bin_freq_hz};
 use super::trace::Trace;
 
@@ -85,12 +85,9 @@ impl PhaseCorrection<'_> {
         if value.is_finite() {
             Ok(())
         } else {
-            Err(SignalsError::InvalidParameter {
-                name,
-                value,
-                unit,
-                valid: "finite".into(),
-            })
+            Err(SignalsError::from(InvalidParameter::new(
+                name, value, unit, "finite",
+            )))
         }
     }
 }
@@ -219,15 +216,15 @@ pub fn plan_window(
     positive_finite("sample_rate_hz", sample_rate_hz, "Hz")?;
     positive_finite("drive_freq_hz", drive_freq_hz, "Hz")?;
     if drive_freq_hz >= sample_rate_hz / 2.0 {
-        return Err(SignalsError::InvalidParameter {
-            name: "drive_freq_hz",
-            value: drive_freq_hz,
-            unit: "Hz",
-            valid: format!(
+        return Err(SignalsError::from(InvalidParameter::new(
+            "drive_freq_hz",
+            drive_freq_hz,
+            "Hz",
+            format!(
                 "below the Nyquist frequency sample_rate_hz / 2 = {} Hz",
                 sample_rate_hz / 2.0
             ),
-        });
+        )));
     }
     let periods_in = |n: usize| n as f64 * drive_freq_hz / sample_rate_hz;
     let too_few = |n: usize| SignalsError::TooFewPeriods {
@@ -448,12 +445,12 @@ pub fn efficiency(
     g_mps2: f64,
 ) -> Result<f64> {
     if !energy_per_cycle_j.is_finite() {
-        return Err(SignalsError::InvalidParameter {
-            name: "energy_per_cycle_j",
-            value: energy_per_cycle_j,
-            unit: "J",
-            valid: "finite".into(),
-        });
+        return Err(SignalsError::from(InvalidParameter::new(
+            "energy_per_cycle_j",
+            energy_per_cycle_j,
+            "J",
+            "finite",
+        )));
     }
     Ok(energy_per_cycle_j / max_energy_per_cycle_j(particle_mass_kg, gamma, freq_hz, g_mps2)?)
 }

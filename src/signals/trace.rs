@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use super::error::{Result, SignalsError, all_finite, positive_finite};
+use super::error::{InvalidParameter, Result, SignalsError, all_finite, positive_finite};
 
 /// One named signal of a [`Trace`].
 #[derive(Debug, Clone, PartialEq)]
@@ -79,12 +79,12 @@ impl Trace {
     pub fn new(sample_rate_hz: f64, start_time_s: f64) -> Result<Self> {
         positive_finite("sample_rate_hz", sample_rate_hz, "Hz")?;
         if !start_time_s.is_finite() {
-            return Err(SignalsError::InvalidParameter {
-                name: "start_time_s",
-                value: start_time_s,
-                unit: "s",
-                valid: "finite".into(),
-            });
+            return Err(SignalsError::from(InvalidParameter::new(
+                "start_time_s",
+                start_time_s,
+                "s",
+                "finite",
+            )));
         }
         Ok(Self {
             sample_rate_hz,
