@@ -1,19 +1,31 @@
-//! One contact: Hertz normal force, Mindlin tangential spring history, restitution
-//! damping, Coulomb slip, and the energy each of them stores or dissipates.
+//! One contact: the contact law and its sub-models, as small pure functions,
+//! and the energy each of them stores or dissipates.
 //!
-//! Normal (thesis eq. 5.7, 5.21, 5.32): `f_el = 4/3 E* √R* δ^{3/2}`, damping
-//! `f_d = c_n δ̇` with `c_n = 2 √(5/6) β √(2 E* √(R* δ) m*)`; the total
-//! `f_n = max(0, f_el + f_d)` never pulls (the clamp discussed in Section 5.5.3).
+//! A [`ContactLaw`] is built once per kind of contact from a [`ContactSpec`]
+//! (restitution, friction, restitution mode) and composes three sub-models,
+//! the way LAMMPS' granular pair style composes named ones:
 //!
-//! Tangential (eq. 5.15, 5.22, 5.24, 5.33, with the erratum of eq. 3.9: the spring
-//! stretch is the *vector* tangential displacement, not the integral of its speed):
-//! a spring history `ξ` is created when the contact opens, rotated into the current
-//! tangent plane every step (keeping its length), incremented by the relative
-//! tangential displacement, and gives `F_t = -k_t ξ - c_t v_t` with the Mindlin
-//! stiffness `k_t = 8 G* √(R* δ)` and `c_t = 2 √(5/6) β √(k_t m*)`. When
-//! `|F_t| > μ f_n` the contact slips: `F_t` is scaled back to `μ f_n` (eq. 5.16) and
-//! the spring is shortened, if needed, so that it carries no more than `μ f_n`
-//! (it is never lengthened). The history is dropped when the bodies separate.
+//! - normal: Hertz, [`hertz_force_n`] (thesis eq. 5.7);
+//! - damping: [`NormalDamping::Restitution`], [`normal_damping_nspm`] (eq. 5.32;
+//!   with the no-pull clamp [`clamped_normal_force_n`], Section 5.5.3), or
+//!   [`NormalDamping::Elastic`] when e = 1;
+//! - tangential: [`Tangential::MindlinCoulomb`], [`mindlin_coulomb`] (eq. 5.15,
+//!   5.16, 5.24, 5.33, with the erratum of eq. 3.9: the spring stretch is the
+//!   *vector* tangential displacement), or [`Tangential::Frictionless`] when
+//!   μ = 0, which keeps no history.
+//!
+//! Normal: `f_el = 4/3 E* √R* δ^{3/2}`, damping `f_d = c_n δ̇` with
+//! `c_n = 2 √(5/6) β √(2 E* √(R* δ) m*)`; the total `f_n = max(0, f_el + f_d)`
+//! never pulls.
+//!
+//! Tangential: a spring history `ξ` is created when the contact opens, rotated
+//! into the current tangent plane every step (keeping its length), incremented
+//! by the relative tangential displacement, and gives `F_t = -k_t ξ - c_t v_t`
+//! with the Mindlin stiffness `k_t = 8 G* √(R* δ)` and `c_t = 2 √(5/6) β √(k_t m*)`.
+//! When `|F_t| > μ f_n` the contact slips: `F_t` is scaled back to `μ f_n` (eq.
+//! 5.16) and the spring is shortened, if needed, so that it carries no more than
+//! `μ f_n` (it is never lengthened). The history is dropped when the bodies
+//! separate.
 //!
 //! Energy bookkeeping (thesis eq. 6.4, evaluated so that it is consistent with the
 //! velocity-Verlet integrator): over a step the contact forces act on the relative
@@ -37,7 +49,53 @@ use glam::DVec3;
 use super::material::{Material, effective_shear_pa, effective_youngs_pa};
 use super::restitution::RestitutionMode;
 
-/// Constants of one kind of contact (a pair of materials with its e and μ).
+/// How a contact turns restitution into damping (thesis Section 5.5.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NormalDamping {
+    /// `e = 1`: no damping is computed at all.
+    Elastic,
+    /// The restitution dashpot of eq. 5.32 (and 5.33 tangentially):
+    /// `c = 2 √(5/6) β √(S m*)`.
+    Restitution {
+        /// `2 √(5/6) β √(2 E*)`, so that `c_n = coeff √(√(R* δ) m*)`.
+        coeff: f64,
+    },
+}
+
+/// The tangential sub-model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tangential {
+    /// `μ = 0`: no tangential force and no history.
+    Frictionless,
+    /// Mindlin no-slip spring `k_t = 8 G* √(R* δ)` (eq. 5.24) with a vector
+    /// history, tangential damping (eq. 5.33), capped by Coulomb slip (eq. 5.16).
+    MindlinCoulomb {
+        /// `8 G*`, so that `k_t = shear_coeff √(R* δ)`.
+        shear_coeff: f64,
+        /// `c_t / c_n = √(k_t / S_n) = √(4 G* / E*)`.
+        damping_ratio: f64,
+        /// Coefficient of friction μ.
+        friction: f64,
+    },
+}
+
+/// What a scene says about one kind of contact: restitution, friction and how
+/// the damping is derived from the restitution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactSpec {
+    /// Normal coefficient of restitution e, in (0, 1].
+    pub restitution: f64,
+    /// Coefficient of friction μ, ≥ 0.
+    pub friction: f64,
+    /// How β follows from e.
+    pub mode: RestitutionMode,
+}
+
+/// The contact law of one kind of contact (a pair of materials with its e and
+/// μ), built once from its [`ContactSpec`]: the Hertz normal spring, a damping
+/// sub-model and a tangential sub-model, each chosen by what the spec needs
+/// (as LAMMPS' granular pair style composes named sub-models). A law with
+/// `e = 1` computes no damping; one with `μ = 0` keeps no tangential history.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactLaw {
     /// Equivalent Young's modulus E* (Pa), eq. 5.6.
@@ -50,36 +108,81 @@ pub struct ContactLaw {
     pub restitution: f64,
     /// Damping factor β (-), from `restitution` by the chosen mode.
     pub damping_factor: f64,
+    /// `4/3 E*`: the Hertz force is `hertz_coeff √(R* δ) δ` (eq. 5.7).
     hertz_coeff: f64,
-    damping_coeff: f64,
-    tangential_damping_ratio: f64,
-    shear_coeff: f64,
+    pub damping: NormalDamping,
+    pub tangential: Tangential,
 }
 
 impl ContactLaw {
     /// Law for bodies of materials `a` and `b` with restitution `e` and friction `mu`.
     pub fn new(a: &Material, b: &Material, e: f64, mu: f64, mode: RestitutionMode) -> Self {
+        Self::from_spec(
+            a,
+            b,
+            &ContactSpec {
+                restitution: e,
+                friction: mu,
+                mode,
+            },
+        )
+    }
+
+    /// Law for bodies of materials `a` and `b` as `spec` describes it.
+    pub fn from_spec(a: &Material, b: &Material, spec: &ContactSpec) -> Self {
         let e_star = effective_youngs_pa(a, b);
         let g_star = effective_shear_pa(a, b);
-        let beta = mode.damping_factor(e);
+        let beta = spec.mode.damping_factor(spec.restitution);
+        let damping = if beta > 0.0 {
+            NormalDamping::Restitution {
+                // c_n = 2 √(5/6) β √(2 E*) · √(√(R* δ) m*)
+                coeff: 2.0 * (5.0f64 / 6.0).sqrt() * beta * (2.0 * e_star).sqrt(),
+            }
+        } else {
+            NormalDamping::Elastic
+        };
+        let tangential = if spec.friction > 0.0 {
+            Tangential::MindlinCoulomb {
+                shear_coeff: 8.0 * g_star,
+                damping_ratio: (4.0 * g_star / e_star).sqrt(),
+                friction: spec.friction,
+            }
+        } else {
+            Tangential::Frictionless
+        };
         ContactLaw {
             e_star_pa: e_star,
             g_star_pa: g_star,
-            friction: mu,
-            restitution: e,
+            friction: spec.friction,
+            restitution: spec.restitution,
             damping_factor: beta,
             hertz_coeff: 4.0 / 3.0 * e_star,
-            // c_n = 2 √(5/6) β √(2 E*) · √(√(R* δ) m*)
-            damping_coeff: 2.0 * (5.0f64 / 6.0).sqrt() * beta * (2.0 * e_star).sqrt(),
-            // c_t / c_n = √(k_t / S_n) = √(8 G* / 2 E*)
-            tangential_damping_ratio: (4.0 * g_star / e_star).sqrt(),
-            shear_coeff: 8.0 * g_star,
+            damping,
+            tangential,
         }
+    }
+
+    /// The sub-models by name, e.g. `hertz + restitution + mindlin-coulomb`.
+    pub fn describe(&self) -> String {
+        let damping = match self.damping {
+            NormalDamping::Elastic => "elastic",
+            NormalDamping::Restitution { .. } => "restitution",
+        };
+        let tangential = match self.tangential {
+            Tangential::Frictionless => "frictionless",
+            Tangential::MindlinCoulomb { .. } => "mindlin-coulomb",
+        };
+        format!("hertz + {damping} + {tangential}")
+    }
+
+    /// True when the law has a tangential force (and so spins the particles).
+    pub fn has_friction(&self) -> bool {
+        matches!(self.tangential, Tangential::MindlinCoulomb { .. })
     }
 
     /// Hertz elastic normal force (N) at overlap `delta_m`, eq. 5.7.
     pub fn hertz_force_n(&self, r_star_m: f64, delta_m: f64) -> f64 {
-        self.hertz_coeff * (r_star_m * delta_m).sqrt() * delta_m
+        hertz_force_n(self.hertz_coeff, (r_star_m * delta_m).sqrt(), delta_m)
     }
 
     /// Elastic energy (J) of a Hertz contact: ∫ f_el dδ = 8/15 E* √R* δ^{5/2}.
@@ -89,12 +192,81 @@ impl ContactLaw {
 
     /// Mindlin tangential stiffness k_t = 8 G* √(R* δ) (N/m), eq. 5.24.
     pub fn tangential_stiffness_npm(&self, r_star_m: f64, delta_m: f64) -> f64 {
-        self.shear_coeff * (r_star_m * delta_m).sqrt()
+        8.0 * self.g_star_pa * (r_star_m * delta_m).sqrt()
     }
 
     /// Normal damping coefficient c_n (N s/m), eq. 5.32.
     pub fn normal_damping_nspm(&self, r_star_m: f64, m_star_kg: f64, delta_m: f64) -> f64 {
-        self.damping_coeff * ((r_star_m * delta_m).sqrt() * m_star_kg).sqrt()
+        match self.damping {
+            NormalDamping::Elastic => 0.0,
+            NormalDamping::Restitution { coeff } => {
+                normal_damping_nspm(coeff, (r_star_m * delta_m).sqrt(), m_star_kg)
+            }
+        }
+    }
+
+    /// Tangential damping coefficient c_t = c_n √(k_t / S_n) (N s/m), eq. 5.33.
+    pub fn tangential_damping_nspm(&self, r_star_m: f64, m_star_kg: f64, delta_m: f64) -> f64 {
+        match self.tangential {
+            Tangential::Frictionless => 0.0,
+            Tangential::MindlinCoulomb { damping_ratio, .. } => {
+                damping_ratio * self.normal_damping_nspm(r_star_m, m_star_kg, delta_m)
+            }
+        }
+    }
+}
+
+/// Hertz elastic normal force (N), eq. 5.7: `f_el = 4/3 E* √(R* δ) δ`, given
+/// `hertz_coeff = 4/3 E*` and `sqrt_rd = √(R* δ)`.
+#[inline]
+pub fn hertz_force_n(hertz_coeff: f64, sqrt_rd: f64, delta_m: f64) -> f64 {
+    hertz_coeff * sqrt_rd * delta_m
+}
+
+/// Restitution damping coefficient (N s/m), eq. 5.32:
+/// `c_n = 2 √(5/6) β √(2 E* √(R* δ) m*)`, given `coeff = 2 √(5/6) β √(2 E*)`.
+#[inline]
+pub fn normal_damping_nspm(coeff: f64, sqrt_rd: f64, m_star_kg: f64) -> f64 {
+    coeff * (sqrt_rd * m_star_kg).sqrt()
+}
+
+/// The normal force magnitude (N): spring plus dashpot at approach speed
+/// `v_n_mps` (positive while compressing), never attractive (Section 5.5.3).
+#[inline]
+pub fn clamped_normal_force_n(f_el: f64, c_n: f64, v_n_mps: f64) -> f64 {
+    (f_el + c_n * v_n_mps).max(0.0)
+}
+
+/// Mindlin tangential spring with Coulomb slip (eq. 5.15, 5.16, 5.24, 5.33),
+/// over one step: the rotated history `xi_rot` grows by the tangential
+/// displacement `ds`; the force is `-k_t ξ - c_t v_t`, capped at `cap = μ f_n`.
+/// On slip the force is the cap along the trial force and the spring shrinks,
+/// if needed, to carry at most the cap; it is never stretched beyond the
+/// accumulated displacement (at contact onset the cap is set by damping,
+/// ∝ δ^{1/4}, while k_t ∝ δ^{1/2}). Returns (force on body i, new history).
+#[inline]
+pub fn mindlin_coulomb(
+    k_t: f64,
+    c_t: f64,
+    cap: f64,
+    xi_rot: DVec3,
+    ds: DVec3,
+    v_t: DVec3,
+) -> (DVec3, DVec3) {
+    let xi_trial = xi_rot + ds;
+    let f_trial = -k_t * xi_trial - c_t * v_t;
+    let f_trial_sq = f_trial.length_squared();
+    if f_trial_sq > cap * cap {
+        let ft = f_trial * (cap / f_trial_sq.sqrt());
+        let spring = k_t * xi_trial.length();
+        let xi = if spring > cap {
+            xi_trial * (cap / spring)
+        } else {
+            xi_trial
+        };
+        (ft, xi)
+    } else {
+        (f_trial, xi_trial)
     }
 }
 
@@ -183,9 +355,37 @@ pub struct ContactGeometry {
 }
 
 /// Evaluates one contact over a step of `dt_s`: updates `state` and returns forces
-/// and energies. A frictionless law keeps no tangential history.
+/// and energies. The law's sub-models are resolved here, once per call; a
+/// caller that evaluates many contacts of one law can pick the instance itself
+/// with [`evaluate_contact_with`].
 #[inline]
 pub fn evaluate_contact(
+    law: &ContactLaw,
+    geometry: &ContactGeometry,
+    dt_s: f64,
+    state: &mut ContactState,
+) -> ContactOutput {
+    match (law.damping, law.tangential) {
+        (NormalDamping::Restitution { .. }, Tangential::MindlinCoulomb { .. }) => {
+            evaluate_contact_with::<true, true>(law, geometry, dt_s, state)
+        }
+        (NormalDamping::Restitution { .. }, Tangential::Frictionless) => {
+            evaluate_contact_with::<true, false>(law, geometry, dt_s, state)
+        }
+        (NormalDamping::Elastic, Tangential::MindlinCoulomb { .. }) => {
+            evaluate_contact_with::<false, true>(law, geometry, dt_s, state)
+        }
+        (NormalDamping::Elastic, Tangential::Frictionless) => {
+            evaluate_contact_with::<false, false>(law, geometry, dt_s, state)
+        }
+    }
+}
+
+/// [`evaluate_contact`] for a law whose damping is present (`DAMPED`) and whose
+/// tangential sub-model is Mindlin–Coulomb (`FRICTION`), as the caller knows;
+/// the sub-models a law lacks are not computed.
+#[inline]
+pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
     law: &ContactLaw,
     geometry: &ContactGeometry,
     dt_s: f64,
@@ -199,8 +399,6 @@ pub fn evaluate_contact(
         v_rel,
     } = *geometry;
     let v_n = v_rel.dot(n);
-    let v_t = v_rel - v_n * n;
-    let ds = v_t * dt_s;
     let mut out = ContactOutput::default();
 
     if delta_m <= 0.0 {
@@ -208,9 +406,12 @@ pub fn evaluate_contact(
             // The contact opened during this step. The integrator applied the last
             // forces over half of the step; their work closes the books.
             out.dissipated_normal_j = 0.5 * state.fd_prev * (delta_m - state.delta_prev);
-            let stored = 0.5 * state.kt_prev * state.xi.length_squared();
-            out.dissipated_tangential_j = -0.5 * state.ft_prev.dot(ds) + stored;
-            out.stiffness_work_j = -stored;
+            if FRICTION {
+                let ds = (v_rel - v_n * n) * dt_s;
+                let stored = 0.5 * state.kt_prev * state.xi.length_squared();
+                out.dissipated_tangential_j = -0.5 * state.ft_prev.dot(ds) + stored;
+                out.stiffness_work_j = -stored;
+            }
         }
         *state = ContactState::apart(delta_m);
         return out;
@@ -218,41 +419,42 @@ pub fn evaluate_contact(
 
     // Normal: Hertz spring plus restitution damping, never attractive.
     let sqrt_rd = (r_star_m * delta_m).sqrt();
-    let f_el = law.hertz_coeff * sqrt_rd * delta_m;
-    let c_n = law.damping_coeff * (sqrt_rd * m_star_kg).sqrt();
-    let f_n = (f_el + c_n * v_n).max(0.0);
+    let f_el = hertz_force_n(law.hertz_coeff, sqrt_rd, delta_m);
+    let c_n = match law.damping {
+        NormalDamping::Restitution { coeff } if DAMPED => {
+            normal_damping_nspm(coeff, sqrt_rd, m_star_kg)
+        }
+        _ => 0.0,
+    };
+    let f_n = if DAMPED {
+        clamped_normal_force_n(f_el, c_n, v_n)
+    } else {
+        f_el
+    };
     let f_d = f_n - f_el;
     out.normal_force_n = f_n;
-    out.dissipated_normal_j = 0.5 * (state.fd_prev + f_d) * (delta_m - state.delta_prev);
+    if DAMPED {
+        out.dissipated_normal_j = 0.5 * (state.fd_prev + f_d) * (delta_m - state.delta_prev);
+    }
 
     // Tangential: Mindlin spring with vector history, damping, Coulomb slip.
     let mut ft = DVec3::ZERO;
     let mut k_t = 0.0;
-    if law.friction > 0.0 {
-        k_t = law.shear_coeff * sqrt_rd;
-        let c_t = c_n * law.tangential_damping_ratio;
+    if FRICTION
+        && let Tangential::MindlinCoulomb {
+            shear_coeff,
+            damping_ratio,
+            friction,
+        } = law.tangential
+    {
+        let v_t = v_rel - v_n * n;
+        let ds = v_t * dt_s;
+        k_t = shear_coeff * sqrt_rd;
+        let c_t = c_n * damping_ratio;
         let xi_rot = rotate_into_plane(state.xi, n);
         let xi_sq = xi_rot.length_squared();
-        let xi_trial = xi_rot + ds;
-        let f_trial = -k_t * xi_trial - c_t * v_t;
-        let cap = law.friction * f_n;
-        let f_trial_sq = f_trial.length_squared();
-        let xi_new = if f_trial_sq > cap * cap {
-            // Slip: the force is μ f_n along the trial force (eq. 5.16). The spring
-            // only ever shrinks, to carry at most μ f_n; it is never stretched
-            // beyond the accumulated displacement (at contact onset the cap is set
-            // by damping, ∝ δ^{1/4}, while k_t ∝ δ^{1/2}).
-            ft = f_trial * (cap / f_trial_sq.sqrt());
-            let spring = k_t * xi_trial.length();
-            if spring > cap {
-                xi_trial * (cap / spring)
-            } else {
-                xi_trial
-            }
-        } else {
-            ft = f_trial;
-            xi_trial
-        };
+        let (f, xi_new) = mindlin_coulomb(k_t, c_t, friction * f_n, xi_rot, ds, v_t);
+        ft = f;
         let taken = -0.5 * (state.ft_prev + ft).dot(ds);
         let stored_before = 0.5 * state.kt_prev * xi_sq;
         out.dissipated_tangential_j = taken - (0.5 * k_t * xi_new.length_squared() - stored_before);
@@ -291,8 +493,38 @@ mod tests {
         assert!((c_n - c_n_thesis).abs() / c_n < 1e-12);
         let k_t = law.tangential_stiffness_npm(r, d);
         let c_t_thesis = (10.0f64 / 3.0).sqrt() * beta * (k_t * m).sqrt();
-        let c_t = c_n * law.tangential_damping_ratio;
+        let c_t = law.tangential_damping_nspm(r, m, d);
         assert!((c_t - c_t_thesis).abs() / c_t < 1e-12);
+    }
+
+    #[test]
+    fn the_law_leaves_out_what_its_spec_does_not_need() {
+        let a = Material::ACRYLIC;
+        let full = ContactLaw::new(&a, &a, 0.86, 0.52, RestitutionMode::Exact);
+        assert_eq!(full.describe(), "hertz + restitution + mindlin-coulomb");
+        let elastic = ContactLaw::new(&a, &a, 1.0, 0.52, RestitutionMode::Exact);
+        assert_eq!(elastic.damping, NormalDamping::Elastic);
+        let smooth = ContactLaw::new(&a, &a, 0.86, 0.0, RestitutionMode::Exact);
+        assert_eq!(smooth.tangential, Tangential::Frictionless);
+        assert!(!smooth.has_friction());
+        // A frictionless contact keeps no history and exerts no tangential force.
+        let mut st = ContactState::apart(0.0);
+        let g = ContactGeometry {
+            r_star_m: 1.25e-3,
+            m_star_kg: 3.9e-5,
+            delta_m: 1e-6,
+            normal: DVec3::Z,
+            v_rel: DVec3::new(0.3, 0.0, 0.1),
+        };
+        let out = evaluate_contact(&smooth, &g, 1e-7, &mut st);
+        assert_eq!(out.tangential_on_i, DVec3::ZERO);
+        assert_eq!(st.xi, DVec3::ZERO);
+        // The instance chosen by the law gives the same as the dispatcher.
+        let (mut s1, mut s2) = (ContactState::apart(0.0), ContactState::apart(0.0));
+        let a1 = evaluate_contact(&full, &g, 1e-7, &mut s1);
+        let a2 = evaluate_contact_with::<true, true>(&full, &g, 1e-7, &mut s2);
+        assert_eq!(a1, a2);
+        assert_eq!(s1, s2);
     }
 
     #[test]

@@ -17,7 +17,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::contact::{ContactGeometry, ContactLaw, ContactOutput, ContactState, evaluate_contact};
+use super::contact::{ContactGeometry, ContactLaw, ContactState, evaluate_contact};
 use super::error::DemError;
 use super::hertz_theory;
 use super::ledger::{EnergyState, Ledger, LedgerBalance, LedgerSnapshot};
@@ -63,22 +63,37 @@ impl Numerics {
     }
 }
 
-/// Contribution of one listed pair to the forces and the ledger.
+/// What one contact contributed over a step, before it is booked: forces,
+/// energies, and what the stability checks read. Pair and wall contacts both
+/// produce one, and [`World::book`] checks and accumulates both the same way.
 #[derive(Debug, Clone, Copy, Default)]
-struct PairOutput {
+struct ContactResult {
     touching: bool,
+    /// Force on particle `i` (N); particle `j` of a pair gets the opposite.
     force_i: DVec3,
     torque_i: DVec3,
+    /// Torque on particle `j` of a pair (N m); unused for a wall.
     torque_j: DVec3,
     dissipated_normal_j: f64,
     dissipated_tangential_j: f64,
     stiffness_work_j: f64,
+    /// Overlap as a fraction of the smaller radius.
     overlap_ratio: f64,
+    /// Normal approach speed now (m/s).
     approach_mps: f64,
     /// Steps the collision will take, set when the contact opens (else infinite).
     steps_per_collision: f64,
     /// Normal approach speed when the contact opened this step (else zero).
     onset_speed_mps: f64,
+}
+
+/// Which contact a [`ContactResult`] belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ContactAt {
+    /// Particles `i < j`.
+    Pair(usize, usize),
+    /// Particle `i` and wall number `w`.
+    Wall(usize, usize),
 }
 
 /// A complete DEM system.
@@ -102,7 +117,7 @@ pub struct World {
     neighbours: NeighbourList,
     /// Contact state of particle `i` with wall `w` at `i * n_walls + w`.
     wall_states: Vec<ContactState>,
-    pair_out: Vec<PairOutput>,
+    pair_out: Vec<ContactResult>,
     /// Total force of the walls on the particles at the current step (N).
     wall_force: DVec3,
     /// Ledger reading the energy check compares against.
@@ -341,18 +356,76 @@ impl World {
         Ok(())
     }
 
-    fn unresolved(&self, contact: String, speed_mps: f64, duration_s: f64) -> DemError {
-        let dt = self.numerics.dt_s;
-        DemError::UnresolvedCollision {
-            time_s: self.time_s + dt,
-            step: self.steps + 1,
-            contact,
-            speed_mps,
-            duration_s,
-            steps: duration_s / dt,
-            dt_s: dt,
-            suggested_dt_s: duration_s / 20.0,
+    /// Human-readable name of a contact, for diagnoses.
+    fn contact_name(&self, at: ContactAt) -> String {
+        match at {
+            ContactAt::Pair(i, j) => format!("particle-particle ({i}, {j})"),
+            ContactAt::Wall(i, w) => format!("particle-{} (particle {i})", self.walls.names[w]),
         }
+    }
+
+    /// Checks one contact's result and adds it to the forces, the ledger and
+    /// the impact speeds: the one path for pair and wall contacts. A collision
+    /// resolved in too few steps or an excessive overlap stops the run.
+    fn book(&mut self, at: ContactAt, out: &ContactResult, dt: f64) -> Result<(), DemError> {
+        let n = &self.numerics;
+        if out.steps_per_collision < n.min_steps_per_collision {
+            let duration_s = out.steps_per_collision * dt;
+            return Err(DemError::UnresolvedCollision {
+                time_s: self.time_s + dt,
+                step: self.steps + 1,
+                contact: self.contact_name(at),
+                speed_mps: out.onset_speed_mps,
+                duration_s,
+                steps: out.steps_per_collision,
+                dt_s: dt,
+                suggested_dt_s: duration_s / 20.0,
+            });
+        }
+        if out.overlap_ratio > n.max_overlap_ratio {
+            return Err(DemError::ExcessiveOverlap {
+                time_s: self.time_s + dt,
+                step: self.steps + 1,
+                contact: self.contact_name(at),
+                overlap_percent: 100.0 * out.overlap_ratio,
+                limit_percent: 100.0 * n.max_overlap_ratio,
+                speed_mps: out.approach_mps,
+                dt_s: self.numerics.dt_s,
+            });
+        }
+        let p = &mut self.particles;
+        let (fastest, ledger_normal, ledger_tangential) = match at {
+            ContactAt::Pair(i, j) => {
+                p.force[i] += out.force_i;
+                p.force[j] -= out.force_i;
+                p.torque[i] += out.torque_i;
+                p.torque[j] += out.torque_j;
+                let d = &mut self.ledger.dissipated;
+                (
+                    &mut self.impact_speeds.particle_particle_mps,
+                    &mut d.pp_normal,
+                    &mut d.pp_tangential,
+                )
+            }
+            ContactAt::Wall(i, _) => {
+                p.force[i] += out.force_i;
+                p.torque[i] += out.torque_i;
+                self.wall_force += out.force_i;
+                let d = &mut self.ledger.dissipated;
+                (
+                    &mut self.impact_speeds.particle_wall_mps,
+                    &mut d.pw_normal,
+                    &mut d.pw_tangential,
+                )
+            }
+        };
+        *fastest = fastest.max(out.onset_speed_mps);
+        if dt > 0.0 {
+            *ledger_normal += out.dissipated_normal_j;
+            *ledger_tangential += out.dissipated_tangential_j;
+            self.ledger.stiffness_work_j += out.stiffness_work_j;
+        }
+        Ok(())
     }
 
     /// Forces and torques at the current positions. `dt` is the step over which the
@@ -364,6 +437,7 @@ impl World {
             p.force[i] = self.gravity * p.mass[i];
             p.torque[i] = DVec3::ZERO;
         }
+        self.wall_force = DVec3::ZERO;
         self.wall_contacts(dt)?;
         self.pair_contacts(dt)
     }
@@ -372,17 +446,14 @@ impl World {
         let n_walls = self.walls.len();
         let offset = self.walls.offset();
         let v_wall = self.walls.velocity();
-        let law = self.pw_law;
-        let p = &mut self.particles;
-        let mut total = DVec3::ZERO;
-        for i in 0..p.len() {
-            let (x, r) = (p.position[i], p.radius[i]);
+        for i in 0..self.particles.len() {
             for w in 0..n_walls {
-                let (dist, n) = self.walls.shapes[w].distance_and_normal(x, offset);
-                let delta = r - dist;
+                let p = &self.particles;
                 let st = &mut self.wall_states[i * n_walls + w];
-                if delta <= 0.0 && st.delta_prev <= 0.0 {
-                    st.delta_prev = delta;
+                let (dist, normal) = self.walls.shapes[w].distance_and_normal(p.position[i], offset);
+                let r = p.radius[i];
+                if r - dist <= 0.0 && st.delta_prev <= 0.0 {
+                    st.delta_prev = r - dist;
                     continue;
                 }
                 if dist <= 0.0 {
@@ -394,57 +465,19 @@ impl World {
                         dt_s: self.numerics.dt_s,
                     });
                 }
-                let arm = n * (r - 0.5 * delta.max(0.0));
-                let v_rel = p.velocity[i] + p.angular_velocity[i].cross(arm) - v_wall;
-                if delta > self.numerics.max_overlap_ratio * r {
-                    return Err(DemError::ExcessiveOverlap {
-                        time_s: self.time_s + dt,
-                        step: self.steps + 1,
-                        contact: format!("particle-{}", self.walls.names[w]),
-                        overlap_percent: 100.0 * delta / r,
-                        limit_percent: 100.0 * self.numerics.max_overlap_ratio,
-                        speed_mps: v_rel.dot(n),
-                        dt_s: self.numerics.dt_s,
-                    });
-                }
-                if dt > 0.0 && st.delta_prev <= 0.0 {
-                    let v_n = v_rel.dot(n).max(0.0);
-                    let fastest = &mut self.impact_speeds.particle_wall_mps;
-                    *fastest = fastest.max(v_n);
-                    let t_c = hertz_theory::contact_duration_s(p.mass[i], law.e_star_pa, r, v_n);
-                    if t_c < self.numerics.min_steps_per_collision * dt {
-                        let contact = format!("particle-{}", self.walls.names[w]);
-                        return Err(self.unresolved(contact, v_n, t_c));
-                    }
-                }
-                let geometry = ContactGeometry {
-                    r_star_m: r,
-                    m_star_kg: p.mass[i],
-                    delta_m: delta,
-                    normal: n,
-                    v_rel,
-                };
-                let out: ContactOutput = evaluate_contact(&law, &geometry, dt, st);
-                p.force[i] += out.force_on_i;
-                p.torque[i] += arm.cross(out.tangential_on_i);
-                total += out.force_on_i;
-                if dt > 0.0 {
-                    self.ledger.dissipated.pw_normal += out.dissipated_normal_j;
-                    self.ledger.dissipated.pw_tangential += out.dissipated_tangential_j;
-                    self.ledger.stiffness_work_j += out.stiffness_work_j;
-                }
+                let out = wall_contact(&self.pw_law, p, i, dist, normal, v_wall, dt, st);
+                self.book(ContactAt::Wall(i, w), &out, dt)?;
             }
         }
-        self.wall_force = total;
         Ok(())
     }
 
     fn pair_contacts(&mut self, dt: f64) -> Result<(), DemError> {
         let n_pairs = self.neighbours.pairs.len();
-        self.pair_out.resize(n_pairs, PairOutput::default());
+        self.pair_out.resize(n_pairs, ContactResult::default());
         let law = self.pp_law;
         let p = &self.particles;
-        let work = |(&(i, j), (st, out)): (&(u32, u32), (&mut ContactState, &mut PairOutput))| {
+        let work = |(&(i, j), (st, out)): (&(u32, u32), (&mut ContactState, &mut ContactResult))| {
             *out = pair_contact(&law, p, i as usize, j as usize, dt, st);
         };
         let pairs = &self.neighbours.pairs;
@@ -463,42 +496,83 @@ impl World {
         }
 
         // Fixed-order accumulation: identical sums for any thread count.
-        let p = &mut self.particles;
-        for (k, out) in self.pair_out.iter().enumerate() {
+        let results = std::mem::take(&mut self.pair_out);
+        let booked = results.iter().enumerate().try_for_each(|(k, out)| {
             if !out.touching {
-                continue;
+                return Ok(());
             }
             let (i, j) = self.neighbours.pairs[k];
-            let (i, j) = (i as usize, j as usize);
-            if out.steps_per_collision < self.numerics.min_steps_per_collision {
-                let t_c = out.steps_per_collision * dt;
-                let contact = format!("particle-particle ({i}, {j})");
-                return Err(self.unresolved(contact, out.approach_mps, t_c));
-            }
-            if out.overlap_ratio > self.numerics.max_overlap_ratio {
-                return Err(DemError::ExcessiveOverlap {
-                    time_s: self.time_s + dt,
-                    step: self.steps + 1,
-                    contact: format!("particle-particle ({i}, {j})"),
-                    overlap_percent: 100.0 * out.overlap_ratio,
-                    limit_percent: 100.0 * self.numerics.max_overlap_ratio,
-                    speed_mps: out.approach_mps,
-                    dt_s: self.numerics.dt_s,
-                });
-            }
-            let fastest = &mut self.impact_speeds.particle_particle_mps;
-            *fastest = fastest.max(out.onset_speed_mps);
-            p.force[i] += out.force_i;
-            p.force[j] -= out.force_i;
-            p.torque[i] += out.torque_i;
-            p.torque[j] += out.torque_j;
-            if dt > 0.0 {
-                self.ledger.dissipated.pp_normal += out.dissipated_normal_j;
-                self.ledger.dissipated.pp_tangential += out.dissipated_tangential_j;
-                self.ledger.stiffness_work_j += out.stiffness_work_j;
-            }
-        }
-        Ok(())
+            self.book(ContactAt::Pair(i as usize, j as usize), out, dt)
+        });
+        self.pair_out = results;
+        booked
+    }
+}
+
+/// Steps an opening collision will take, and its approach speed: the Hertz
+/// duration (eq. 5.10) at the normal approach speed, when the contact opens
+/// during a step of `dt` (else infinitely many steps and no onset speed).
+#[inline]
+fn onset(
+    law: &ContactLaw,
+    geometry: &ContactGeometry,
+    dt: f64,
+    state: &ContactState,
+) -> (f64, f64) {
+    if dt > 0.0 && state.delta_prev <= 0.0 {
+        let v_n = geometry.v_rel.dot(geometry.normal).max(0.0);
+        let t_c = hertz_theory::contact_duration_s(
+            geometry.m_star_kg,
+            law.e_star_pa,
+            geometry.r_star_m,
+            v_n,
+        );
+        (t_c / dt, v_n)
+    } else {
+        (f64::INFINITY, 0.0)
+    }
+}
+
+/// One particle-wall contact (thesis Section 3.3: overlap eq. 3.12, normal eq.
+/// 3.14; a flat wall, R* = R and m* = m). `dist` is the centre's distance to
+/// the wall and `normal` points from the centre to the wall.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn wall_contact(
+    law: &ContactLaw,
+    p: &Particles,
+    i: usize,
+    dist: f64,
+    normal: DVec3,
+    v_wall: DVec3,
+    dt: f64,
+    st: &mut ContactState,
+) -> ContactResult {
+    let r = p.radius[i];
+    let delta = r - dist;
+    let arm = normal * (r - 0.5 * delta.max(0.0));
+    let v_rel = p.velocity[i] + p.angular_velocity[i].cross(arm) - v_wall;
+    let geometry = ContactGeometry {
+        r_star_m: r,
+        m_star_kg: p.mass[i],
+        delta_m: delta,
+        normal,
+        v_rel,
+    };
+    let (steps_per_collision, onset_speed_mps) = onset(law, &geometry, dt, st);
+    let out = evaluate_contact(law, &geometry, dt, st);
+    ContactResult {
+        touching: true,
+        force_i: out.force_on_i,
+        torque_i: arm.cross(out.tangential_on_i),
+        torque_j: DVec3::ZERO,
+        dissipated_normal_j: out.dissipated_normal_j,
+        dissipated_tangential_j: out.dissipated_tangential_j,
+        stiffness_work_j: out.stiffness_work_j,
+        overlap_ratio: delta / r,
+        approach_mps: v_rel.dot(normal),
+        steps_per_collision,
+        onset_speed_mps,
     }
 }
 
@@ -511,7 +585,7 @@ fn pair_contact(
     j: usize,
     dt: f64,
     st: &mut ContactState,
-) -> PairOutput {
+) -> ContactResult {
     let d = p.position[j] - p.position[i];
     let (ri, rj) = (p.radius[i], p.radius[j]);
     let dist_sq = d.length_squared();
@@ -519,7 +593,7 @@ fn pair_contact(
     if dist_sq >= reach * reach && st.delta_prev <= 0.0 {
         // Apart now and before: remember the gap for the trapezoid at contact onset.
         st.delta_prev = reach - dist_sq.sqrt();
-        return PairOutput::default();
+        return ContactResult::default();
     }
     let dist = dist_sq.sqrt();
     let n = d / dist;
@@ -537,20 +611,9 @@ fn pair_contact(
         normal: n,
         v_rel,
     };
-    let (steps_per_collision, onset_speed_mps) = if dt > 0.0 && st.delta_prev <= 0.0 {
-        let v_n = v_rel.dot(n).max(0.0);
-        let t_c = hertz_theory::contact_duration_s(
-            geometry.m_star_kg,
-            law.e_star_pa,
-            geometry.r_star_m,
-            v_n,
-        );
-        (t_c / dt, v_n)
-    } else {
-        (f64::INFINITY, 0.0)
-    };
+    let (steps_per_collision, onset_speed_mps) = onset(law, &geometry, dt, st);
     let out = evaluate_contact(law, &geometry, dt, st);
-    PairOutput {
+    ContactResult {
         touching: true,
         force_i: out.force_on_i,
         torque_i: arm_i.cross(out.tangential_on_i),

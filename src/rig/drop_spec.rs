@@ -231,7 +231,7 @@ mod tests {
             .expect_err("overdamped")
             .to_string();
         assert!(
-            msg.starts_with("t.toml: mount.damping_ratio = 1.5 1: must be in [0, 1)"),
+            msg.starts_with("t.toml: mount.damping_ratio = 1.5: must be in [0, 1)"),
             "{msg}"
         );
         let text = DROP_RIG_TOML.replace("mass_kg = 0.10", "mass_kg = -0.1");

@@ -737,27 +737,29 @@ mod tests {
     }
 
     #[test]
-    fn validation_names_flag_unit_and_range() {
+    fn validation_names_field_unit_and_range() {
         let msg = |f: &dyn Fn(&mut DropSetup)| {
             let mut s = DropSetup::preset(DropParticle::AcrylicSmooth, 0.05).expect("preset");
             f(&mut s);
             s.validate().expect_err("refused").to_string()
         };
-        assert!(msg(&|s| s.height_m = 0.0).starts_with("--height-m 0 is invalid"));
-        assert!(msg(&|s| s.height_m = -0.01).contains("positive and finite (m)"));
+        assert_eq!(
+            msg(&|s| s.height_m = 0.0),
+            "height_m = 0 m: must be positive and finite"
+        );
+        assert!(msg(&|s| s.height_m = -0.01).starts_with("height_m = -0.01 m:"));
         assert!(msg(&|s| s.height_m = 0.0005).contains("at least 0.001 m"));
         let high = msg(&|s| s.height_m = 1.0);
         assert!(
-            high.starts_with("--height-m 1 m is too high for the 2 s record")
-                && high.contains("use at most 0.545 m"),
+            high.starts_with("height_m = 1 m: must be at most 0.545 m")
+                && high.contains("the 2 s record"),
             "{high}"
         );
         assert!(msg(&|s| s.restitution = 1.2).contains("(0, 1]"));
         let slow = msg(&|s| s.rig.daq.sample_rate_hz = 10_000.0);
         assert!(
-            slow.starts_with("--sample-rate-hz 10000 Hz cannot resolve the impacts")
-                && slow.contains("lasts 32.")
-                && slow.contains("at least 1"),
+            slow.starts_with("daq.sample_rate_hz = 10000 Hz: must be at least 1")
+                && slow.contains("lasts 32."),
             "{slow}"
         );
     }
