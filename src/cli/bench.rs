@@ -13,7 +13,8 @@ use serde::Serialize;
 
 use vlab::atomic_write::write_atomic;
 use vlab::dem::World;
-use vlab::scene::damper::{DrivePlan, NoObserver, SineDrive, run_drive, settle_bed};
+use vlab::rig::SineMotion;
+use vlab::scene::damper::{DrivePlan, NoObserver, run_drive, settle_bed};
 use vlab::scene::file::Scene;
 use vlab::signals::bench_yang_power;
 
@@ -96,7 +97,7 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
             cycles: a.cycles.max(1),
             steady_cycles: 1,
         };
-        let mut drive = SineDrive::new(plan.freq_hz, plan.gamma, plan.gravity_mps2);
+        let mut drive = SineMotion::new(plan.freq_hz, plan.gamma, plan.gravity_mps2);
         let out = pool
             .install(|| {
                 run_drive(&mut world, &plan, &mut drive, &mut NoObserver, &mut |p| {

@@ -12,7 +12,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use vlab::atomic_write::write_atomic;
-use vlab::scene::damper::{DrivePlan, NoObserver, SettledBed, SineDrive, run_drive, settle_bed};
+use vlab::rig::SineMotion;
+use vlab::scene::damper::{DrivePlan, NoObserver, SettledBed, run_drive, settle_bed};
 use vlab::scene::file::Scene;
 use vlab::signals::{Series, SeriesStyle, plot_xy_svg};
 
@@ -157,7 +158,7 @@ fn drive_once(
         cycles: scene.drive.cycles,
         steady_cycles: scene.drive.steady_cycles,
     };
-    let mut drive = SineDrive::new(freq_hz, gamma, g);
+    let mut drive = SineMotion::new(freq_hz, gamma, g);
     let out = run_drive(&mut world, &plan, &mut drive, &mut NoObserver, &mut |_| {})
         .with_context(|| format!("driving seed {seed} at Gamma {gamma}"))?;
     let d = out.dissipated_per_cycle;

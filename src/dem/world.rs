@@ -450,7 +450,8 @@ impl World {
             for w in 0..n_walls {
                 let p = &self.particles;
                 let st = &mut self.wall_states[i * n_walls + w];
-                let (dist, normal) = self.walls.shapes[w].distance_and_normal(p.position[i], offset);
+                let (dist, normal) =
+                    self.walls.shapes[w].distance_and_normal(p.position[i], offset);
                 let r = p.radius[i];
                 if r - dist <= 0.0 && st.delta_prev <= 0.0 {
                     st.delta_prev = r - dist;
@@ -477,9 +478,10 @@ impl World {
         self.pair_out.resize(n_pairs, ContactResult::default());
         let law = self.pp_law;
         let p = &self.particles;
-        let work = |(&(i, j), (st, out)): (&(u32, u32), (&mut ContactState, &mut ContactResult))| {
-            *out = pair_contact(&law, p, i as usize, j as usize, dt, st);
-        };
+        let work =
+            |(&(i, j), (st, out)): (&(u32, u32), (&mut ContactState, &mut ContactResult))| {
+                *out = pair_contact(&law, p, i as usize, j as usize, dt, st);
+            };
         let pairs = &self.neighbours.pairs;
         let states = &mut self.neighbours.states;
         if rayon::current_num_threads() > 1 && n_pairs >= self.numerics.parallel_min_pairs {

@@ -4,7 +4,9 @@
 //!
 //! - [`spec`]: rig files (`rig/*.toml`, strict, versioned) and the built-in
 //!   rigs `thesis-shaker` (default) and `ideal`; the model's own phase error;
-//! - [`shaker`]: prescribed sine (eq. 6.2 / 7.6) or a lumped electrodynamic
+//! - [`motion`]: the one enclosure-motion abstraction ([`EnclosureMotion`],
+//!   [`Kinematics`]) and the prescribed sine of eq. 6.2 / 7.6 ([`SineMotion`]);
+//! - [`shaker`]: the rig's drive, prescribed or a lumped electrodynamic
 //!   shaker whose motion the particles disturb, with the rig's stroke and
 //!   acceleration limits;
 //! - [`transducer`]: what the force gauge reads, `m_enc a - F_p + W`;
@@ -18,12 +20,13 @@
 //!
 //! The rig sees the damper only as the axial force the particles exert on the
 //! enclosure: this module imports neither `dem` nor `scene`. SI units
-//! throughout. Per DEM step, [`Shaker::advance`] and [`Daq::push`] do O(1)
-//! work and do not allocate.
+//! throughout. Per DEM step, [`EnclosureMotion::advance`] and [`Daq::push`]
+//! do O(1) work and do not allocate.
 //!
-//! A `vlab shake` step, in order: `x = shaker.advance(t, dt, f_p)` ->
-//! DEM step with the enclosure at `x` -> `a = shaker.kinematics()` ->
-//! `daq.push(t, a, transducer_force_n(m_enc, a, f_p, w))`.
+//! A `vlab shake` step, in order: `k = shaker.advance(t, dt, f_p)` ->
+//! DEM step with the enclosure at `k.displacement_m` ->
+//! `daq.push(t, a, transducer_force_n(m_enc, a, f_p, w))` with
+//! `a = k.acceleration_mps2`.
 
 pub mod channel;
 pub mod daq;
@@ -32,6 +35,7 @@ pub mod drop_rig;
 pub mod drop_spec;
 pub mod error;
 pub mod filter;
+pub mod motion;
 pub mod noise;
 pub mod plate;
 pub mod shaker;
@@ -43,8 +47,9 @@ pub use daq::{ACCEL_CHANNEL, ChannelReport, Daq, DaqReport, FORCE_CHANNEL};
 pub use drop_rig::{DROP_FORCE_CHANNEL, DropRig, DropRigReport};
 pub use drop_spec::{DROP_RIG, DROP_RIG_TOML, DropRigSpec, MountSpec, PlateSpec, RecordSpec};
 pub use error::{Result, RigError};
+pub use motion::{EnclosureMotion, Kinematics, SineMotion};
 pub use plate::Plate;
-pub use shaker::{Shaker, ShakerKinematics, ShakerReport, check_limits};
+pub use shaker::{ElectrodynamicShaker, Shaker, ShakerReport, check_limits};
 pub use spec::{
     AccelerometerSpec, ChannelParams, DEFAULT_RIG, DaqSpec, ElectrodynamicSpec, EnclosureSpec,
     ForceSpec, LowPassSpec, RIG_VERSION, RigSpec, Sampling, ShakerKind, ShakerSpec,

@@ -24,6 +24,8 @@
 
 use std::f64::consts::PI;
 
+use glam::{DMat3, DVec3};
+
 use super::discretise::zero_order_hold;
 use super::drop_spec::DropRigSpec;
 use super::error::{InvalidParameter, RigError, positive};
@@ -34,12 +36,12 @@ pub struct Plate {
     mass_kg: f64,
     stiffness_n_per_m: f64,
     damping_n_s_per_m: f64,
-    a: [[f64; 3]; 3],
+    a: DMat3,
     /// Displacement along +z, m, and velocity, m/s (third state unused).
-    z: [f64; 3],
+    z: DVec3,
     dt_s: f64,
-    phi: [[f64; 3]; 3],
-    gamma: [f64; 3],
+    phi: DMat3,
+    gamma: DVec3,
 }
 
 impl Plate {
@@ -57,20 +59,21 @@ impl Plate {
             )));
         }
         let c = 2.0 * damping_ratio * (stiffness_n_per_m * mass_kg).sqrt();
-        let a = [
+        let a = DMat3::from_cols_array_2d(&[
             [0.0, 1.0, 0.0],
             [-stiffness_n_per_m / mass_kg, -c / mass_kg, 0.0],
             [0.0, 0.0, 0.0],
-        ];
+        ])
+        .transpose();
         Ok(Plate {
             mass_kg,
             stiffness_n_per_m,
             damping_n_s_per_m: c,
             a,
-            z: [0.0; 3],
+            z: DVec3::ZERO,
             dt_s: 0.0,
-            phi: [[0.0; 3]; 3],
-            gamma: [0.0; 3],
+            phi: DMat3::ZERO,
+            gamma: DVec3::ZERO,
         })
     }
 
@@ -88,33 +91,31 @@ impl Plate {
     #[inline]
     pub fn advance(&mut self, dt_s: f64, force_n: f64) -> f64 {
         if dt_s != self.dt_s {
-            let b = [0.0, 1.0 / self.mass_kg, 0.0];
-            let (phi, gamma) = zero_order_hold(&self.a, &b, dt_s);
+            let b = DVec3::new(0.0, 1.0 / self.mass_kg, 0.0);
+            let (phi, gamma) = zero_order_hold(&self.a, b, dt_s);
             self.phi = phi;
             self.gamma = gamma;
             self.dt_s = dt_s;
         }
-        let [x, v, _] = self.z;
-        self.z[0] = self.phi[0][0] * x + self.phi[0][1] * v + self.gamma[0] * force_n;
-        self.z[1] = self.phi[1][0] * x + self.phi[1][1] * v + self.gamma[1] * force_n;
-        self.z[0]
+        self.z = self.phi * self.z + self.gamma * force_n;
+        self.z.x
     }
 
     /// Displacement along +z from equilibrium, m.
     pub fn displacement_m(&self) -> f64 {
-        self.z[0]
+        self.z.x
     }
 
     /// Velocity along +z, m/s.
     pub fn velocity_mps(&self) -> f64 {
-        self.z[1]
+        self.z.y
     }
 
     /// What the transducer carries: the spring and damper force, positive in
     /// compression, N.
     #[inline]
     pub fn transducer_force_n(&self) -> f64 {
-        -(self.stiffness_n_per_m * self.z[0] + self.damping_n_s_per_m * self.z[1])
+        -(self.stiffness_n_per_m * self.z.x + self.damping_n_s_per_m * self.z.y)
     }
 
     /// Mass, kg.
@@ -157,7 +158,7 @@ impl Plate {
     /// phase lead `phi ~ 2 zeta`); computed here on the model itself.
     pub fn first_pulse_duration_s(&self, contact_duration_s: f64) -> f64 {
         let mut p = Plate {
-            z: [0.0; 3],
+            z: DVec3::ZERO,
             dt_s: 0.0,
             ..self.clone()
         };

@@ -55,22 +55,13 @@
 
 use std::f64::consts::PI;
 
+use glam::{DMat3, DVec3};
 use realfft::num_complex::Complex64;
 
 use super::discretise::zero_order_hold;
 use super::error::{RigError, non_negative, positive};
+use super::motion::{EnclosureMotion, Kinematics, SineMotion};
 use super::spec::{ElectrodynamicSpec, RigSpec, ShakerKind};
-
-/// Enclosure kinematics along the drive axis.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct ShakerKinematics {
-    /// Displacement from the rest position, m.
-    pub displacement_m: f64,
-    /// Velocity, m/s.
-    pub velocity_mps: f64,
-    /// Acceleration, m/s^2.
-    pub acceleration_mps2: f64,
-}
 
 /// How the drive went, for the caller's report.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -167,7 +158,8 @@ impl CycleFit {
         self.yc += y * cs;
     }
 
-    /// The fundamental as a phasor `a + j b` (signal `Im(P e^{jwt})`).
+    /// The fundamental as a phasor `a + j b` (signal `Im(P e^{jwt})`): the
+    /// normal equations of the fit, solved directly.
     fn phasor(&self) -> Option<Complex64> {
         if self.n < 8.0 {
             return None;
@@ -178,6 +170,11 @@ impl CycleFit {
             [self.c, self.sc, self.cc],
         ];
         let r = [self.y, self.ys, self.yc];
+        let det3 = |m: &[[f64; 3]; 3]| {
+            m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+        };
         let det = det3(&m);
         if det.is_nan() || det.abs() <= 1e-12 * self.n.powi(3) {
             return None;
@@ -193,23 +190,17 @@ impl CycleFit {
     }
 }
 
-fn det3(m: &[[f64; 3]; 3]) -> f64 {
-    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-}
-
 /// The lumped electrodynamic shaker's state and constants.
 #[derive(Debug, Clone)]
 struct Electrodynamic {
     p: ElectrodynamicSpec,
     mass_kg: f64,
-    a: [[f64; 3]; 3],
-    phi: [[f64; 3]; 3],
-    gamma_f: [f64; 3],
+    a: DMat3,
+    phi: DMat3,
+    gamma_f: DVec3,
     dt_s: f64,
     /// Deviation of (x, v, i) from the steady state.
-    e: [f64; 3],
+    e: DVec3,
     /// Drive phasor at the amplifier input, V.
     drive: Complex64,
     /// Steady-state phasors of x, v, i for the current drive.
@@ -248,25 +239,24 @@ impl Electrodynamic {
         p: ElectrodynamicSpec,
         enclosure_mass_kg: f64,
         particle_mass_kg: f64,
-        w: f64,
-        x_amp: f64,
-        accel_amp: f64,
+        target: &SineMotion,
     ) -> Self {
+        let w = target.omega();
         let mass_kg = p.armature_mass_kg + enclosure_mass_kg;
         let m_eff = mass_kg + p.feedforward_particle_fraction * particle_mass_kg;
         let h_eff = Self::receptance(&p, m_eff, w);
-        let v_amp = Complex64::new(x_amp, 0.0) / h_eff;
+        let v_amp = Complex64::new(target.amplitude_m(), 0.0) / h_eff;
         let drive = v_amp / p.amplifier_gain_v_per_v;
         let start = Self::steady(&p, m_eff, w, v_amp);
         let ss = Self::steady(&p, mass_kg, w, v_amp);
         // At t = 0 the state is Im(start); the particular solution is Im(ss).
-        let e = [
+        let e = DVec3::new(
             start[0].im - ss[0].im,
             start[1].im - ss[1].im,
             start[2].im - ss[2].im,
-        ];
+        );
         let bl = p.force_factor_n_per_a;
-        let a = [
+        let a = DMat3::from_cols_array_2d(&[
             [0.0, 1.0, 0.0],
             [
                 -p.suspension_stiffness_n_per_m / mass_kg,
@@ -278,13 +268,15 @@ impl Electrodynamic {
                 -bl / p.coil_inductance_h,
                 -p.coil_resistance_ohm / p.coil_inductance_h,
             ],
-        ];
+        ])
+        .transpose();
+        let accel_amp = target.amplitude_m() * w * w;
         Electrodynamic {
             p,
             mass_kg,
             a,
-            phi: [[0.0; 3]; 3],
-            gamma_f: [0.0; 3],
+            phi: DMat3::ZERO,
+            gamma_f: DVec3::ZERO,
             dt_s: 0.0,
             e,
             drive,
@@ -299,9 +291,13 @@ impl Electrodynamic {
         }
     }
 
+    /// The force input of the state equation: the particles push the moving mass.
+    fn force_input(&self) -> DVec3 {
+        DVec3::new(0.0, 1.0 / self.mass_kg, 0.0)
+    }
+
     fn discretise(&mut self, dt_s: f64) {
-        let b = [0.0, 1.0 / self.mass_kg, 0.0];
-        let (phi, gamma_f) = zero_order_hold(&self.a, &b, dt_s);
+        let (phi, gamma_f) = zero_order_hold(&self.a, self.force_input(), dt_s);
         self.phi = phi;
         self.gamma_f = gamma_f;
         self.dt_s = dt_s;
@@ -309,42 +305,50 @@ impl Electrodynamic {
 
     /// State (x, v, i) at phase (sin wt, cos wt).
     #[inline]
-    fn state(&self, sn: f64, cs: f64) -> [f64; 3] {
-        [0, 1, 2].map(|j| self.ss[j].re * sn + self.ss[j].im * cs + self.e[j])
+    fn state(&self, sn: f64, cs: f64) -> DVec3 {
+        DVec3::from_array([0, 1, 2].map(|j| self.ss[j].re * sn + self.ss[j].im * cs)) + self.e
     }
 
-    fn acceleration(&self, z: &[f64; 3], force_n: f64) -> f64 {
-        (self.p.force_factor_n_per_a * z[2]
-            - self.p.suspension_stiffness_n_per_m * z[0]
-            - self.p.suspension_damping_n_s_per_m * z[1]
+    fn acceleration(&self, z: DVec3, force_n: f64) -> f64 {
+        (self.p.force_factor_n_per_a * z.z
+            - self.p.suspension_stiffness_n_per_m * z.x
+            - self.p.suspension_damping_n_s_per_m * z.y
             + force_n)
             / self.mass_kg
     }
 
-    /// One step to `t_s`; returns (x, v, a).
+    /// Kinematics at phase (sin wt, cos wt) with the particles' force `force_n`.
+    fn kinematics(&self, sn: f64, cs: f64, force_n: f64) -> Kinematics {
+        let z = self.state(sn, cs);
+        Kinematics {
+            displacement_m: z.x,
+            velocity_mps: z.y,
+            acceleration_mps2: self.acceleration(z, force_n),
+        }
+    }
+
+    /// One step to `t_s`.
     #[inline]
-    fn advance(&mut self, w: f64, freq_hz: f64, t_s: f64, dt_s: f64, force_n: f64) -> [f64; 3] {
+    fn advance(&mut self, w: f64, freq_hz: f64, t_s: f64, dt_s: f64, force_n: f64) -> Kinematics {
         if (dt_s - self.dt_s).abs() > 1e-12 * dt_s {
             self.discretise(dt_s);
         }
-        let e = self.e;
-        for i in 0..3 {
-            self.e[i] = self.phi[i][0] * e[0]
-                + self.phi[i][1] * e[1]
-                + self.phi[i][2] * e[2]
-                + self.gamma_f[i] * force_n;
-        }
+        self.e = self.phi * self.e + self.gamma_f * force_n;
         let (sn, cs) = (w * t_s).sin_cos();
         let z = self.state(sn, cs);
-        let a = self.acceleration(&z, force_n);
-        self.current_a = z[2];
-        self.peak_current_a = self.peak_current_a.max(z[2].abs());
+        let k = Kinematics {
+            displacement_m: z.x,
+            velocity_mps: z.y,
+            acceleration_mps2: self.acceleration(z, force_n),
+        };
+        self.current_a = z.z;
+        self.peak_current_a = self.peak_current_a.max(self.current_a.abs());
         let cycle = (t_s * freq_hz + 1e-9).floor() as i64;
         if cycle != self.fit.cycle {
             self.end_cycle(w, sn, cs, cycle);
         }
-        self.fit.add(sn, cs, a);
-        [z[0], z[1], a]
+        self.fit.add(sn, cs, k.acceleration_mps2);
+        k
     }
 
     fn end_cycle(&mut self, w: f64, sn: f64, cs: f64, cycle: i64) {
@@ -361,9 +365,9 @@ impl Electrodynamic {
                     let old = self.ss;
                     let v_amp = self.drive * self.p.amplifier_gain_v_per_v;
                     self.ss = Self::steady(&self.p, self.mass_kg, w, v_amp);
-                    for ((e, old), new) in self.e.iter_mut().zip(old).zip(self.ss) {
+                    for (k, (old, new)) in old.iter().zip(self.ss).enumerate() {
                         let d = old - new;
-                        *e += d.re * sn + d.im * cs;
+                        self.e[k] += d.re * sn + d.im * cs;
                     }
                     self.updates += 1;
                 }
@@ -373,18 +377,23 @@ impl Electrodynamic {
     }
 }
 
-/// The drive of one test: a prescribed sine or an electrodynamic shaker.
+/// An electrodynamic shaker following its sine controller.
 #[derive(Debug, Clone)]
-pub struct Shaker {
-    kind: ShakerKind,
-    freq_hz: f64,
-    omega: f64,
-    gamma: f64,
+pub struct ElectrodynamicShaker {
+    target: SineMotion,
+    model: Electrodynamic,
     g_mps2: f64,
-    amplitude_m: f64,
-    t_s: f64,
-    kin: ShakerKinematics,
-    ed: Option<Electrodynamic>,
+    kin: Kinematics,
+}
+
+/// The drive of one test: a prescribed sine, or an electrodynamic shaker whose
+/// motion the particles disturb. Either answers [`EnclosureMotion`].
+#[derive(Debug, Clone)]
+pub enum Shaker {
+    /// The enclosure follows the sine exactly.
+    Prescribed(SineMotion),
+    /// The lumped shaker of the module documentation.
+    Electrodynamic(Box<ElectrodynamicShaker>),
 }
 
 impl Shaker {
@@ -404,10 +413,9 @@ impl Shaker {
         check_limits(spec, freq_hz, gamma, g_mps2)?;
         positive("moving_mass_kg", moving_mass_kg, "kg")?;
         non_negative("particle_mass_kg", particle_mass_kg, "kg")?;
-        let omega = 2.0 * PI * freq_hz;
-        let amplitude_m = gamma * g_mps2 / (omega * omega);
-        let ed = match kind {
-            ShakerKind::Prescribed => None,
+        let target = SineMotion::new(freq_hz, gamma, g_mps2);
+        Ok(match kind {
+            ShakerKind::Prescribed => Shaker::Prescribed(target),
             ShakerKind::Electrodynamic => {
                 let p = spec
                     .shaker
@@ -420,127 +428,82 @@ impl Shaker {
                            prescribed drive or a rig that has them (thesis-shaker)"
                                 .into(),
                     })?;
-                Some(Electrodynamic::new(
-                    p,
-                    moving_mass_kg,
-                    particle_mass_kg,
-                    omega,
-                    amplitude_m,
-                    gamma * g_mps2,
-                ))
+                let model = Electrodynamic::new(p, moving_mass_kg, particle_mass_kg, &target);
+                let kin = model.kinematics(0.0, 1.0, 0.0);
+                Shaker::Electrodynamic(Box::new(ElectrodynamicShaker {
+                    target,
+                    model,
+                    g_mps2,
+                    kin,
+                }))
             }
-        };
-        let mut shaker = Shaker {
-            kind,
-            freq_hz,
-            omega,
-            gamma,
-            g_mps2,
-            amplitude_m,
-            t_s: 0.0,
-            kin: ShakerKinematics::default(),
-            ed,
-        };
-        shaker.kin = match &shaker.ed {
-            None => shaker.prescribed_at(0.0),
-            Some(ed) => {
-                let z = ed.state(0.0, 1.0);
-                ShakerKinematics {
-                    displacement_m: z[0],
-                    velocity_mps: z[1],
-                    acceleration_mps2: ed.acceleration(&z, 0.0),
-                }
-            }
-        };
-        Ok(shaker)
+        })
     }
 
-    /// The prescribed motion at `t_s`: `X sin wt`, `X w cos wt`, `-X w^2 sin wt`.
-    pub fn prescribed_at(&self, t_s: f64) -> ShakerKinematics {
-        let (s, c) = (self.omega * t_s).sin_cos();
-        let x = self.amplitude_m;
-        ShakerKinematics {
-            displacement_m: x * s,
-            velocity_mps: x * self.omega * c,
-            acceleration_mps2: -x * self.omega * self.omega * s,
+    /// The motion the drive aims at: `X sin wt`.
+    pub fn target(&self) -> &SineMotion {
+        match self {
+            Shaker::Prescribed(s) => s,
+            Shaker::Electrodynamic(ed) => &ed.target,
         }
-    }
-
-    /// Advances the enclosure to `t_s` (the end of a step of `dt_s` from the
-    /// previous call, time from the drive start), given the axial force the
-    /// particles exerted on the enclosure during the step (N, positive along
-    /// the axis); returns the enclosure displacement at `t_s` (m).
-    #[inline]
-    pub fn advance(&mut self, t_s: f64, dt_s: f64, particle_force_n: f64) -> f64 {
-        self.t_s = t_s;
-        self.kin = match &mut self.ed {
-            None => self.prescribed_at(t_s),
-            Some(ed) => {
-                let [x, v, a] = ed.advance(self.omega, self.freq_hz, t_s, dt_s, particle_force_n);
-                ShakerKinematics {
-                    displacement_m: x,
-                    velocity_mps: v,
-                    acceleration_mps2: a,
-                }
-            }
-        };
-        self.kin.displacement_m
-    }
-
-    /// Kinematics at the last time passed to [`Self::advance`] (at t = 0
-    /// before the first call).
-    pub fn kinematics(&self) -> ShakerKinematics {
-        self.kin
-    }
-
-    /// Time of the last [`Self::advance`], s.
-    pub fn time_s(&self) -> f64 {
-        self.t_s
     }
 
     /// Kind of drive.
     pub fn kind(&self) -> ShakerKind {
-        self.kind
+        match self {
+            Shaker::Prescribed(_) => ShakerKind::Prescribed,
+            Shaker::Electrodynamic(_) => ShakerKind::Electrodynamic,
+        }
+    }
+
+    /// Time of the last [`EnclosureMotion::advance`], s.
+    pub fn time_s(&self) -> f64 {
+        self.target().time_s()
     }
 
     /// Displacement amplitude of the target motion, `Gamma g / w^2`, m.
     pub fn amplitude_m(&self) -> f64 {
-        self.amplitude_m
+        self.target().amplitude_m()
     }
 
     /// Coil current at the last time, A (electrodynamic).
     pub fn coil_current_a(&self) -> Option<f64> {
-        self.ed.as_ref().map(|ed| ed.current_a)
+        match self {
+            Shaker::Prescribed(_) => None,
+            Shaker::Electrodynamic(ed) => Some(ed.model.current_a),
+        }
     }
 
     /// How the drive went so far.
     pub fn report(&self) -> ShakerReport {
-        let target = Complex64::new(-self.gamma * self.g_mps2, 0.0);
-        match &self.ed {
-            None => ShakerReport {
-                kind: self.kind,
-                target_gamma: self.gamma,
-                achieved_gamma: Some(self.gamma),
+        let target = self.target();
+        let gamma = target.gamma();
+        match self {
+            Shaker::Prescribed(s) => ShakerReport {
+                kind: ShakerKind::Prescribed,
+                target_gamma: gamma,
+                achieved_gamma: Some(gamma),
                 fundamental_phase_rad: 0.0,
                 drive_amplitude_v: None,
-                cycles_measured: (self.t_s * self.freq_hz + 1e-9).floor() as u32,
+                cycles_measured: (s.time_s() * s.freq_hz() + 1e-9).floor() as u32,
                 control_updates: 0,
                 peak_current_a: None,
             },
-            Some(ed) => {
-                let fit = ed.last_fit;
+            Shaker::Electrodynamic(ed) => {
+                let wanted = Complex64::new(-gamma * ed.g_mps2, 0.0);
+                let fit = ed.model.last_fit;
                 ShakerReport {
-                    kind: self.kind,
-                    target_gamma: self.gamma,
-                    achieved_gamma: fit.map(|a| a.norm() / self.g_mps2),
+                    kind: ShakerKind::Electrodynamic,
+                    target_gamma: gamma,
+                    achieved_gamma: fit.map(|a| a.norm() / ed.g_mps2),
                     fundamental_phase_rad: match fit {
-                        Some(a) if target.norm() > 0.0 => (a / target).arg(),
+                        Some(a) if wanted.norm() > 0.0 => (a / wanted).arg(),
                         _ => 0.0,
                     },
-                    drive_amplitude_v: Some(ed.drive.norm()),
-                    cycles_measured: ed.cycles,
-                    control_updates: ed.updates,
-                    peak_current_a: Some(ed.peak_current_a),
+                    drive_amplitude_v: Some(ed.model.drive.norm()),
+                    cycles_measured: ed.model.cycles,
+                    control_updates: ed.model.updates,
+                    peak_current_a: Some(ed.model.peak_current_a),
                 }
             }
         }
@@ -551,35 +514,48 @@ impl Shaker {
     /// many steps. Tending to 0 means the integration is stable. `None` for the
     /// prescribed drive.
     pub fn step_matrix_norm_after(&self, dt_s: f64, steps: u32) -> Option<f64> {
-        let ed = self.ed.as_ref()?;
-        let b = [0.0, 1.0 / ed.mass_kg, 0.0];
-        let (phi, _) = zero_order_hold(&ed.a, &b, dt_s);
+        let Shaker::Electrodynamic(ed) = self else {
+            return None;
+        };
+        let (phi, _) = zero_order_hold(&ed.model.a, ed.model.force_input(), dt_s);
         let mut m = phi;
-        let mut p = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let mut p = DMat3::IDENTITY;
         let mut n = steps;
         while n > 0 {
             if n & 1 == 1 {
-                p = mul3(&p, &m);
+                p *= m;
             }
-            m = mul3(&m, &m);
+            m *= m;
             n >>= 1;
         }
         Some(
-            p.iter()
-                .map(|r| r.iter().map(|x| x.abs()).sum::<f64>())
+            (0..3)
+                .map(|i| p.row(i).abs().element_sum())
                 .fold(0.0, f64::max),
         )
     }
 }
 
-fn mul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let mut c = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+impl EnclosureMotion for Shaker {
+    #[inline]
+    fn advance(&mut self, t_s: f64, dt_s: f64, particle_force_n: f64) -> Kinematics {
+        match self {
+            Shaker::Prescribed(s) => s.advance(t_s, dt_s, particle_force_n),
+            Shaker::Electrodynamic(ed) => {
+                let (w, f) = (ed.target.omega(), ed.target.freq_hz());
+                ed.target.advance(t_s, dt_s, particle_force_n);
+                ed.kin = ed.model.advance(w, f, t_s, dt_s, particle_force_n);
+                ed.kin
+            }
         }
     }
-    c
+
+    fn kinematics(&self) -> Kinematics {
+        match self {
+            Shaker::Prescribed(s) => s.kinematics(),
+            Shaker::Electrodynamic(ed) => ed.kin,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -643,9 +619,9 @@ mod tests {
         let x = 20.0 * G / (w * w);
         for n in [1u32, 17, 25_000, 123_457] {
             let t = f64::from(n) * 1e-6;
-            let u = s.advance(t, 1e-6, 1e3);
-            let k = s.kinematics();
-            assert!((u - x * (w * t).sin()).abs() < 1e-12);
+            let k = s.advance(t, 1e-6, 1e3);
+            assert_eq!(s.kinematics(), k);
+            assert!((k.displacement_m - x * (w * t).sin()).abs() < 1e-12);
             assert!((k.velocity_mps - x * w * (w * t).cos()).abs() < 1e-12);
             assert!((k.acceleration_mps2 + 20.0 * G * (w * t).sin()).abs() < 1e-12);
         }

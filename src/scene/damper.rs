@@ -5,8 +5,9 @@
 //! `fill`), settle with the axis vertical, the lid is closed at the design length,
 //! the damper is turned to its test orientation and the bed settles again (thesis:
 //! 0.2 s, ended early once the bed is at rest). Then the enclosure is driven along
-//! its axis, by a prescribed sine `u = Γ g / ω² sin ωt` (thesis eq. 6.2) or by any
-//! other [`EnclosureMotion`] (the rig's shaker), for whole cycles, and the energy
+//! its axis, by a prescribed sine `u = Γ g / ω² sin ωt` ([`SineMotion`], thesis
+//! eq. 6.2) or by any other [`EnclosureMotion`] (the rig's shaker), for whole
+//! cycles, and the energy
 //! ledger is read at every cycle boundary.
 //!
 //! Efficiency (thesis eq. 6.8–6.10, erratum for 6.9: the numerator is
@@ -17,12 +18,12 @@ use std::f64::consts::PI;
 use std::time::Instant;
 
 use glam::DVec3;
-use serde::Serialize;
 
 use crate::dem::{
     ContactLaw, Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, Numerics, Particles,
     Walls, World,
 };
+pub use crate::rig::{EnclosureMotion, Kinematics, SineMotion};
 use crate::scene::file::{Orientation, Scene, SceneError};
 use crate::scene::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
 
@@ -30,77 +31,6 @@ use crate::scene::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
 pub const REST_SPEED_MPS: f64 = 0.005;
 /// Longest the poured column may take to come to rest (s).
 pub const MAX_POUR_S: f64 = 1.5;
-
-/// Motion of the enclosure along its axis.
-pub trait EnclosureMotion {
-    /// Advances the enclosure to time `t_s` (the end of a step of `dt_s`), given
-    /// the axial force the particles exerted on it during the step (N), and
-    /// returns the displacement at `t_s` (m).
-    fn advance(&mut self, t_s: f64, dt_s: f64, particle_force_n: f64) -> f64;
-    /// Displacement (m), velocity (m/s) and acceleration (m/s²) at the last time.
-    fn kinematics(&self) -> Kinematics;
-}
-
-/// Enclosure kinematics along the axis.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct Kinematics {
-    pub displacement_m: f64,
-    pub velocity_mps: f64,
-    pub acceleration_mps2: f64,
-}
-
-/// The prescribed sine of thesis eq. 6.2: `u = Γ g / ω² sin ωt`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SineDrive {
-    pub freq_hz: f64,
-    pub gamma: f64,
-    pub gravity_mps2: f64,
-    t_s: f64,
-}
-
-impl SineDrive {
-    pub fn new(freq_hz: f64, gamma: f64, gravity_mps2: f64) -> Self {
-        SineDrive {
-            freq_hz,
-            gamma,
-            gravity_mps2,
-            t_s: 0.0,
-        }
-    }
-
-    /// Angular frequency ω (rad/s).
-    pub fn omega(&self) -> f64 {
-        2.0 * PI * self.freq_hz
-    }
-
-    /// Displacement amplitude Γ g / ω² (m).
-    pub fn amplitude_m(&self) -> f64 {
-        self.gamma * self.gravity_mps2 / (self.omega() * self.omega())
-    }
-
-    /// Kinematics at time `t_s`.
-    pub fn at(&self, t_s: f64) -> Kinematics {
-        let w = self.omega();
-        let (s, c) = (w * t_s).sin_cos();
-        let a = self.amplitude_m();
-        Kinematics {
-            displacement_m: a * s,
-            velocity_mps: a * w * c,
-            acceleration_mps2: -a * w * w * s,
-        }
-    }
-}
-
-impl EnclosureMotion for SineDrive {
-    fn advance(&mut self, t_s: f64, _dt_s: f64, _particle_force_n: f64) -> f64 {
-        self.t_s = t_s;
-        self.at(t_s).displacement_m
-    }
-
-    fn kinematics(&self) -> Kinematics {
-        self.at(self.t_s)
-    }
-}
 
 /// Progress of a long run, for display.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -337,9 +267,8 @@ pub fn run_drive(
         k += 1;
         let t = k as f64 * dt;
         let axial = -world.wall_force().dot(world.walls.axis);
-        let u = motion.advance(t, dt, axial);
-        world.step(u)?;
-        let kin = motion.kinematics();
+        let kin = motion.advance(t, dt, axial);
+        world.step(kin.displacement_m)?;
         observer.observe(t, world, &kin);
         // A cycle ends at the step nearest to its boundary time.
         if (t / period - next_boundary as f64) * period > -0.5 * dt {

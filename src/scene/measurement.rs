@@ -19,30 +19,14 @@ use serde::Serialize;
 
 use crate::dem::World;
 use crate::rig::{Daq, DaqReport, RigSpec, Shaker, ShakerKind, ShakerReport, transducer_force_n};
-use crate::scene::damper::{
-    DriveOutcome, DrivePlan, EnclosureMotion, Kinematics, Progress, StepObserver, run_drive,
-};
+use crate::rig::{EnclosureMotion, Kinematics};
+use crate::scene::damper::{DriveOutcome, DrivePlan, Progress, StepObserver, run_drive};
 use crate::scene::file::{Orientation, Scene, SceneError};
 use crate::scene::record::{TruthRecorder, TruthSamples};
 use crate::signals::{
     PhaseCalibration, PhaseCorrection, PhaseErrorPoint, PowerOptions, PowerResult, Trace,
     TraceMetadata, efficiency, estimate_phase_error, yang_power_of_trace,
 };
-
-impl EnclosureMotion for Shaker {
-    fn advance(&mut self, t_s: f64, dt_s: f64, particle_force_n: f64) -> f64 {
-        Shaker::advance(self, t_s, dt_s, particle_force_n)
-    }
-
-    fn kinematics(&self) -> Kinematics {
-        let k = Shaker::kinematics(self);
-        Kinematics {
-            displacement_m: k.displacement_m,
-            velocity_mps: k.velocity_mps,
-            acceleration_mps2: k.acceleration_mps2,
-        }
-    }
-}
 
 /// Feeds the rig's DAQ and the truth recorder from every DEM step.
 struct Instruments {
@@ -339,8 +323,7 @@ pub fn calibrate_rig(
             let weight = rig.enclosure.mass_kg * g_mps2;
             for k in 1..=steps {
                 let t = k as f64 * dt_s;
-                shaker.advance(t, dt_s, 0.0);
-                let a = shaker.kinematics().acceleration_mps2;
+                let a = shaker.advance(t, dt_s, 0.0).acceleration_mps2;
                 daq.push(
                     t,
                     a,
