@@ -164,29 +164,17 @@ impl CycleFit {
         if self.n < 8.0 {
             return None;
         }
-        let m = [
+        let m = DMat3::from_cols_array_2d(&[
             [self.n, self.s, self.c],
             [self.s, self.ss, self.sc],
             [self.c, self.sc, self.cc],
-        ];
-        let r = [self.y, self.ys, self.yc];
-        let det3 = |m: &[[f64; 3]; 3]| {
-            m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-        };
-        let det = det3(&m);
+        ]);
+        let det = m.determinant();
         if det.is_nan() || det.abs() <= 1e-12 * self.n.powi(3) {
             return None;
         }
-        let col = |j: usize| {
-            let mut mj = m;
-            for i in 0..3 {
-                mj[i][j] = r[i];
-            }
-            det3(&mj) / det
-        };
-        Some(Complex64::new(col(1), col(2)))
+        let x = m.inverse() * DVec3::new(self.y, self.ys, self.yc);
+        Some(Complex64::new(x.y, x.z))
     }
 }
 
