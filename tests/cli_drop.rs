@@ -348,8 +348,9 @@ fn bad_drop_parameters() {
     refuses(&["drop", "--particle", "glass"], &["--particle", "glass"]);
     refuses(&["drop", "--rig", "missing.toml"], &["missing.toml"]);
     let dir = Scratch::new("drop-rig");
-    let rig =
-        vlab::rig::DROP_RIG_TOML.replace("sample_rate_hz = 200000.0", "sample_rate_hz = 100000.5");
+    let rig = vlab::rig::builtin_toml("drop-test")
+        .expect("built in")
+        .replace("sample_rate_hz = 200000.0", "sample_rate_hz = 100000.5");
     dir.write("odd.toml", &rig);
     refuses_in(
         &dir,
@@ -358,7 +359,7 @@ fn bad_drop_parameters() {
     );
     dir.write(
         "shaker.toml",
-        vlab::rig::RigSpec::builtin_toml("ideal").expect("built in"),
+        vlab::rig::builtin_toml("ideal").expect("built in"),
     );
     refuses_in(
         &dir,

@@ -4,7 +4,7 @@
 
 use std::sync::OnceLock;
 
-use vlab::rig::{ACCEL_CHANNEL, RigSpec, ShakerKind};
+use vlab::rig::{ACCEL_CHANNEL, RigFile, RigSpec, ShakerKind};
 use vlab::scene::damper::{SettledBed, settle_bed};
 use vlab::scene::file::Scene;
 use vlab::scene::measurement::{

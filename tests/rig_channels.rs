@@ -6,7 +6,8 @@
 use std::f64::consts::PI;
 
 use vlab::rig::{
-    ACCEL_CHANNEL, Daq, FORCE_CHANNEL, RigSpec, Shaker, ShakerKind, transducer_force_n,
+    ACCEL_CHANNEL, Daq, EnclosureMotion, FORCE_CHANNEL, RigFile, RigSpec, Shaker, ShakerKind,
+    transducer_force_n,
 };
 use vlab::signals::{
     PhaseCorrection, PowerOptions, Trace, TraceMetadata, estimate_phase_error, yang_power_of_trace,

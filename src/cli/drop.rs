@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use vlab::atomic_write::{write_atomic, write_bytes_atomic};
-use vlab::rig::DropRigSpec;
+use vlab::rig::{DROP_RIG, DropRigSpec, RigFile};
 use vlab::scene::drop::{
     DROP_FRICTION, DROP_GRAVITY_MPS2, DemImpact, DropEstimate, DropNumerics, DropOutcome,
     DropParticle, DropSetup, run_drop,
@@ -183,7 +183,7 @@ fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
     let preset = a.particle.preset();
     let mut rig = match &a.rig {
         Some(path) => DropRigSpec::load(path)?,
-        None => DropRigSpec::builtin()?,
+        None => DropRigSpec::builtin(DROP_RIG)?,
     };
     if let Some(fs) = a.sample_rate_hz {
         rig.daq.sample_rate_hz = fs;

@@ -4,8 +4,7 @@
 use anyhow::{Result, bail};
 use clap::Args;
 
-use vlab::rig::RigSpec;
-use vlab::rig::drop_spec::{DROP_RIG, DROP_RIG_TOML, DropRigSpec};
+use vlab::rig::{DropRigSpec, RigFile, RigKind, RigSpec, builtin_rigs, builtin_toml};
 
 #[derive(Debug, Clone, Args)]
 pub struct RigArgs {
@@ -17,62 +16,66 @@ pub struct RigArgs {
     print: bool,
 }
 
+/// Names of every built-in rig, for messages.
+fn all_names() -> String {
+    builtin_rigs()
+        .map(|(n, _)| n)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 pub fn run(a: RigArgs) -> Result<()> {
     let Some(name) = a.name else {
         if a.print {
-            bail!(
-                "--print needs a rig NAME: one of {}, {DROP_RIG}",
-                RigSpec::names().join(", ")
-            );
+            bail!("--print needs a rig NAME: one of {}", all_names());
         }
-        for name in RigSpec::names() {
-            let rig = RigSpec::builtin(name)?;
-            println!("{name:14} {}", rig.description);
+        for (name, kind) in builtin_rigs() {
+            let description = match kind {
+                RigKind::Shaker => RigSpec::builtin(name)?.description,
+                RigKind::DropTest => DropRigSpec::builtin(name)?.description,
+            };
+            println!("{name:14} {kind:10} {description}");
         }
-        let drop = DropRigSpec::builtin()?;
-        println!("{DROP_RIG:14} {}", drop.description);
         println!(
             "(vlab rig NAME --print shows a rig's file; copy it, edit it, pass it with --rig FILE)"
         );
         return Ok(());
     };
-    let text = if name == DROP_RIG {
-        DROP_RIG_TOML
-    } else {
-        match RigSpec::builtin_toml(&name) {
-            Some(t) => t,
-            None => bail!(
-                "no built-in rig '{name}': the built-in rigs are {}, {DROP_RIG}",
-                RigSpec::names().join(", ")
-            ),
-        }
+    let Some((_, kind)) = builtin_rigs().find(|(n, _)| *n == name) else {
+        bail!(
+            "no built-in rig '{name}': the built-in rigs are {}",
+            all_names()
+        );
     };
     if a.print {
-        print!("{text}");
+        print!("{}", builtin_toml(&name).unwrap_or_default());
         return Ok(());
     }
-    if name == DROP_RIG {
-        let d = DropRigSpec::builtin()?;
-        println!("{}: {}", d.name, d.description);
-        println!(
-            "  plate rings at {:.0} Hz on its transducer; force sampled at {} Hz",
-            d.plate_natural_freq_hz(),
-            d.daq.sample_rate_hz
-        );
-    } else {
-        let r = RigSpec::builtin(&name)?;
-        println!("{}: {}", r.name, r.description);
-        println!(
-            "  enclosure above the gauge {} kg; default shaker {}; sample rate {} Hz",
-            r.enclosure.mass_kg,
-            super::shake_name(r.shaker.kind),
-            r.daq.sample_rate_hz
-        );
-        for f in [20.0, 40.0, 160.0] {
+    match kind {
+        RigKind::DropTest => {
+            let d = DropRigSpec::builtin(&name)?;
+            println!("{} ({kind} rig): {}", d.name, d.description);
             println!(
-                "  phase error of the model at {f} Hz: {:.4} deg",
-                r.expected_phase_error_rad(f).to_degrees()
+                "  plate rings at {:.0} Hz on its transducer; force sampled at {} Hz",
+                d.plate_natural_freq_hz(),
+                d.daq.sample_rate_hz
             );
+        }
+        RigKind::Shaker => {
+            let r = RigSpec::builtin(&name)?;
+            println!("{} ({kind} rig): {}", r.name, r.description);
+            println!(
+                "  enclosure above the gauge {} kg; default shaker {}; sample rate {} Hz",
+                r.enclosure.mass_kg,
+                super::shake_name(r.shaker.kind),
+                r.daq.sample_rate_hz
+            );
+            for f in [20.0, 40.0, 160.0] {
+                println!(
+                    "  phase error of the model at {f} Hz: {:.4} deg",
+                    r.expected_phase_error_rad(f).to_degrees()
+                );
+            }
         }
     }
     Ok(())

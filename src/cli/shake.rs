@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use vlab::atomic_write::write_bytes_atomic;
 use vlab::dem::{Dissipation, LedgerBalance};
-use vlab::rig::{RigSpec, ShakerKind, check_limits};
+use vlab::rig::{RigFile, RigSpec, ShakerKind, check_limits};
 use vlab::scene::damper::{DriveOutcome, settle_bed};
 use vlab::scene::file::{Orientation, Scene};
 use vlab::scene::measurement::{

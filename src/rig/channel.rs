@@ -317,6 +317,7 @@ mod tests {
     use std::f64::consts::PI;
 
     use super::*;
+    use crate::rig::RigFile;
     use crate::rig::spec::{LowPassSpec, RigSpec};
 
     const DT: f64 = 1e-6;

@@ -14,6 +14,7 @@ use serde_json::json;
 
 use super::channel::MeasurementChannel;
 use super::error::{InvalidParameter, RigError, finite, positive};
+use super::file::RigFile;
 use super::noise::GaussianNoise;
 use super::spec::{ChannelParams, RigSpec, Sampling};
 use crate::signals::{Sensitivity, Trace, TraceMetadata};

@@ -13,6 +13,7 @@
 //! The record starts at the release (t = 0), sample `k` at `k / fs`; its single
 //! channel is `force` (N), the transducer's reading (compression positive).
 
+use super::file::RigFile;
 use serde_json::json;
 
 use super::channel::MeasurementChannel;
@@ -228,10 +229,11 @@ impl DropRig {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rig::DROP_RIG;
 
     #[test]
     fn a_hammer_blow_is_recorded_at_its_time_and_the_rest_is_noise() {
-        let spec = DropRigSpec::builtin().expect("built in");
+        let spec = DropRigSpec::builtin(DROP_RIG).expect("built in");
         let tick = 0.3125e-6;
         let mut rig = DropRig::new(&spec, tick, 5).expect("valid");
         rig.reserve(0.02);
@@ -268,7 +270,7 @@ mod tests {
 
     #[test]
     fn tick_longer_than_a_sample_is_refused() {
-        let spec = DropRigSpec::builtin().expect("built in");
+        let spec = DropRigSpec::builtin(DROP_RIG).expect("built in");
         let err = DropRig::new(&spec, 1e-5, 1).expect_err("too coarse");
         assert!(err.to_string().starts_with("tick_s = 0.00001 s"), "{err}");
     }

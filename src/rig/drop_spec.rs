@@ -11,18 +11,14 @@
 //! This module knows nothing of the DEM: the plate's elastic constants are plain
 //! numbers here; the scene turns them into a contact material.
 
-use std::path::Path;
-
 use serde::{Deserialize, Serialize};
 
 use super::error::{InvalidParameter, RigError, positive};
-use super::spec::{ChannelParams, DaqSpec, ForceSpec, RIG_VERSION};
+use super::file::{RigFile, RigKind, check_header, drop_test_kind};
+use super::spec::{ChannelParams, DaqSpec, ForceSpec};
 
 /// Name of the built-in drop rig.
 pub const DROP_RIG: &str = "drop-test";
-
-/// The built-in drop rig's TOML text.
-pub const DROP_RIG_TOML: &str = include_str!("../../rig/drop-test.toml");
 
 /// Longest record a drop rig may ask for, s (memory: 1 min at 1 MHz is 480 MB).
 pub const MAX_RECORD_LENGTH_S: f64 = 60.0;
@@ -31,8 +27,11 @@ pub const MAX_RECORD_LENGTH_S: f64 = 60.0;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DropRigSpec {
-    /// File format version; must be [`RIG_VERSION`].
+    /// File format version; must be [`super::file::RIG_VERSION`].
     pub version: u32,
+    /// Always `drop-test` (optional in files).
+    #[serde(default = "drop_test_kind")]
+    pub kind: RigKind,
     /// Rig name, written into trace metadata.
     pub name: String,
     /// One or two sentences on what this rig is.
@@ -84,46 +83,6 @@ pub struct RecordSpec {
 }
 
 impl DropRigSpec {
-    /// The built-in `drop-test` rig.
-    pub fn builtin() -> Result<DropRigSpec, RigError> {
-        Self::from_toml_str(DROP_RIG_TOML, &format!("built-in rig '{DROP_RIG}'"))
-    }
-
-    /// Reads a drop rig file: a complete rig, every required key present.
-    pub fn load(path: &Path) -> Result<DropRigSpec, RigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| RigError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Self::from_toml_str(&text, &path.display().to_string())
-    }
-
-    /// The built-in rig by its name, else a drop rig file at that path.
-    pub fn from_name_or_path(name_or_path: &str) -> Result<DropRigSpec, RigError> {
-        if name_or_path == DROP_RIG {
-            return Self::builtin();
-        }
-        let path = Path::new(name_or_path);
-        if path.is_file() {
-            return Self::load(path);
-        }
-        Err(RigError::UnknownRig {
-            name: name_or_path.to_string(),
-            available: DROP_RIG.to_string(),
-        })
-    }
-
-    /// Parses and validates a drop rig from TOML text; `origin` names the
-    /// source in messages.
-    pub fn from_toml_str(text: &str, origin: &str) -> Result<DropRigSpec, RigError> {
-        super::spec::parse_versioned(text, origin, DropRigSpec::validate)
-    }
-
-    /// The rig as TOML (parses back to an equal rig).
-    pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot print rig: {e}\n"))
-    }
-
     /// The force channel in common terms.
     pub fn force_channel(&self) -> ChannelParams {
         let f = &self.force;
@@ -142,23 +101,17 @@ impl DropRigSpec {
         }
     }
 
-    /// Checks every value; the error names the key, its unit and valid range.
-    pub fn validate(&self) -> Result<(), RigError> {
-        if self.version != RIG_VERSION {
-            return Err(RigError::Version {
-                origin: format!("rig '{}'", self.name),
-                found: self.version,
-                supported: RIG_VERSION,
-            });
-        }
-        if self.name.trim().is_empty() {
-            return Err(RigError::from(InvalidParameter::new(
-                "name",
-                "\"\"",
-                "",
-                "a non-empty rig name",
-            )));
-        }
+    /// Undamped natural frequency of the plate on its mount, Hz.
+    pub fn plate_natural_freq_hz(&self) -> f64 {
+        (self.mount.stiffness_n_per_m / self.plate.mass_kg).sqrt() / (2.0 * std::f64::consts::PI)
+    }
+}
+
+impl RigFile for DropRigSpec {
+    const KIND: RigKind = RigKind::DropTest;
+
+    fn validate(&self) -> Result<(), RigError> {
+        check_header(self.version, self.kind, Self::KIND, &self.name)?;
         let p = &self.plate;
         positive("plate.mass_kg", p.mass_kg, "kg")?;
         positive("plate.youngs_pa", p.youngs_pa, "Pa")?;
@@ -200,20 +153,18 @@ impl DropRigSpec {
         }
         Ok(())
     }
-
-    /// Undamped natural frequency of the plate on its mount, Hz.
-    pub fn plate_natural_freq_hz(&self) -> f64 {
-        (self.mount.stiffness_n_per_m / self.plate.mass_kg).sqrt() / (2.0 * std::f64::consts::PI)
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
+
+    const DROP_RIG_TOML: &str = include_str!("../../rig/drop-test.toml");
 
     #[test]
     fn builtin_parses_round_trips_and_matches_the_checked_in_file() {
-        let rig = DropRigSpec::builtin().expect("built in");
+        let rig = DropRigSpec::builtin(DROP_RIG).expect("built in");
         assert_eq!(rig.name, DROP_RIG);
         assert_eq!(rig.daq.sample_rate_hz, 200_000.0, "thesis Section 7.3");
         let back = DropRigSpec::from_toml_str(&rig.to_toml(), "printed").expect("reparses");

@@ -78,6 +78,25 @@ pub enum RigError {
         /// The TOML parser's message (names the key, line and column).
         message: String,
     },
+    /// A value of a rig file is refused.
+    #[error("{origin}: {source}")]
+    InFile {
+        /// File path or built-in name.
+        origin: String,
+        /// What is wrong with it.
+        #[source]
+        source: Box<RigError>,
+    },
+    /// A rig file of another kind than the one needed.
+    #[error("{origin} is a {found} rig; a {wanted} rig is needed here")]
+    WrongKind {
+        /// File path or built-in name.
+        origin: String,
+        /// Kind of the file.
+        found: super::file::RigKind,
+        /// Kind needed.
+        wanted: super::file::RigKind,
+    },
     /// A rig file of another format version.
     #[error(
         "{origin}: version = {found} is not supported: this vlab reads rig files of version {supported}"

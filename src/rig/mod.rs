@@ -2,8 +2,10 @@
 //! the shaker that moves the enclosure, the force transducer and the
 //! accelerometer on it, the signal conditioner and the digitiser.
 //!
-//! - [`spec`]: rig files (`rig/*.toml`, strict, versioned) and the built-in
-//!   rigs `thesis-shaker` (default) and `ideal`; the model's own phase error;
+//! - [`file`]: the one rig-file loader: built-in rigs, version, kind tag,
+//!   strict keys, validation ([`RigFile`]);
+//! - [`spec`]: shaker rigs (`kind = "shaker"`) and the built-in rigs
+//!   `thesis-shaker` (default) and `ideal`; the model's own phase error;
 //! - [`motion`]: the one enclosure-motion abstraction ([`EnclosureMotion`],
 //!   [`Kinematics`]) and the prescribed sine of eq. 6.2 / 7.6 ([`SineMotion`]);
 //! - [`shaker`]: the rig's drive, prescribed or a lumped electrodynamic
@@ -13,7 +15,8 @@
 //! - [`channel`]: one channel: sensitivity, gain, AC coupling, anti-alias
 //!   filter, sampling with skew, noise, ADC;
 //! - [`daq`]: both channels sampled into a [`crate::signals::Trace`];
-//! - [`drop_spec`]: the drop-test rig file (`rig/drop-test.toml`, built in);
+//! - [`drop_spec`]: drop-test rigs (`kind = "drop-test"`,
+//!   `rig/drop-test.toml` built in);
 //! - [`plate`]: the drop rig's base plate ringing on its force transducer;
 //! - [`drop_rig`]: plate and force channel on one clock, recording a drop test;
 //! - [`filter`], [`discretise`], [`noise`]: the numerical pieces.
@@ -34,6 +37,7 @@ pub mod discretise;
 pub mod drop_rig;
 pub mod drop_spec;
 pub mod error;
+pub mod file;
 pub mod filter;
 pub mod motion;
 pub mod noise;
@@ -45,13 +49,14 @@ pub mod transducer;
 pub use channel::{Adc, MeasurementChannel};
 pub use daq::{ACCEL_CHANNEL, ChannelReport, Daq, DaqReport, FORCE_CHANNEL};
 pub use drop_rig::{DROP_FORCE_CHANNEL, DropRig, DropRigReport};
-pub use drop_spec::{DROP_RIG, DROP_RIG_TOML, DropRigSpec, MountSpec, PlateSpec, RecordSpec};
+pub use drop_spec::{DROP_RIG, DropRigSpec, MountSpec, PlateSpec, RecordSpec};
 pub use error::{Result, RigError};
+pub use file::{RIG_VERSION, RigFile, RigKind, builtin_rigs, builtin_toml};
 pub use motion::{EnclosureMotion, Kinematics, SineMotion};
 pub use plate::Plate;
 pub use shaker::{ElectrodynamicShaker, Shaker, ShakerReport, check_limits};
 pub use spec::{
     AccelerometerSpec, ChannelParams, DEFAULT_RIG, DaqSpec, ElectrodynamicSpec, EnclosureSpec,
-    ForceSpec, LowPassSpec, RIG_VERSION, RigSpec, Sampling, ShakerKind, ShakerSpec,
+    ForceSpec, LowPassSpec, RigSpec, Sampling, ShakerKind, ShakerSpec,
 };
 pub use transducer::transducer_force_n;

@@ -190,9 +190,10 @@ impl Plate {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rig::{DROP_RIG, RigFile};
 
     fn rig_plate() -> Plate {
-        Plate::from_spec(&DropRigSpec::builtin().expect("built in")).expect("valid")
+        Plate::from_spec(&DropRigSpec::builtin(DROP_RIG).expect("built in")).expect("valid")
     }
 
     #[test]
@@ -204,7 +205,7 @@ mod tests {
         let x0 = 1e-6;
         for (dt, steps) in [(0.3e-6, 1000u32), (1e-3 / 3.0, 1)] {
             let mut p = p0.clone();
-            p.z = [x0, 0.0, 0.0];
+            p.z = DVec3::new(x0, 0.0, 0.0);
             for _ in 0..steps {
                 p.advance(dt, 0.0);
             }
@@ -224,7 +225,7 @@ mod tests {
     fn impulse_rings_at_j_w_and_static_load_reads_its_weight() {
         // Undamped: a short impulse J rings the transducer with amplitude
         // J w_n, less cos(w_n w / 2) - 1 = 5e-4 for a 1 us pulse at 10 kHz.
-        let rig = DropRigSpec::builtin().expect("built in");
+        let rig = DropRigSpec::builtin(DROP_RIG).expect("built in");
         let mut p = Plate::new(rig.plate.mass_kg, rig.mount.stiffness_n_per_m, 0.0).expect("valid");
         let (j, width) = (1e-4, 1e-6);
         let steps = 10;

@@ -549,6 +549,7 @@ impl EnclosureMotion for Shaker {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rig::RigFile;
 
     const G: f64 = 9.81;
 

@@ -19,29 +19,18 @@
 //! calibration of Fig. 7.9 estimates, is [`RigSpec::expected_phase_error_rad`].
 
 use std::f64::consts::PI;
-use std::path::Path;
 
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use super::error::{InvalidParameter, RigError, finite, non_negative, positive};
+use super::file::{RigFile, RigKind, check_header, shaker_kind};
 use super::filter::{MAX_LOW_PASS_ORDER, butterworth_response, high_pass_response};
 use crate::signals::wrap_phase_rad;
-
-/// Version written into, and required of, rig files.
-pub const RIG_VERSION: u32 = 1;
+use crate::validation::count_in;
 
 /// Name of the default rig.
 pub const DEFAULT_RIG: &str = "thesis-shaker";
-
-/// The built-in rig files, by name.
-const BUILTIN: [(&str, &str); 2] = [
-    (
-        "thesis-shaker",
-        include_str!("../../rig/thesis-shaker.toml"),
-    ),
-    ("ideal", include_str!("../../rig/ideal.toml")),
-];
 
 /// How the enclosure is moved.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -62,6 +51,9 @@ pub enum ShakerKind {
 pub struct RigSpec {
     /// File format version; must be [`RIG_VERSION`].
     pub version: u32,
+    /// Always `shaker` (optional in files).
+    #[serde(default = "shaker_kind")]
+    pub kind: RigKind,
     /// Rig name, written into trace metadata.
     pub name: String,
     /// One or two sentences on what this rig is.
@@ -372,98 +364,7 @@ impl ChannelParams {
     }
 }
 
-/// Parses a versioned rig file of type `T` and validates it with `validate`.
-/// The version is checked first, so that a file of another version is not
-/// blamed for keys this version does not know; errors name `origin`.
-pub(crate) fn parse_versioned<T: serde::de::DeserializeOwned>(
-    text: &str,
-    origin: &str,
-    validate: impl Fn(&T) -> Result<(), RigError>,
-) -> Result<T, RigError> {
-    if let Ok(table) = text.parse::<toml::Table>()
-        && let Some(v) = table.get("version").and_then(toml::Value::as_integer)
-        && v != i64::from(RIG_VERSION)
-    {
-        return Err(RigError::Version {
-            origin: origin.to_string(),
-            found: u32::try_from(v).unwrap_or(u32::MAX),
-            supported: RIG_VERSION,
-        });
-    }
-    let spec: T = toml::from_str(text).map_err(|e| RigError::Parse {
-        origin: origin.to_string(),
-        message: e.to_string().trim_end().to_string(),
-    })?;
-    validate(&spec).map_err(|e| match e {
-        RigError::Version { found, .. } => RigError::Version {
-            origin: origin.to_string(),
-            found,
-            supported: RIG_VERSION,
-        },
-        other => RigError::Parse {
-            origin: origin.to_string(),
-            message: other.to_string(),
-        },
-    })?;
-    Ok(spec)
-}
-
 impl RigSpec {
-    /// Names of the built-in rigs; the first is the default.
-    pub fn names() -> Vec<&'static str> {
-        BUILTIN.iter().map(|(n, _)| *n).collect()
-    }
-
-    /// The TOML text of a built-in rig.
-    pub fn builtin_toml(name: &str) -> Option<&'static str> {
-        BUILTIN.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
-    }
-
-    /// A built-in rig by name.
-    pub fn builtin(name: &str) -> Result<RigSpec, RigError> {
-        let text = Self::builtin_toml(name).ok_or_else(|| RigError::UnknownRig {
-            name: name.to_string(),
-            available: Self::names().join(", "),
-        })?;
-        Self::from_toml_str(text, &format!("built-in rig '{name}'"))
-    }
-
-    /// Reads a rig file: a complete rig, every required key present (nothing
-    /// is merged from a built-in).
-    pub fn load(path: &Path) -> Result<RigSpec, RigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| RigError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Self::from_toml_str(&text, &path.display().to_string())
-    }
-
-    /// A built-in name, else a path to a rig file.
-    pub fn from_name_or_path(name_or_path: &str) -> Result<RigSpec, RigError> {
-        if Self::builtin_toml(name_or_path).is_some() {
-            return Self::builtin(name_or_path);
-        }
-        let path = Path::new(name_or_path);
-        if path.is_file() {
-            return Self::load(path);
-        }
-        Err(RigError::UnknownRig {
-            name: name_or_path.to_string(),
-            available: Self::names().join(", "),
-        })
-    }
-
-    /// Parses and validates a rig from TOML text; `origin` names the source in
-    /// messages.
-    pub fn from_toml_str(text: &str, origin: &str) -> Result<RigSpec, RigError> {
-        parse_versioned(text, origin, RigSpec::validate)
-    }
-
-    /// The rig as TOML (parses back to an equal rig).
-    pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot print rig: {e}\n"))
-    }
-
     /// The accelerometer channel in common terms.
     pub fn accel_channel(&self) -> ChannelParams {
         let a = &self.accelerometer;
@@ -514,24 +415,13 @@ impl RigSpec {
         let ha = self.accel_channel().response(freq_hz, fs);
         wrap_phase_rad(hf.arg() - ha.arg())
     }
+}
 
-    /// Checks every value; the error names the key, its unit and valid range.
-    pub fn validate(&self) -> Result<(), RigError> {
-        if self.version != RIG_VERSION {
-            return Err(RigError::Version {
-                origin: format!("rig '{}'", self.name),
-                found: self.version,
-                supported: RIG_VERSION,
-            });
-        }
-        if self.name.trim().is_empty() {
-            return Err(RigError::from(InvalidParameter::new(
-                "name",
-                "\"\"",
-                "",
-                "a non-empty rig name",
-            )));
-        }
+impl RigFile for RigSpec {
+    const KIND: RigKind = RigKind::Shaker;
+
+    fn validate(&self) -> Result<(), RigError> {
+        check_header(self.version, self.kind, Self::KIND, &self.name)?;
         positive("enclosure.mass_kg", self.enclosure.mass_kg, "kg")?;
         let s = &self.shaker;
         if let Some(v) = s.stroke_pp_m {
@@ -564,14 +454,7 @@ impl DaqSpec {
     /// Checks sample rate, bits and full scale.
     pub fn validate(&self) -> Result<(), RigError> {
         positive("daq.sample_rate_hz", self.sample_rate_hz, "Hz")?;
-        if !(1..=32).contains(&self.bits) {
-            return Err(RigError::from(InvalidParameter::new(
-                "daq.bits",
-                self.bits,
-                "bits",
-                "an integer in 1..=32",
-            )));
-        }
+        count_in("daq.bits", self.bits, "bits", 1, Some(32))?;
         positive("daq.full_scale_v", self.full_scale_v, "V")?;
         Ok(())
     }
@@ -623,9 +506,10 @@ impl ElectrodynamicSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rig::builtin_toml;
 
     fn thesis_text() -> &'static str {
-        RigSpec::builtin_toml("thesis-shaker").expect("built in")
+        builtin_toml("thesis-shaker").expect("built in")
     }
 
     fn parse_err(text: &str) -> String {
@@ -645,27 +529,6 @@ mod tests {
         }
         let msg = RigSpec::builtin("nope").expect_err("unknown").to_string();
         assert!(msg.contains("thesis-shaker, ideal"), "{msg}");
-    }
-
-    #[test]
-    fn every_checked_in_rig_file_parses() {
-        // Every file in rig/ is a rig: shaker rigs have a [shaker] section.
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("rig");
-        let mut rigs = 0;
-        for entry in std::fs::read_dir(&dir).expect("rig/ exists") {
-            let path = entry.expect("entry").path();
-            if path.extension().is_none_or(|e| e != "toml") {
-                continue;
-            }
-            let text = std::fs::read_to_string(&path).expect("readable");
-            let table: toml::Table = text.parse().expect("valid TOML");
-            if !table.contains_key("shaker") {
-                continue;
-            }
-            RigSpec::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            rigs += 1;
-        }
-        assert!(rigs >= 2, "found {rigs} rig files");
     }
 
     #[test]

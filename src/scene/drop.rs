@@ -65,6 +65,7 @@
 //! 1 ms, the sphere is taken to rest on the plate: the DEM stops and the rig
 //! carries the sphere's weight to the end of the record.
 
+use crate::rig::{DROP_RIG, RigFile};
 use std::time::Instant;
 
 use glam::DVec3;
@@ -238,7 +239,7 @@ impl DropSetup {
             restitution: particle.restitution(),
             friction: DROP_FRICTION,
             height_m,
-            rig: DropRigSpec::builtin()?,
+            rig: DropRigSpec::builtin(DROP_RIG)?,
             gravity_mps2: DROP_GRAVITY_MPS2,
             seed: 1,
             numerics: DropNumerics::default(),
