@@ -35,6 +35,45 @@ pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     write_atomic(path, |w| w.write_all(bytes))
 }
 
+/// An output folder made before a long run, so that an unwritable path fails
+/// at once; if the run fails, [`OutputDir::keep_if_ok`] removes every folder it
+/// made again (innermost first, and only while empty).
+#[derive(Debug)]
+pub struct OutputDir {
+    created: Vec<PathBuf>,
+}
+
+impl OutputDir {
+    /// Creates `path` and any missing parents.
+    pub fn prepare(path: &Path) -> io::Result<Self> {
+        if path.is_file() {
+            return Err(io::Error::new(
+                io::ErrorKind::AlreadyExists,
+                format!("{} is a file, not a folder", path.display()),
+            ));
+        }
+        let created: Vec<PathBuf> = path
+            .ancestors()
+            .take_while(|p| !p.as_os_str().is_empty() && !p.exists())
+            .map(Path::to_path_buf)
+            .collect();
+        fs::create_dir_all(path)?;
+        Ok(OutputDir { created })
+    }
+
+    /// Passes `result` through; on error removes the folders this run made.
+    pub fn keep_if_ok<T, E>(&self, result: Result<T, E>) -> Result<T, E> {
+        if result.is_err() {
+            for dir in &self.created {
+                if fs::remove_dir(dir).is_err() {
+                    break;
+                }
+            }
+        }
+        result
+    }
+}
+
 fn temporary_name(path: &Path) -> PathBuf {
     let name = path
         .file_name()

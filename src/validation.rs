@@ -111,7 +111,7 @@ impl Bound {
 /// `in (0, 1]`, `<= 4 and finite`.
 pub fn describe_range(lo: Bound, hi: Bound) -> String {
     match (lo, hi) {
-        (Bound::Open(a), Bound::Unbounded) if a == 0.0 => "positive and finite".into(),
+        (Bound::Open(0.0), Bound::Unbounded) => "positive and finite".into(),
         (Bound::Open(a), Bound::Unbounded) => format!("> {a} and finite"),
         (Bound::Closed(a), Bound::Unbounded) => format!(">= {a} and finite"),
         (Bound::Unbounded, Bound::Open(b)) => format!("< {b}"),

@@ -1,5 +1,7 @@
 //! Same scene and seed give bit-identical physics whatever the thread count.
 
+#![cfg(all(feature = "cli", feature = "plot"))]
+
 mod common;
 
 use common::{Scratch, json, stderr, vlab};

@@ -1,5 +1,7 @@
 //! `vlab impact` end to end: the JSON keys of the issue and the contact trace.
 
+#![cfg(all(feature = "cli", feature = "plot"))]
+
 mod common;
 
 use common::{Scratch, stderr, vlab};

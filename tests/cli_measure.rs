@@ -1,5 +1,7 @@
 //! `vlab shake` through the rig, `vlab analyze`, `vlab calibrate`, end to end.
 
+#![cfg(all(feature = "cli", feature = "plot"))]
+
 mod common;
 
 use common::{Scratch, json, refuses_in, stderr, vlab};

@@ -1,5 +1,7 @@
 //! `vlab shake` end to end on the thesis scene.
 
+#![cfg(all(feature = "cli", feature = "plot"))]
+
 mod common;
 
 use common::{Scratch, json, stderr, vlab};

@@ -1,6 +1,8 @@
 //! The tutorial's commands run, in order, so that `docs/tutorial.md` cannot rot.
 //! Lines marked `# takes minutes` are skipped.
 
+#![cfg(all(feature = "cli", feature = "plot"))]
+
 mod common;
 
 use std::process::Command;

@@ -3,6 +3,8 @@
 //! table, store a damper run as CSV and as WAV, read everything back and
 //! recover the dissipated power and efficiency.
 
+#![cfg(all(feature = "cli", feature = "plot"))]
+
 use std::f64::consts::PI;
 use std::path::PathBuf;
 

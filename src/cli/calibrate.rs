@@ -10,12 +10,13 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::Serialize;
 
+use vlab::rig::ShakerKind;
 use vlab::scene::damper::DrivePlan;
 use vlab::scene::file::Scene;
 use vlab::scene::measurement::calibrate_rig;
+use vlab::scene::shake::resolve_rig;
 
 use super::args;
-use super::shake::{ShakerChoice, resolve_rig};
 
 #[derive(Debug, Clone, Args)]
 #[command(allow_negative_numbers = true)]
@@ -31,7 +32,7 @@ pub struct CalibrateArgs {
     rig: String,
     /// How the enclosure is moved [default: the rig's own].
     #[arg(long, value_enum)]
-    shaker: Option<ShakerChoice>,
+    shaker: Option<ShakerKind>,
     /// Drive cycles per run; the last --record-cycles are recorded, as in a
     /// damper run.
     #[arg(long, default_value = "8")]
@@ -72,7 +73,10 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
     let mut rig_and_kind = None;
     for &f in &a.freqs_hz {
         for &gamma in &a.gammas {
-            rig_and_kind = Some(resolve_rig(&a.rig, a.shaker, f, gamma, g)?);
+            rig_and_kind = Some(
+                resolve_rig(&a.rig, a.shaker, f, gamma, g)
+                    .with_context(|| format!("--rig {}", a.rig))?,
+            );
         }
     }
     let Some((rig, kind)) = rig_and_kind else {

@@ -18,7 +18,7 @@ use clap::{Args, ValueEnum};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use vlab::atomic_write::{write_atomic, write_bytes_atomic};
+use vlab::atomic_write::{OutputDir, write_atomic, write_bytes_atomic};
 use vlab::rig::{DROP_RIG, DropRigSpec, RigFile};
 use vlab::scene::drop::{
     DROP_FRICTION, DROP_GRAVITY_MPS2, DemImpact, DropEstimate, DropNumerics, DropOutcome,
@@ -28,7 +28,6 @@ use vlab::scene::validity::yield_warning;
 use vlab::signals::{ImpactParams, Series, SeriesStyle, plot_xy_svg, write_csv, write_wav};
 
 use super::args;
-use super::shake::OutputDir;
 
 /// The built-in particles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -11,15 +11,16 @@ use clap::Args;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use vlab::atomic_write::write_atomic;
+use vlab::atomic_write::{OutputDir, write_atomic};
 use vlab::rig::SineMotion;
 use vlab::scene::damper::{DrivePlan, NoObserver, SettledBed, run_drive, settle_bed};
 use vlab::scene::file::Scene;
+use vlab::scene::shake::check_drive;
 use vlab::signals::{Series, SeriesStyle, plot_xy_svg};
 
 use super::args;
 use super::progress::ProgressLine;
-use super::shake::{OutputDir, SceneOverrides, check_drive, compact};
+use super::shake::SceneArgs;
 
 #[derive(Debug, Clone, Args)]
 #[command(allow_negative_numbers = true)]
@@ -39,7 +40,7 @@ pub struct SweepArgs {
     )]
     seeds: Vec<u64>,
     #[command(flatten)]
-    scene: SceneOverrides,
+    scene: SceneArgs,
     /// Output folder [default: signals/sweep-<scene>-<freq>Hz].
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -78,7 +79,7 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
     let scene = a.scene.resolve()?;
     check_drive(&scene, a.freq_hz)?;
     let out_dir = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from("signals").join(format!("sweep-{}-{}Hz", scene.name, compact(a.freq_hz)))
+        PathBuf::from("signals").join(format!("sweep-{}-{}Hz", scene.name, a.freq_hz))
     });
     let made = OutputDir::prepare(&out_dir)?;
     let progress = Mutex::new(ProgressLine::new("sweep", quiet));

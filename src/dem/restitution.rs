@@ -26,6 +26,7 @@ use std::f64::consts::PI;
 
 /// How the damping factor β is derived from the configured restitution.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum RestitutionMode {
     /// β from thesis eq. 5.29 / 5.32 as written; the realised e drifts above the target.

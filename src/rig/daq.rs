@@ -119,7 +119,7 @@ impl Daq {
                 "dem_dt_s",
                 dem_dt_s,
                 "s",
-                &format!(
+                format!(
                     "at most one sample period, {period} s at daq.sample_rate_hz = {} Hz",
                     spec.daq.sample_rate_hz
                 ),

@@ -67,9 +67,10 @@ mod tests {
             [-w * s, c, 0.0],
             [0.0, 0.0, (-2.0 * dt).exp()],
         ];
-        for i in 0..3 {
-            for j in 0..3 {
-                assert!((phi.row(i)[j] - want[i][j]).abs() < 1e-13, "{i}{j}");
+        for (i, row) in want.iter().enumerate() {
+            let got = phi.row(i);
+            for (j, w) in row.iter().enumerate() {
+                assert!((got[j] - w).abs() < 1e-13, "{i}{j}");
             }
         }
         assert!((g[0] - (1.0 - c) / (w * w)).abs() < 1e-14);

@@ -70,7 +70,7 @@ impl DropRig {
                 "tick_s",
                 tick_s,
                 "s",
-                &format!(
+                format!(
                     "at most one sample period, {period} s at daq.sample_rate_hz = {} Hz",
                     spec.daq.sample_rate_hz
                 ),

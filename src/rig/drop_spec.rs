@@ -148,7 +148,7 @@ impl RigFile for DropRigSpec {
                 "record.length_s",
                 len,
                 "s",
-                &format!("positive, at most {MAX_RECORD_LENGTH_S} s"),
+                format!("positive, at most {MAX_RECORD_LENGTH_S} s"),
             )));
         }
         Ok(())

@@ -34,9 +34,10 @@ pub const DEFAULT_RIG: &str = "thesis-shaker";
 
 /// How the enclosure is moved.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum ShakerKind {
-    /// The motion is exactly `u = Gamma g / w^2 sin(w t)` (thesis eq. 6.2 / 7.6),
+    /// The enclosure follows u = Gamma g / w^2 sin(w t) exactly (thesis eq. 6.2 / 7.6),
     /// whatever the particles do.
     #[default]
     Prescribed,
@@ -335,10 +336,10 @@ impl ChannelParams {
             }
             if lp.cutoff_hz <= self.high_pass_hz {
                 return Err(RigError::from(InvalidParameter::new(
-                    &key("low_pass.cutoff_hz"),
+                    key("low_pass.cutoff_hz"),
                     lp.cutoff_hz,
                     "Hz",
-                    &format!(
+                    format!(
                         "above the high-pass corner {} Hz ({})",
                         self.high_pass_hz,
                         key("high_pass_hz")
@@ -350,10 +351,10 @@ impl ChannelParams {
         let period = 1.0 / sample_rate_hz;
         if self.sample_skew_s.abs() >= 0.5 * period {
             return Err(RigError::from(InvalidParameter::new(
-                &key("sample_skew_s"),
+                key("sample_skew_s"),
                 self.sample_skew_s,
                 "s",
-                &format!(
+                format!(
                     "less than half a sample period ({} s at daq.sample_rate_hz = {} Hz) in magnitude",
                     0.5 * period,
                     sample_rate_hz
@@ -484,7 +485,7 @@ impl ElectrodynamicSpec {
         )?;
         if !(self.loop_gain > 0.0 && self.loop_gain <= 1.0) {
             return Err(RigError::from(InvalidParameter::new(
-                &k("loop_gain"),
+                k("loop_gain"),
                 self.loop_gain,
                 "",
                 "in (0, 1]",
@@ -493,7 +494,7 @@ impl ElectrodynamicSpec {
         let f = self.feedforward_particle_fraction;
         if !(0.0..=1.0).contains(&f) {
             return Err(RigError::from(InvalidParameter::new(
-                &k("feedforward_particle_fraction"),
+                k("feedforward_particle_fraction"),
                 f,
                 "",
                 "in [0, 1]",

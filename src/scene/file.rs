@@ -82,6 +82,12 @@ pub enum SceneError {
         "the settled bed is {height_mm:.1} mm high, taller than the enclosure (enclosure.inner_length_m = {length_m} m): reduce particles.count or lengthen the enclosure"
     )]
     BedTooTall { height_mm: f64, length_m: f64 },
+    /// An output file could not be written.
+    #[error("cannot write {}", path.display())]
+    Write {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
     #[error(transparent)]
     Dem(#[from] DemError),
     #[error(transparent)]
@@ -130,7 +136,8 @@ pub fn material_preset(name: &str) -> Option<Material> {
 }
 
 /// Gravity relative to the cylinder (and drive) axis.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Orientation {
     /// Axis along gravity.
@@ -360,12 +367,12 @@ impl Scene {
         non_negative("simulation.gravity_mps2", s.gravity_mps2, "m/s^2")?;
         let d = &self.drive;
         count_in("drive.cycles", d.cycles, "", 1, None)?;
-        count_in(
+        require(
+            (1..=d.cycles).contains(&d.steady_cycles),
             "drive.steady_cycles",
             d.steady_cycles,
             "",
-            1,
-            Some(d.cycles),
+            format!("in [1, drive.cycles = {}]", d.cycles),
         )?;
         Ok(())
     }
@@ -449,6 +456,66 @@ impl Scene {
         );
         let pw = hertz_theory::yield_velocity_mps(m, effective_youngs_pa(&pm, &wm), r, y);
         Some((pp, pw))
+    }
+}
+
+/// Changes to a scene that a caller (the command line, a sweep) makes over a
+/// scene file; [`SceneOverrides::apply`] validates the result, and a refusal
+/// names the scene key (`drive.cycles`), which the caller may map to its own
+/// name for the value.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SceneOverrides {
+    /// `drive.cycles`.
+    pub cycles: Option<u32>,
+    /// `drive.steady_cycles`.
+    pub steady_cycles: Option<u32>,
+    /// `enclosure.orientation`.
+    pub orientation: Option<Orientation>,
+    /// `simulation.seed`.
+    pub seed: Option<u64>,
+    /// `simulation.dt_s`.
+    pub dt_s: Option<f64>,
+}
+
+impl SceneOverrides {
+    /// `scene` with the overrides applied, validated.
+    pub fn apply(&self, mut scene: Scene) -> Result<Scene, SceneError> {
+        if let Some(c) = self.cycles {
+            scene.drive.cycles = c;
+        }
+        if let Some(s) = self.steady_cycles {
+            scene.drive.steady_cycles = s;
+        }
+        if let Some(o) = self.orientation {
+            scene.enclosure.orientation = o;
+        }
+        if let Some(seed) = self.seed {
+            scene.simulation.seed = seed;
+        }
+        if let Some(dt) = self.dt_s {
+            scene.simulation.dt_s = TimeStepSpec::Seconds(dt);
+        }
+        scene.validate()?;
+        Ok(scene)
+    }
+}
+
+impl Scene {
+    /// The built-in scene, or the file at `path` merged over it.
+    pub fn load_or_thesis(path: Option<&Path>) -> Result<Scene, SceneError> {
+        match path {
+            Some(p) => Scene::load_over_preset(p),
+            None => Ok(Scene::thesis()),
+        }
+    }
+
+    /// Sets the steady (recorded) part of the drive to `duration_s` at
+    /// `freq_hz` (at least 2 whole cycles), keeping the transient cycles.
+    pub fn set_record_length(&mut self, duration_s: f64, freq_hz: f64) {
+        let steady = (duration_s * freq_hz).ceil().max(2.0) as u32;
+        let transient = self.drive.cycles - self.drive.steady_cycles;
+        self.drive.cycles = transient + steady;
+        self.drive.steady_cycles = steady;
     }
 }
 

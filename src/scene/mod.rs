@@ -10,4 +10,5 @@ pub mod fill;
 pub mod impact;
 pub mod measurement;
 pub mod record;
+pub mod shake;
 pub mod validity;

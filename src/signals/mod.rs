@@ -21,6 +21,7 @@ pub mod calibration;
 pub mod csv;
 pub mod error;
 pub mod impacts;
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod power;
 pub mod spectrum;
@@ -39,6 +40,7 @@ pub use impacts::{
     CorEstimate, DropTestResult, Impact, ImpactDetection, ImpactParams, Polarity, detect_impacts,
     estimate_cor, restitution_from_impact_times,
 };
+#[cfg(feature = "plot")]
 pub use plot::{Series, SeriesStyle, plot_xy_svg};
 pub use power::{
     BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,

@@ -1,0 +1,422 @@
+//! The main job, `vlab shake`, as library API: a damper filled, settled,
+//! driven through a rig and measured, with the DEM truth beside the
+//! measurement (thesis eq. 6.3–6.10 and Section 7.4.2), and the files a lab
+//! run leaves behind.
+//!
+//! ```no_run
+//! use vlab::scene::file::Scene;
+//! use vlab::scene::measurement::{CalibrationSource, ShakeSetup};
+//! use vlab::scene::shake::{resolve_rig, run_shake};
+//!
+//! let scene = Scene::thesis();
+//! let g = scene.simulation.gravity_mps2;
+//! let (rig, shaker) = resolve_rig("thesis-shaker", None, 40.0, 20.0, g)?;
+//! let setup = ShakeSetup {
+//!     rig,
+//!     shaker,
+//!     freq_hz: 40.0,
+//!     gamma: 20.0,
+//!     calibration: CalibrationSource::OnTheFly,
+//! };
+//! let mut run = run_shake(&scene, &setup, &mut |_| {})?;
+//! println!("efficiency {:.3}", run.summary.dem.efficiency);
+//! run.write(std::path::Path::new("signals/my-run"), &scene, &setup)?;
+//! # Ok::<(), vlab::scene::file::SceneError>(())
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::atomic_write::write_bytes_atomic;
+use crate::dem::{Dissipation, LedgerBalance};
+use crate::rig::{RigFile, RigSpec, ShakerKind, check_limits};
+use crate::scene::damper::{DriveOutcome, Progress, settle_bed};
+use crate::scene::file::{Scene, SceneError};
+use crate::scene::measurement::{Measured, ShakeExperiment, ShakeSetup, run_measured_shake};
+use crate::scene::record::TruthSamples;
+use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
+use crate::validation::{InvalidParameter, positive};
+
+/// Sample rate of the truth record (Hz), the thesis DAQ's.
+pub const TRUTH_SAMPLE_RATE_HZ: f64 = 40_000.0;
+
+/// The rig `name_or_path` (a built-in name or a rig file) and the drive it
+/// uses (`shaker`, or the rig's own), refusing what the rig cannot do at
+/// `freq_hz` and `gamma` (thesis: Γ ≤ 12 at 20 Hz, ≤ 40 elsewhere).
+pub fn resolve_rig(
+    name_or_path: &str,
+    shaker: Option<ShakerKind>,
+    freq_hz: f64,
+    gamma: f64,
+    g_mps2: f64,
+) -> Result<(RigSpec, ShakerKind), SceneError> {
+    let rig = RigSpec::from_name_or_path(name_or_path)?;
+    let kind = shaker.unwrap_or(rig.shaker.kind);
+    check_limits(&rig, freq_hz, gamma, g_mps2)?;
+    if kind == ShakerKind::Electrodynamic && rig.shaker.electrodynamic.is_none() {
+        return Err(InvalidParameter::new(
+            "shaker",
+            "\"electrodynamic\"",
+            "",
+            format!(
+                "\"prescribed\" on rig {}: it has no [shaker.electrodynamic] section (rig thesis-shaker has one)",
+                rig.name
+            ),
+        )
+        .into());
+    }
+    Ok((rig, kind))
+}
+
+/// Checks that a drive at `freq_hz` can be resolved by the scene's time step
+/// (200 steps a cycle at least) and by the 40 kHz truth record.
+pub fn check_drive(scene: &Scene, freq_hz: f64) -> Result<(), SceneError> {
+    positive("freq_hz", freq_hz, "Hz")?;
+    let dt = scene.dt_s();
+    let by_step = 1.0 / (200.0 * dt);
+    let by_record = TRUTH_SAMPLE_RATE_HZ / 4.0;
+    if freq_hz > by_step.min(by_record) {
+        let why = if by_step < by_record {
+            format!("at most {by_step:.0} Hz: a cycle needs at least 200 time steps of {dt:.3e} s")
+        } else {
+            format!(
+                "at most {by_record:.0} Hz: the {TRUTH_SAMPLE_RATE_HZ} Hz record needs 4 samples a cycle"
+            )
+        };
+        return Err(InvalidParameter::new("freq_hz", freq_hz, "Hz", why).into());
+    }
+    Ok(())
+}
+
+/// Default output folder of a shake: `signals/<scene>-<freq>Hz-G<gamma>`.
+pub fn default_out_dir(scene: &Scene, freq_hz: f64, gamma: f64) -> PathBuf {
+    PathBuf::from("signals").join(format!("{}-{freq_hz}Hz-G{gamma}", scene.name))
+}
+
+/// Yield velocities, or the largest impact speeds to hold against them (m/s).
+#[derive(Debug, Clone, Serialize)]
+pub struct YieldVelocities {
+    pub particle_particle_mps: f64,
+    pub particle_wall_mps: f64,
+}
+
+/// What the DEM knows: thesis eq. 6.3–6.10.
+#[derive(Debug, Clone, Serialize)]
+pub struct DemTruth {
+    /// Dissipated energy per cycle, averaged over the steady cycles (J), eq. 6.9.
+    pub energy_per_cycle_j: f64,
+    /// Maximum dissipated energy per cycle 4 (Γ g / ω)² M (J), eq. 6.10.
+    pub e_max_j: f64,
+    /// `energy_per_cycle_j / e_max_j`, eq. 6.8.
+    pub efficiency: f64,
+    /// Energy dissipated over the steady cycles, by source (J).
+    pub dissipated_j: Dissipation,
+    /// The same per cycle (J); sums to `energy_per_cycle_j`.
+    pub dissipated_per_cycle_j: Dissipation,
+    /// Work the enclosure did on the particles per steady cycle (J): what an
+    /// input-power measurement sees.
+    pub work_in_per_cycle_j: f64,
+    /// (work in − dissipated) / dissipated over the steady cycles: zero in a
+    /// steady state; otherwise the bed stored or gave back energy.
+    pub steadiness_rel: f64,
+    /// |ledger residual| / dissipated energy over the whole drive.
+    pub ledger_residual_rel: f64,
+    /// Energy balance of the whole drive (J).
+    pub ledger: LedgerBalance,
+    /// Energy balance of the steady cycles (J).
+    pub steady_ledger: LedgerBalance,
+    /// Largest particle speed seen at a cycle boundary (m/s).
+    pub largest_particle_speed_mps: f64,
+    /// Largest normal approach speeds at contact onset during the drive (m/s).
+    pub largest_impact_speed_mps: YieldVelocities,
+    /// Yield velocities of eq. 5.26, when the material has a yield strength.
+    pub yield_velocity_mps: Option<YieldVelocities>,
+}
+
+impl DemTruth {
+    /// The truth of a drive of `scene`.
+    pub fn new(out: &DriveOutcome, scene: &Scene) -> Self {
+        DemTruth {
+            energy_per_cycle_j: out.energy_per_cycle_j,
+            e_max_j: out.e_max_j,
+            efficiency: out.efficiency,
+            dissipated_j: out.steady.dissipated,
+            dissipated_per_cycle_j: out.dissipated_per_cycle,
+            work_in_per_cycle_j: out.work_in_per_cycle_j,
+            steadiness_rel: out.work_in_per_cycle_j / out.energy_per_cycle_j - 1.0,
+            ledger_residual_rel: out.whole.residual_relative(),
+            ledger: out.whole,
+            steady_ledger: out.steady,
+            largest_particle_speed_mps: out.largest_speed_mps,
+            largest_impact_speed_mps: YieldVelocities {
+                particle_particle_mps: out.impact_speeds.particle_particle_mps,
+                particle_wall_mps: out.impact_speeds.particle_wall_mps,
+            },
+            yield_velocity_mps: scene
+                .yield_velocities_mps()
+                .map(|(pp, pw)| YieldVelocities {
+                    particle_particle_mps: pp,
+                    particle_wall_mps: pw,
+                }),
+        }
+    }
+
+    /// Warnings a user must see: impacts beyond yield, a record that is not
+    /// steady.
+    pub fn warnings(&self, freq_hz: f64) -> Vec<String> {
+        let mut w = Vec::new();
+        if let Some(y) = &self.yield_velocity_mps {
+            let v = &self.largest_impact_speed_mps;
+            for (what, speed, limit) in [
+                (
+                    "particle-particle",
+                    v.particle_particle_mps,
+                    y.particle_particle_mps,
+                ),
+                ("particle-wall", v.particle_wall_mps, y.particle_wall_mps),
+            ] {
+                if speed > limit {
+                    w.push(format!(
+                        "{what} impacts reached {speed:.2} m/s, above the yield velocity {limit:.2} m/s (thesis eq. 5.26): the contacts would yield and the constant restitution of the model no longer holds (Section 5.5.4)"
+                    ));
+                }
+            }
+        }
+        if self.steadiness_rel.abs() > 0.02 {
+            w.push(format!(
+                "the bed is not in a steady state over the record: the enclosure put in {:+.1} % of the energy the DEM dissipated (the bed {} the difference), so any input-power measurement differs from the DEM's dissipation by that much; lengthen the transient (drive.cycles; at {freq_hz} Hz try {} cycles)",
+                100.0 * self.steadiness_rel,
+                if self.steadiness_rel < 0.0 {
+                    "gave back"
+                } else {
+                    "stored"
+                },
+                (freq_hz * 0.5).ceil().max(16.0)
+            ));
+        }
+        w
+    }
+}
+
+/// Everything `summary.json` says about a shake.
+#[derive(Debug, Clone, Serialize)]
+pub struct ShakeSummary {
+    pub vlab_version: &'static str,
+    pub scene: String,
+    pub freq_hz: f64,
+    pub gamma: f64,
+    pub orientation: &'static str,
+    pub n_particles: usize,
+    pub particle_mass_kg: f64,
+    pub fill_ratio: f64,
+    pub seed: u64,
+    pub dt_s: f64,
+    pub cycles: u32,
+    pub steady_cycles: u32,
+    /// Drive steps.
+    pub steps: u64,
+    /// Simulated time spent pouring and settling before the drive (s).
+    pub settle_time_s: f64,
+    /// Start of the steady window and of the rig's record, from the drive start (s).
+    pub steady_start_s: f64,
+    pub rig: String,
+    pub shaker: &'static str,
+    pub sample_rate_hz: f64,
+    /// Wall-clock time of the drive's stepping loop (s).
+    pub wall_time_s: f64,
+    /// Particles × drive steps / `wall_time_s`.
+    pub particle_steps_per_s: f64,
+    /// Wall-clock time of pouring and settling (s).
+    pub settle_wall_time_s: f64,
+    pub threads: usize,
+    pub dem: DemTruth,
+    pub measured: Measured,
+    pub warnings: Vec<String>,
+    pub files: Vec<String>,
+}
+
+/// A finished shake: the summary and everything recorded.
+#[derive(Debug, Clone)]
+pub struct ShakeRun {
+    pub summary: ShakeSummary,
+    pub experiment: ShakeExperiment,
+}
+
+/// Pours, settles, drives `scene` through the rig of `setup` and measures it.
+pub fn run_shake(
+    scene: &Scene,
+    setup: &ShakeSetup,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<ShakeRun, SceneError> {
+    check_drive(scene, setup.freq_hz)?;
+    let dt = scene.dt_s();
+    let bed = settle_bed(scene, dt, progress)?;
+    let mut world = bed.world;
+    let experiment = run_measured_shake(scene, &mut world, setup, progress)?;
+    let outcome = &experiment.outcome;
+    let n = world.particles.len();
+    let dem = DemTruth::new(outcome, scene);
+    let mut warnings = experiment.measured.clipping.clone();
+    warnings.extend(dem.warnings(setup.freq_hz));
+    let summary = ShakeSummary {
+        vlab_version: env!("CARGO_PKG_VERSION"),
+        scene: scene.name.clone(),
+        freq_hz: setup.freq_hz,
+        gamma: setup.gamma,
+        orientation: scene.enclosure.orientation.as_str(),
+        n_particles: n,
+        particle_mass_kg: world.particles.total_mass_kg(),
+        fill_ratio: scene.fill_ratio(),
+        seed: scene.simulation.seed,
+        dt_s: dt,
+        cycles: scene.drive.cycles,
+        steady_cycles: scene.drive.steady_cycles,
+        steps: outcome.steps,
+        settle_time_s: bed.settle_time_s,
+        steady_start_s: outcome.steady_start_s,
+        rig: setup.rig.name.clone(),
+        shaker: experiment.measured.shaker,
+        sample_rate_hz: setup.rig.daq.sample_rate_hz,
+        wall_time_s: outcome.wall_time_s,
+        particle_steps_per_s: (n as u64 * outcome.steps) as f64 / outcome.wall_time_s,
+        settle_wall_time_s: bed.wall_time_s,
+        threads: rayon::current_num_threads(),
+        dem,
+        measured: experiment.measured.clone(),
+        warnings,
+        files: Vec::new(),
+    };
+    Ok(ShakeRun {
+        summary,
+        experiment,
+    })
+}
+
+impl ShakeRun {
+    /// Writes the run's files into `dir` (which must exist), each atomically,
+    /// `summary.json` last; the file names end up in `summary.files`.
+    pub fn write(
+        &mut self,
+        dir: &Path,
+        scene: &Scene,
+        setup: &ShakeSetup,
+    ) -> Result<(), SceneError> {
+        let e = &self.experiment;
+        let truth = truth_trace(&e.truth, &self.summary)?;
+        write_csv(&dir.join("kinematics.csv"), &truth)?;
+        write_csv(&dir.join("trace.csv"), &e.trace)?;
+        // Full scale of the WAV = the ADC's, so that ADC codes are stored exactly.
+        let full_scale: BTreeMap<String, f64> = if e.daq.ideal_adc {
+            BTreeMap::new()
+        } else {
+            e.daq
+                .channels
+                .iter()
+                .map(|c| (c.name.clone(), c.full_scale))
+                .collect()
+        };
+        write_wav_with_full_scale(&dir.join("trace.wav"), &e.trace, &full_scale)?;
+        e.calibration.save_json(&dir.join("calibration.json"))?;
+        #[cfg_attr(not(feature = "plot"), allow(unused_mut))]
+        let mut files = vec![
+            "summary.json",
+            "trace.csv",
+            "trace.wav",
+            "trace.wav.json",
+            "kinematics.csv",
+            "calibration.json",
+        ];
+        #[cfg(feature = "plot")]
+        {
+            plot_record(&dir.join("trace.svg"), &e.trace, scene, setup)?;
+            files.push("trace.svg");
+        }
+        #[cfg(not(feature = "plot"))]
+        let _ = (scene, setup);
+        self.summary.files = files.into_iter().map(String::from).collect();
+        let path = dir.join("summary.json");
+        write_bytes_atomic(&path, self.summary_json().as_bytes())
+            .map_err(|source| SceneError::Write { path, source })
+    }
+
+    /// `summary.json`'s text.
+    pub fn summary_json(&self) -> String {
+        serde_json::to_string_pretty(&self.summary)
+            .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+            + "\n"
+    }
+}
+
+/// The truth record as a trace: the enclosure's kinematics and the particles'
+/// force on it, at the lab's sample rate.
+pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Trace, SceneError> {
+    let start = samples.time_s.first().copied().unwrap_or(0.0);
+    let mut trace = Trace::new(summary.sample_rate_hz, start)?;
+    trace.metadata = TraceMetadata {
+        source: format!("vlab {} shake: DEM truth", summary.vlab_version),
+        rig: "none (DEM truth, no sensors)".into(),
+        drive_freq_hz: Some(summary.freq_hz),
+        gamma: Some(summary.gamma),
+        ..Default::default()
+    };
+    let columns: [(&str, &str, &Vec<f64>); 6] = [
+        ("enclosure_displacement", "m", &samples.displacement_m),
+        ("enclosure_velocity", "m/s", &samples.velocity_mps),
+        (
+            "enclosure_acceleration",
+            "m/s^2",
+            &samples.acceleration_mps2,
+        ),
+        ("particle_force_axial", "N", &samples.force_axial_n),
+        ("particle_force_x", "N", &samples.force_x_n),
+        ("particle_force_y", "N", &samples.force_y_n),
+    ];
+    for (name, unit, data) in columns {
+        trace.add_channel(name, unit, data.clone())?;
+    }
+    Ok(trace)
+}
+
+/// Two cycles of the record as the thesis plots them (Fig. 7.12): the
+/// acceleration and the force divided by the total mass, both in m/s².
+#[cfg(feature = "plot")]
+fn plot_record(
+    path: &Path,
+    trace: &Trace,
+    scene: &Scene,
+    setup: &ShakeSetup,
+) -> Result<(), SceneError> {
+    use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+    let a = &trace.channel(crate::rig::ACCEL_CHANNEL)?.samples;
+    let f = &trace.channel(crate::rig::FORCE_CHANNEL)?.samples;
+    let m_total = setup.rig.enclosure.mass_kg + scene.particle_mass_kg();
+    let n = ((2.0 * trace.sample_rate_hz / setup.freq_hz).round() as usize).min(a.len());
+    let t = |i: usize| 1e3 * trace.time_s(i);
+    // The static weight is a constant offset of the force; remove its mean.
+    let f_mean = f[..n].iter().sum::<f64>() / n.max(1) as f64;
+    let series = [
+        Series {
+            name: "acceleration".into(),
+            points: (0..n).map(|i| (t(i), a[i])).collect(),
+            style: SeriesStyle::Line,
+        },
+        Series {
+            name: "force / (m_enclosure + m_particles), mean removed".into(),
+            points: (0..n).map(|i| (t(i), (f[i] - f_mean) / m_total)).collect(),
+            style: SeriesStyle::Line,
+        },
+    ];
+    plot_xy_svg(
+        path,
+        &format!(
+            "{} damper, {} Hz, Gamma {}: rig {} record (cf. thesis Fig. 7.12)",
+            scene.name, setup.freq_hz, setup.gamma, setup.rig.name
+        ),
+        "time from the record start (ms)",
+        "m/s^2",
+        &series,
+    )?;
+    Ok(())
+}
