@@ -266,6 +266,42 @@ pub enum CsvErrorKind {
         /// What is wrong.
         problem: String,
     },
+    /// The bytes are not UTF-8 text.
+    #[error(
+        "byte 0x{byte:02X} is not UTF-8 text: save the file as UTF-8 (a spreadsheet's \"CSV UTF-8\")"
+    )]
+    NotUtf8 {
+        /// The first offending byte.
+        byte: u8,
+    },
+    /// The field separator cannot be told from the file.
+    #[error("{problem}; name it with --delimiter (',', ';' or tab)")]
+    AmbiguousDelimiter {
+        /// What makes it ambiguous.
+        problem: String,
+    },
+    /// A number's decimal mark contradicts the file's (or the one asked for).
+    #[error("column '{column}': '{text}' {problem}")]
+    DecimalMark {
+        /// Column header.
+        column: String,
+        /// The cell text.
+        text: String,
+        /// What is wrong, and where the file's decimal mark was decided.
+        problem: String,
+    },
+    /// A delimiter other than the three vlab reads was asked for.
+    #[error("delimiter {delimiter:?}: vlab reads ',', ';' or tab")]
+    UnsupportedDelimiter {
+        /// The delimiter asked for.
+        delimiter: char,
+    },
+    /// The CSV parser itself refused the text.
+    #[error("{problem}")]
+    Syntax {
+        /// The parser's message.
+        problem: String,
+    },
     /// A channel name or unit cannot be written into a CSV header.
     #[error(
         "channel '{name}' unit '{unit}': names and units must not contain ',', '[', ']', '\"' or line breaks"

@@ -33,7 +33,7 @@ mod testutil;
 
 pub use bench::{YangBenchReport, bench_yang_power};
 pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
-pub use csv::{read_csv, write_csv};
+pub use csv::{CsvReadOptions, read_csv, read_csv_with, write_csv};
 pub use error::{CsvErrorKind, Result, SignalsError, WavErrorKind};
 pub use impacts::{
     CorEstimate, DropTestResult, Impact, ImpactDetection, ImpactParams, Polarity, detect_impacts,
