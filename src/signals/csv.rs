@@ -26,7 +26,12 @@
 //! - One row per sample, comma-separated, no quoting (a channel name or unit
 //!   that would need quotes is refused). Samples are written with Rust's
 //!   shortest round-trip formatting (`{}`), so reading back gives
-//!   bit-identical `f64` samples. Time is written as `start_time_s + i / fs`.
+//!   bit-identical `f64` samples.
+//! - Time in s, as the sample index over the rate: `(k + i) / fs` for sample
+//!   `i` when the start time is `k / fs` for a whole `k` (within
+//!   [`START_ON_GRID_REL_TOL`] of a sample period), so that at 40 kHz sample 1
+//!   of a record starting at 0 reads `0.000025`; `start_time_s + i / fs`
+//!   otherwise. The exact start time is kept in the `start_time_s` comment.
 //!
 //! # Reading
 //!
@@ -73,6 +78,11 @@ use crate::atomic_write::write_atomic;
 /// How far a time value may be from the uniform grid, as a fraction of the
 /// sample period.
 pub const TIME_GRID_REL_TOL: f64 = 1e-6;
+
+/// How close the start time must be to a whole number `k` of sample periods,
+/// as a fraction of a period, for the time column to be written as
+/// `(k + i) / fs`.
+pub const START_ON_GRID_REL_TOL: f64 = 1e-9;
 
 /// The field separators vlab reads: comma, semicolon, tab.
 pub const DELIMITERS: [u8; 3] = [b',', b';', b'\t'];
@@ -144,6 +154,7 @@ pub fn write_csv(path: &Path, trace: &Trace) -> Result<()> {
             .iter()
             .map(|c| format!("{} [{}]", c.name, c.unit)),
     );
+    let time = TimeColumn::of(trace);
     write_atomic(path, |out| {
         out.write_all(head.as_bytes())?;
         let mut w = csv::WriterBuilder::new().from_writer(out);
@@ -151,7 +162,7 @@ pub fn write_csv(path: &Path, trace: &Trace) -> Result<()> {
         let mut cell = String::new();
         for i in 0..trace.len() {
             cell.clear();
-            let _ = write!(cell, "{}", trace.time_s(i));
+            let _ = write!(cell, "{}", time.at(i));
             w.write_field(&cell)?;
             for c in &trace.channels {
                 cell.clear();
@@ -166,6 +177,38 @@ pub fn write_csv(path: &Path, trace: &Trace) -> Result<()> {
         path: path.to_path_buf(),
         source,
     })
+}
+
+/// The time column as written: sample index over rate, from the start's
+/// place on the sample grid when it has one.
+struct TimeColumn {
+    sample_rate_hz: f64,
+    start_time_s: f64,
+    /// `k` with `start_time_s = k / sample_rate_hz`, when there is one.
+    start_index: Option<f64>,
+}
+
+impl TimeColumn {
+    fn of(trace: &Trace) -> Self {
+        let fs = trace.sample_rate_hz;
+        let k = (trace.start_time_s * fs).round();
+        // Beyond 2^53 whole numbers are no longer exact in f64.
+        let on_grid = k.abs() < 2f64.powi(53)
+            && ((trace.start_time_s - k / fs) * fs).abs() <= START_ON_GRID_REL_TOL;
+        Self {
+            sample_rate_hz: fs,
+            start_time_s: trace.start_time_s,
+            start_index: on_grid.then_some(k),
+        }
+    }
+
+    /// Time of sample `i`, in s.
+    fn at(&self, i: usize) -> f64 {
+        match self.start_index {
+            Some(k) => (k + i as f64) / self.sample_rate_hz,
+            None => self.start_time_s + i as f64 / self.sample_rate_hz,
+        }
+    }
 }
 
 /// True when `s` can sit in a header cell unquoted and be parsed back unchanged.
@@ -781,6 +824,60 @@ mod tests {
         }
         let header = std::fs::read_to_string(&path).expect("text");
         assert!(header.contains("\ntime [s],force [N],acceleration [m/s^2],gain []\n"));
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// The time cells of a written file, as text.
+    fn time_cells(path: &std::path::Path) -> Vec<String> {
+        std::fs::read_to_string(path)
+            .expect("text")
+            .lines()
+            .skip(5)
+            .map(|l| l.split(',').next().unwrap_or_default().to_string())
+            .collect()
+    }
+
+    #[test]
+    fn time_is_written_as_sample_index_over_rate() {
+        let dir = scratch("time");
+        let path = dir.join("t.csv");
+        let write_read = |start: f64| {
+            let mut t = Trace::new(40_000.0, start).expect("trace");
+            t.add_channel("x", "m", vec![1.0 / 3.0, -0.0, 2e-300, 7.0])
+                .expect("x");
+            write_csv(&path, &t).expect("write");
+            let back = read_csv(&path).expect("read");
+            assert_eq!(back.start_time_s.to_bits(), start.to_bits());
+            let bits = |c: &[f64]| c.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(&back.channels[0].samples),
+                bits(&t.channels[0].samples)
+            );
+            (t, time_cells(&path))
+        };
+        // Starts on the 40 kHz grid: (k + i) / fs, shortest text.
+        let on_grid: [(f64, [&str; 4]); 4] = [
+            (0.0, ["0", "0.000025", "0.00005", "0.000075"]),
+            // A start that should be 0, off by rounding (seen from vlab shake).
+            (
+                -1.3877787807814457e-17,
+                ["0", "0.000025", "0.00005", "0.000075"],
+            ),
+            (
+                3000.0 / 40_000.0,
+                ["0.075", "0.075025", "0.07505", "0.075075"],
+            ),
+            (-0.01, ["-0.01", "-0.009975", "-0.00995", "-0.009925"]),
+        ];
+        for (start, expected) in on_grid {
+            assert_eq!(write_read(start).1, expected, "start {start:e}");
+        }
+        // 0.4 of a period off the grid: start + i / fs, as the trace computes it
+        // (which is not the shortest decimal: 0.000035000000000000004).
+        let (t, cells) = write_read(1e-5);
+        let expected: Vec<String> = (0..4).map(|i| format!("{}", t.time_s(i))).collect();
+        assert_eq!(cells, expected);
+        assert_eq!(cells[1], "0.000035000000000000004");
         std::fs::remove_dir_all(dir).ok();
     }
 
