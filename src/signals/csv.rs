@@ -52,8 +52,8 @@
 //! - separator: the one of `;`, tab and `,` that appears in the header line
 //!   outside quotes; if several do, the one that splits the first data row into
 //!   as many cells as the header. Anything else is refused as ambiguous, as is
-//!   a `,`-separated file whose first row has more cells than its header (the
-//!   sign of decimal commas in a comma-separated file).
+//!   a detected `,`-separated file with a row of more cells than its header
+//!   (the sign of decimal commas in a comma-separated file).
 //! - decimal mark: `,` if a number holds a comma (unquoted, only possible when
 //!   the separator is `;` or a tab), `.` otherwise. A file that uses both is
 //!   refused, naming the line that decided the mark.
@@ -394,13 +394,13 @@ fn parse_csv_with(text: &str, options: &CsvReadOptions) -> Result<Trace, ParseEr
         };
         let n_cols = columns.len() + 1;
         if used != n_cols {
-            if detected_comma && time.is_empty() && used > n_cols {
+            if detected_comma && used > n_cols {
                 return Err((
                     n,
                     CsvErrorKind::AmbiguousDelimiter {
                         problem: format!(
-                            "the header splits into {n_cols} columns at ',' but the first data row \
-                             into {used} cells: numbers with decimal commas in a ','-separated file? \
+                            "the header splits into {n_cols} columns at ',' but this row into \
+                             {used} cells: numbers with decimal commas in a ','-separated file? \
                              They cannot be told apart from the separators unless quoted"
                         ),
                     },

@@ -2,8 +2,8 @@
 //! thesis Chapter 7 — usable on real lab records alone.
 //!
 //! - [`trace`]: multichannel uniformly sampled records ([`Trace`]);
-//! - [`csv`], [`wav`]: trace files (CSV with units in the header; 32-bit float
-//!   WAV with a JSON sidecar);
+//! - [`csv`], [`wav`]: trace files (CSV with units in the header, read in the
+//!   dialects lab software exports; 32-bit float WAV with a JSON sidecar);
 //! - [`spectrum`]: one-sided amplitude spectra (scaling convention stated there);
 //! - [`power`]: Yang's structure-independent dissipated power, eq. 7.8-7.12,
 //!   and the damping efficiency, eq. 7.7 / 6.10;
@@ -47,7 +47,7 @@ pub use power::{
 };
 pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
 pub use trace::{Channel, Sensitivity, Trace, TraceMetadata};
-pub use trace_file::read_trace;
+pub use trace_file::{TraceFormat, read_trace, read_trace_with};
 pub use wav::{
     WavChannelInfo, WavSidecar, read_wav, read_wav_with, sidecar_path, write_wav,
     write_wav_with_full_scale,
