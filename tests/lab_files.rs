@@ -1,15 +1,23 @@
-//! Lab files of every common dialect through `vlab analyze` and `vlab cor`:
-//! one record written as vlab's CSV, as a spreadsheet's `;`/decimal-comma
-//! export and as tab-separated text gives the same figures, whether the
-//! dialect is detected or named with `--delimiter` / `--decimal-comma`; what
-//! cannot be read is refused naming the file and the line.
+//! Lab files through `vlab analyze`, `vlab cor` and `vlab::signals`:
+//!
+//! - CSV of every common dialect: one record written as vlab's CSV, as a
+//!   spreadsheet's `;`/decimal-comma export and as tab-separated text gives the
+//!   same figures, whether the dialect is detected or named with `--delimiter`
+//!   / `--decimal-comma`; what cannot be read is refused naming file and line.
+//! - TDMS: the small files of `tests/fixtures/tdms/` (made once with nptdms by
+//!   `make_tdms.py` there) are read or refused with the reason, and so are
+//!   byte-patched copies in layouts the reader must not misread.
 
 mod common;
 
 use std::f64::consts::PI;
 
+use std::path::{Path, PathBuf};
+
 use common::{Scratch, refuses_in, stderr, vlab};
-use vlab::signals::{Trace, write_csv, write_wav};
+use vlab::signals::{
+    SignalsError, TdmsErrorKind, Trace, read_csv, read_tdms, read_trace, write_csv, write_wav,
+};
 
 const FS: f64 = 40_000.0;
 
@@ -201,4 +209,136 @@ fn unreadable_dialects_are_refused_with_file_and_line() {
         &["analyze", "eu.csv", "--delimiter", "|"],
         &["--delimiter", "',', ';' or tab"],
     );
+}
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/tdms")
+        .join(name)
+}
+
+/// The record the fixtures were cut from: its first 200 samples.
+fn source_head() -> Trace {
+    let mut t = read_csv(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("signals/reference/thesis-40Hz-G20/trace.csv"),
+    )
+    .expect("reference CSV");
+    for c in &mut t.channels {
+        c.samples.truncate(200);
+    }
+    t
+}
+
+fn tdms_kind(path: &Path) -> TdmsErrorKind {
+    match read_tdms(path) {
+        Err(SignalsError::Tdms { kind, .. }) => kind,
+        other => panic!("{}: expected a TDMS refusal, got {other:?}", path.display()),
+    }
+}
+
+#[test]
+fn tdms_f64_and_f32_channels_read_with_names_units_and_rate() {
+    let source = source_head();
+    let t = read_trace(&fixture("float32.tdms")).expect("float32.tdms");
+    assert_eq!(t.sample_rate_hz, 40_000.0, "1 / wf_increment, whole hertz");
+    assert_eq!(t.start_time_s.to_bits(), source.start_time_s.to_bits());
+    assert_eq!(t.channel_names(), ["acceleration", "force"]);
+    assert_eq!(t.channels[0].unit, "m/s^2");
+    assert_eq!(t.channels[1].unit, "N");
+    // f32 acceleration: the CSV value rounded to f32, widened exactly.
+    let rounded: Vec<f64> = source.channels[0]
+        .samples
+        .iter()
+        .map(|&x| f64::from(x as f32))
+        .collect();
+    assert_eq!(t.channels[0].samples, rounded);
+    // f64 force: bit for bit.
+    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(
+        bits(&t.channels[1].samples),
+        bits(&source.channels[1].samples)
+    );
+    // No vlab_metadata property: empty metadata.
+    assert_eq!(t.metadata, Default::default());
+}
+
+#[test]
+fn tdms_files_without_a_usable_record_are_refused_with_the_reason() {
+    let msg = |name: &str| read_tdms(&fixture(name)).expect_err(name).to_string();
+    assert!(matches!(
+        tdms_kind(&fixture("no-increment.tdms")),
+        TdmsErrorKind::BadTiming { .. }
+    ));
+    let m = msg("no-increment.tdms");
+    assert!(
+        m.contains("no-increment.tdms") && m.contains("wf_increment"),
+        "{m}"
+    );
+    match tdms_kind(&fixture("unequal-lengths.tdms")) {
+        TdmsErrorKind::UnequalLength {
+            first_len: 200,
+            len: 199,
+            ..
+        } => {}
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(
+        tdms_kind(&fixture("two-groups.tdms")),
+        TdmsErrorKind::SeveralGroups { count: 2, .. }
+    ));
+    match tdms_kind(&fixture("integer.tdms")) {
+        TdmsErrorKind::UnsupportedDataType { channel, .. } => assert_eq!(channel, "adc_codes"),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn tdms_layouts_the_reader_would_misread_are_refused() {
+    let dir = Scratch::new("tdms-layouts");
+    let good = std::fs::read(fixture("float32.tdms")).expect("fixture");
+    let patched = |name: &str, patch: &dyn Fn(&mut Vec<u8>)| {
+        let mut bytes = good.clone();
+        patch(&mut bytes);
+        let path = dir.path(name);
+        std::fs::write(&path, bytes).expect("write");
+        tdms_kind(&path)
+    };
+    // Table-of-contents flags of the first (only) segment, bytes 4..8.
+    for (bit, layout) in [(5, "interleaved"), (6, "big-endian"), (7, "DAQmx")] {
+        match patched("flag.tdms", &|b| b[4] |= 1 << bit) {
+            TdmsErrorKind::UnsupportedLayout {
+                offset: 0,
+                layout: l,
+            } => {
+                assert!(l.contains(layout), "{l}")
+            }
+            other => panic!("bit {bit}: {other:?}"),
+        }
+    }
+    // A segment that claims 8 raw bytes more than its channels hold.
+    let more = patched("more.tdms", &|b| {
+        let next = u64::from_le_bytes(b[12..20].try_into().expect("8 bytes")) + 8;
+        b[12..20].copy_from_slice(&next.to_le_bytes());
+        b.extend_from_slice(&[0; 8]);
+    });
+    match more {
+        TdmsErrorKind::RawDataUnaccounted {
+            in_segments,
+            in_channels,
+        } => assert_eq!(in_segments, in_channels + 8),
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(
+        patched("cut.tdms", &|b| b.truncate(b.len() - 10)),
+        TdmsErrorKind::Truncated { offset: 0, .. }
+    ));
+    assert!(matches!(
+        patched("text.tdms", &|b| *b = b"time [s],x [m]\n0,1\n".to_vec()),
+        TdmsErrorKind::NotTdms { offset: 0, .. }
+    ));
+    // A second segment glued on that is not one.
+    assert!(matches!(
+        patched("tail.tdms", &|b| b.extend_from_slice(b"garbage")),
+        TdmsErrorKind::NotTdms { .. }
+    ));
 }

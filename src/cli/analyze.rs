@@ -1,6 +1,6 @@
 //! `vlab analyze`: Yang's structure-independent method (thesis eq. 7.8–7.12) on
 //! a force/acceleration record, from vlab or from a real lab (CSV of any common
-//! dialect, or WAV): the dissipated power, the energy per cycle, the efficiency
+//! dialect, WAV or TDMS): the dissipated power, the energy per cycle, the efficiency
 //! (eq. 7.7) when the particle mass and amplitude are known, and the phase
 //! correction used. Also home of [`LabFileArgs`], the options for reading a lab
 //! record that `vlab cor` shares.
@@ -58,7 +58,7 @@ impl LabFileArgs {
 #[derive(Debug, Clone, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct AnalyzeArgs {
-    /// The record: a CSV (',', ';' or tab separated) or a WAV file (with its .json sidecar).
+    /// The record: a CSV (',', ';' or tab separated), a WAV file (with its .json sidecar) or a TDMS file.
     #[arg(value_name = "TRACE")]
     trace: PathBuf,
     /// Phase-error table (from `vlab calibrate` or a shake run's calibration.json).

@@ -1,6 +1,7 @@
 //! `vlab cor TRACE`: the drop-test restitution estimator (thesis eq. 7.3-7.5)
-//! on any force record, CSV (time column first; ',', ';' or tab separated) or
-//! WAV with its JSON sidecar, such as a real lab file or one `vlab drop` wrote.
+//! on any force record, CSV (time column first; ',', ';' or tab separated), WAV
+//! with its JSON sidecar or TDMS, such as a real lab file or one `vlab drop`
+//! wrote.
 //! Reads only; writes nothing.
 
 use std::path::PathBuf;
@@ -17,7 +18,7 @@ use super::args;
 #[derive(Debug, Clone, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct CorArgs {
-    /// Force record: .csv (time column first) or .wav (with its .wav.json sidecar).
+    /// Force record: .csv (time column first), .wav (with its .wav.json sidecar) or .tdms.
     #[arg(value_name = "TRACE")]
     pub trace: PathBuf,
     /// Channel holding the force [default: 'force', or the record's only channel].
@@ -74,7 +75,7 @@ struct CorReport {
 fn read_trace(path: &std::path::Path, file: &LabFileArgs) -> Result<Trace> {
     if !path.is_file() {
         bail!(
-            "TRACE {}: no such file (a .csv or .wav force record)",
+            "TRACE {}: no such file (a .csv, .wav or .tdms force record)",
             path.display()
         );
     }

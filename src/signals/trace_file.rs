@@ -1,11 +1,13 @@
 //! Reading a trace file of any format vlab knows, told apart by its extension:
-//! `.csv` ([`super::csv`]) or `.wav` with its JSON sidecar ([`super::wav`]).
+//! `.csv` ([`super::csv`]), `.wav` with its JSON sidecar ([`super::wav`]) or
+//! `.tdms` ([`super::tdms`]).
 
 use std::path::Path;
 
 use super::csv::{CsvReadOptions, read_csv_with};
 use super::error::{Result, SignalsError};
 use super::read_wav;
+use super::tdms::read_tdms;
 use super::trace::Trace;
 
 /// The kinds of trace file, by extension.
@@ -15,6 +17,8 @@ pub enum TraceFormat {
     Csv,
     /// `.wav` with its `.wav.json` sidecar.
     Wav,
+    /// `.tdms`: National Instruments TDMS.
+    Tdms,
 }
 
 impl TraceFormat {
@@ -24,13 +28,14 @@ impl TraceFormat {
         match ext.as_str() {
             "csv" => Some(Self::Csv),
             "wav" => Some(Self::Wav),
+            "tdms" => Some(Self::Tdms),
             _ => None,
         }
     }
 }
 
-/// Reads `path` as a CSV or a WAV trace, by its extension (case-insensitive);
-/// a CSV's separator and decimal mark are detected.
+/// Reads `path` as a CSV, WAV or TDMS trace, by its extension
+/// (case-insensitive); a CSV's separator and decimal mark are detected.
 pub fn read_trace(path: &Path) -> Result<Trace> {
     read_trace_with(path, &CsvReadOptions::default())
 }
@@ -41,6 +46,7 @@ pub fn read_trace_with(path: &Path, csv: &CsvReadOptions) -> Result<Trace> {
     match TraceFormat::of(path) {
         Some(TraceFormat::Csv) => read_csv_with(path, csv),
         Some(TraceFormat::Wav) => read_wav(path),
+        Some(TraceFormat::Tdms) => read_tdms(path),
         None => Err(SignalsError::UnknownTraceFormat {
             path: path.to_path_buf(),
         }),
@@ -64,6 +70,11 @@ mod tests {
             Some(TraceFormat::Csv)
         );
         assert_eq!(TraceFormat::of(Path::new("b.wav")), Some(TraceFormat::Wav));
+        assert_eq!(
+            TraceFormat::of(Path::new("c.Tdms")),
+            Some(TraceFormat::Tdms)
+        );
+        assert_eq!(TraceFormat::of(Path::new("c.tdms_index")), None);
         assert_eq!(TraceFormat::of(Path::new("b.wav.json")), None);
         assert_eq!(TraceFormat::of(Path::new("noext")), None);
     }
