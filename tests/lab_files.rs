@@ -9,12 +9,15 @@
 //!   byte-patched copies in layouts the reader must not misread.
 
 mod common;
+#[path = "support/spreadsheet.rs"]
+mod spreadsheet;
 
 use std::f64::consts::PI;
 
 use std::path::{Path, PathBuf};
 
 use common::{Scratch, refuses_in, stderr, vlab};
+use spreadsheet::export;
 use vlab::signals::{
     SignalsError, TdmsErrorKind, Trace, read_csv, read_tdms, read_trace, write_csv, write_wav,
 };
@@ -51,25 +54,6 @@ fn record() -> (Trace, f64) {
         )
         .expect("acceleration");
     (trace, 0.5 * c_ns_per_m * v_amp * v_amp)
-}
-
-/// vlab's CSV text rewritten as a spreadsheet would export it: comments
-/// dropped, header cells quoted, `sep` between cells, decimal commas when
-/// `comma`, CRLF line ends.
-fn export(vlab_csv: &str, sep: &str, comma: bool) -> String {
-    let mut out = String::new();
-    for line in vlab_csv.lines().filter(|l| !l.starts_with('#')) {
-        let cells: Vec<String> = if line.starts_with("time") {
-            line.split(',').map(|c| format!("\"{c}\"")).collect()
-        } else if comma {
-            line.split(',').map(|c| c.replace('.', ",")).collect()
-        } else {
-            line.split(',').map(str::to_string).collect()
-        };
-        out.push_str(&cells.join(sep));
-        out.push_str("\r\n");
-    }
-    out
 }
 
 fn json_out(dir: &Scratch, args: &[&str]) -> serde_json::Value {
