@@ -58,6 +58,9 @@
 //!   the separator is `;` or a tab), `.` otherwise. A file that uses both is
 //!   refused, naming the line that decided the mark.
 //!
+//! Refused besides: text that is not UTF-8 (a spreadsheet's "CSV UTF-8" is),
+//! a quoted cell that spans lines, a bare carriage return inside a line.
+//!
 //! With a `sample_rate_hz` comment the time column is checked against it;
 //! without one the rate is inferred from the time column, `(n-1) / (t_last -
 //! t_0)`, taken as the nearest whole number of hertz when that is within 1 ppm.
