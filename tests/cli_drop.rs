@@ -298,7 +298,10 @@ fn bad_drop_parameters() {
         &["drop", "--height-m", "0"],
         &["--height-m", "positive", " m: must"],
     );
-    refuses(&["drop", "--height-m", "-0.01"], &["--height-m", " m: must"]);
+    refuses(
+        &["drop", "--height-m", "-0.01"],
+        &["--height-m", " m: must"],
+    );
     refuses(&["drop", "--height-m", "nan"], &["--height-m", "finite"]);
     refuses(
         &["drop", "--height-m", "abc"],
@@ -341,7 +344,10 @@ fn bad_drop_parameters() {
         &["--sample-rate-hz", "whole number"],
     );
     refuses(&["drop", "--cor", "1.5"], &["--cor", "(0, 1]"]);
-    refuses(&["drop", "--diameter-m", "0"], &["--diameter-m", " m: must"]);
+    refuses(
+        &["drop", "--diameter-m", "0"],
+        &["--diameter-m", " m: must"],
+    );
     refuses(&["drop", "--particle", "glass"], &["--particle", "glass"]);
     refuses(&["drop", "--rig", "missing.toml"], &["missing.toml"]);
     let dir = Scratch::new("drop-rig");

@@ -108,7 +108,11 @@ fn unreadable_scene_file() {
 
 #[test]
 fn bad_impact_parameters() {
-    refuses(&["impact", "--radius-m", "0"], None, &["--radius-m", " m: must"]);
+    refuses(
+        &["impact", "--radius-m", "0"],
+        None,
+        &["--radius-m", " m: must"],
+    );
     refuses(
         &["impact", "--speed-mps", "-2"],
         None,

@@ -39,6 +39,11 @@ fn tutorial_commands_run() {
         std::env::var("PATH").unwrap_or_default()
     );
     let dir = Scratch::new("tutorial");
+    // Step 9 reads the reference records, as a reader would from a checkout.
+    copy_dir(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("signals/reference"),
+        &dir.path("signals/reference"),
+    );
     for cmd in &commands {
         let out = Command::new("sh")
             .args(["-c", &format!("set -e; {cmd}")])
@@ -64,4 +69,18 @@ fn tutorial_commands_run() {
         .expect("error");
     assert!(good.abs() < 0.01, "calibrated run off by {good}");
     assert!(wrong.abs() > 0.02, "mis-calibrated run only off by {wrong}");
+}
+
+/// Copies the folder `from` to `to`, recursively.
+fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
+    std::fs::create_dir_all(to).expect("create folder");
+    for entry in std::fs::read_dir(from).expect("read folder") {
+        let path = entry.expect("entry").path();
+        let target = to.join(path.file_name().expect("name"));
+        if path.is_dir() {
+            copy_dir(&path, &target);
+        } else {
+            std::fs::copy(&path, &target).expect("copy");
+        }
+    }
 }

@@ -1,25 +1,64 @@
 //! `vlab analyze`: Yang's structure-independent method (thesis eq. 7.8–7.12) on
-//! a force/acceleration record, from vlab or from a real lab (CSV or WAV): the
-//! dissipated power, the energy per cycle, the efficiency (eq. 7.7) when the
-//! particle mass and amplitude are known, and the phase correction used.
+//! a force/acceleration record, from vlab or from a real lab (CSV of any common
+//! dialect, WAV or TDMS): the dissipated power, the energy per cycle, the efficiency
+//! (eq. 7.7) when the particle mass and amplitude are known, and the phase
+//! correction used. Also home of [`LabFileArgs`], the options for reading a lab
+//! record that `vlab cor` shares.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::Serialize;
 
+use vlab::signals::csv::{CsvReadOptions, parse_delimiter};
 use vlab::signals::{
-    HarmonicPower, PhaseCalibration, PhaseCorrection, PowerOptions, Trace, efficiency, read_trace,
-    yang_power_of_trace,
+    HarmonicPower, PhaseCalibration, PhaseCorrection, PowerOptions, Trace, TraceFormat, efficiency,
+    read_trace_with, yang_power_of_trace,
 };
 
 use super::args;
 
+/// How to read a lab record: the CSV dialect, when detection is not wanted.
+#[derive(Debug, Clone, Default, Args)]
+pub struct LabFileArgs {
+    /// Field separator of a CSV record: ',', ';' or tab [default: detected from the header line].
+    #[arg(long, value_name = "SEP", value_parser = parse_delimiter)]
+    pub delimiter: Option<u8>,
+    /// The CSV record's numbers use ',' as the decimal mark (0,25) [default: detected].
+    #[arg(long)]
+    pub decimal_comma: bool,
+}
+
+impl LabFileArgs {
+    /// The CSV options these arguments ask for (`None`: detect).
+    pub fn csv_options(&self) -> CsvReadOptions {
+        CsvReadOptions {
+            delimiter: self.delimiter,
+            decimal_comma: self.decimal_comma.then_some(true),
+        }
+    }
+
+    /// Reads `path` (any format vlab reads); refuses the CSV options for a
+    /// file that is not a CSV rather than ignore them.
+    pub fn read(&self, path: &Path) -> Result<Trace> {
+        let csv_options = self.csv_options();
+        if csv_options != CsvReadOptions::default()
+            && TraceFormat::of(path) != Some(TraceFormat::Csv)
+        {
+            bail!(
+                "--delimiter and --decimal-comma describe a CSV record; {} is not a .csv",
+                path.display()
+            );
+        }
+        Ok(read_trace_with(path, &csv_options)?)
+    }
+}
+
 #[derive(Debug, Clone, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct AnalyzeArgs {
-    /// The record: a CSV or a WAV file (with its .json sidecar).
+    /// The record: a CSV (',', ';' or tab separated), a WAV file (with its .json sidecar) or a TDMS file.
     #[arg(value_name = "TRACE")]
     trace: PathBuf,
     /// Phase-error table (from `vlab calibrate` or a shake run's calibration.json).
@@ -40,6 +79,8 @@ pub struct AnalyzeArgs {
     /// Name of the acceleration channel (m/s^2).
     #[arg(long, default_value = "acceleration")]
     accel_channel: String,
+    #[command(flatten)]
+    file: LabFileArgs,
     /// Print the result as JSON.
     #[arg(long)]
     json: bool,
@@ -86,7 +127,7 @@ fn clipping_warning(trace: &Trace, channel: &str) -> Option<String> {
 }
 
 pub fn analyse(a: &AnalyzeArgs) -> Result<Analysis> {
-    let trace = read_trace(&a.trace)?;
+    let trace = a.file.read(&a.trace)?;
     let freq = match a.freq_hz.or(trace.metadata.drive_freq_hz) {
         Some(f) => f,
         None => bail!(

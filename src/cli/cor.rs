@@ -1,6 +1,8 @@
 //! `vlab cor TRACE`: the drop-test restitution estimator (thesis eq. 7.3-7.5)
-//! on any force record, CSV (time column first) or WAV with its JSON sidecar,
-//! such as a real lab file or one `vlab drop` wrote. Reads only; writes nothing.
+//! on any force record, CSV (time column first; ',', ';' or tab separated), WAV
+//! with its JSON sidecar or TDMS, such as a real lab file or one `vlab drop`
+//! wrote.
+//! Reads only; writes nothing.
 
 use std::path::PathBuf;
 
@@ -10,12 +12,13 @@ use serde::Serialize;
 
 use vlab::signals::{ImpactParams, Trace, estimate_cor};
 
+use super::analyze::LabFileArgs;
 use super::args;
 
 #[derive(Debug, Clone, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct CorArgs {
-    /// Force record: .csv (time column first) or .wav (with its .wav.json sidecar).
+    /// Force record: .csv (time column first), .wav (with its .wav.json sidecar) or .tdms.
     #[arg(value_name = "TRACE")]
     pub trace: PathBuf,
     /// Channel holding the force [default: 'force', or the record's only channel].
@@ -30,6 +33,8 @@ pub struct CorArgs {
     /// No re-trigger for this long after an impact starts (s), to ignore ringing [default: 0.002].
     #[arg(long = "holdoff-s", value_name = "S", value_parser = args::non_negative_seconds)]
     pub holdoff_s: Option<f64>,
+    #[command(flatten)]
+    pub file: LabFileArgs,
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
@@ -67,18 +72,18 @@ struct CorReport {
     warnings: Vec<String>,
 }
 
-fn read_trace(path: &std::path::Path) -> Result<Trace> {
+fn read_trace(path: &std::path::Path, file: &LabFileArgs) -> Result<Trace> {
     if !path.is_file() {
         bail!(
-            "TRACE {}: no such file (a .csv or .wav force record)",
+            "TRACE {}: no such file (a .csv, .wav or .tdms force record)",
             path.display()
         );
     }
-    Ok(vlab::signals::read_trace(path)?)
+    file.read(path)
 }
 
 pub fn run(a: CorArgs) -> Result<()> {
-    let trace = read_trace(&a.trace)?;
+    let trace = read_trace(&a.trace, &a.file)?;
     let name = match &a.channel {
         Some(n) => n.clone(),
         None if trace.channel("force").is_ok() => "force".to_string(),

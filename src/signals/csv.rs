@@ -1,5 +1,7 @@
 //! Traces as CSV text: what a lab exports and what a spreadsheet reads. No
-//! thesis equation lives here.
+//! thesis equation lives here. The `csv` crate splits and quotes the text;
+//! this module adds vlab's conventions (comments, units, the time column) and
+//! the dialects real lab exports use.
 //!
 //! # Format written by vlab
 //!
@@ -21,20 +23,52 @@
 //!   unit). The first column is time in seconds: `time [s]` (also read:
 //!   `t [s]`, `time_s`, `t_s`). A header cell without brackets is read as a
 //!   name with an empty unit, so plain lab headers such as `force_n` load.
-//! - One row per sample, comma-separated, no quoting. Numbers are written with
-//!   Rust's shortest round-trip formatting (`{}`), so reading back gives
-//!   bit-identical `f64` samples. Time is written as `start_time_s + i / fs`.
+//! - One row per sample, comma-separated, no quoting (a channel name or unit
+//!   that would need quotes is refused). Samples are written with Rust's
+//!   shortest round-trip formatting (`{}`), so reading back gives
+//!   bit-identical `f64` samples.
+//! - Time in s, as the sample index over the rate: `(k + i) / fs` for sample
+//!   `i` when the start time is `k / fs` for a whole `k` (within
+//!   [`START_ON_GRID_REL_TOL`] of a sample period), so that at 40 kHz sample 1
+//!   of a record starting at 0 reads `0.000025`; `start_time_s + i / fs`
+//!   otherwise. The exact start time is kept in the `start_time_s` comment.
 //!
 //! # Reading
 //!
-//! [`read_csv`] reads vlab files and plain lab CSVs (header, no comments).
+//! [`read_csv`] reads vlab files and the CSVs lab software exports:
+//!
+//! - fields separated by `,`, `;` or a tab, optionally in double quotes
+//!   (`"force [N]"`), with or without a trailing separator on each line;
+//! - numbers with `.` or `,` as the decimal mark (`0,25;1,5e-3`); thousands
+//!   separators are not read;
+//! - `#` comment lines (the leading ones may declare the keys above; later
+//!   ones are skipped), blank lines, a UTF-8 byte-order mark, CRLF line ends,
+//!   empty spreadsheet rows (`;;;`), and a spreadsheet's `sep=;` first line
+//!   naming the separator.
+//!
+//! The dialect is detected unless [`CsvReadOptions`] (through
+//! [`read_csv_with`]) names it:
+//!
+//! - separator: the one of `;`, tab and `,` that appears in the header line
+//!   outside quotes; if several do, the one that splits the first data row into
+//!   as many cells as the header. Anything else is refused as ambiguous, as is
+//!   a detected `,`-separated file with a row of more cells than its header
+//!   (the sign of decimal commas in a comma-separated file).
+//! - decimal mark: `,` if a number holds a comma (unquoted, only possible when
+//!   the separator is `;` or a tab), `.` otherwise. A file that uses both is
+//!   refused, naming the line that decided the mark.
+//!
+//! Refused besides: text that is not UTF-8 (a spreadsheet's "CSV UTF-8" is),
+//! a quoted cell that spans lines, a bare carriage return inside a line.
+//!
 //! With a `sample_rate_hz` comment the time column is checked against it;
 //! without one the rate is inferred from the time column, `(n-1) / (t_last -
 //! t_0)`, taken as the nearest whole number of hertz when that is within 1 ppm.
 //! Either way every time value must lie on the uniform grid within
-//! [`TIME_GRID_REL_TOL`] of a sample period. Blank lines are skipped; a UTF-8
-//! byte-order mark is tolerated; CRLF line ends are fine.
+//! [`TIME_GRID_REL_TOL`] of a sample period. Errors name the line (one-based,
+//! counting every line of the file) and what is wrong with it.
 
+use std::borrow::Cow;
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -47,6 +81,45 @@ use crate::atomic_write::write_atomic;
 /// How far a time value may be from the uniform grid, as a fraction of the
 /// sample period.
 pub const TIME_GRID_REL_TOL: f64 = 1e-6;
+
+/// How close the start time must be to a whole number `k` of sample periods,
+/// as a fraction of a period, for the time column to be written as
+/// `(k + i) / fs`.
+pub const START_ON_GRID_REL_TOL: f64 = 1e-9;
+
+/// The field separators vlab reads: comma, semicolon, tab.
+pub const DELIMITERS: [u8; 3] = [b',', b';', b'\t'];
+
+/// How to read a CSV file's dialect. A `None` field is detected from the
+/// file (see the module docs); `Default` detects both.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CsvReadOptions {
+    /// Field separator, one of [`DELIMITERS`].
+    pub delimiter: Option<u8>,
+    /// `true`: numbers use `,` as the decimal mark (`0,25`); `false`: `.`.
+    pub decimal_comma: Option<bool>,
+}
+
+/// Parses a separator as typed on a command line: `,`, `;`, a tab character,
+/// `\t` or `tab`.
+pub fn parse_delimiter(text: &str) -> std::result::Result<u8, String> {
+    match text {
+        "," => Ok(b','),
+        ";" => Ok(b';'),
+        "\t" | "\\t" | "tab" | "TAB" => Ok(b'\t'),
+        other => Err(format!(
+            "'{other}' is not a separator vlab reads: give ',', ';' or tab"
+        )),
+    }
+}
+
+/// A separator as shown in messages.
+fn delimiter_name(d: u8) -> String {
+    match d {
+        b'\t' => "tab".to_string(),
+        d => format!("'{}'", d as char),
+    }
+}
 
 /// Writes `trace` to `path` as CSV (atomically; see the module docs).
 pub fn write_csv(path: &Path, trace: &Trace) -> Result<()> {
@@ -77,24 +150,31 @@ pub fn write_csv(path: &Path, trace: &Trace) -> Result<()> {
     let _ = writeln!(head, "# sample_rate_hz: {}", trace.sample_rate_hz);
     let _ = writeln!(head, "# start_time_s: {}", trace.start_time_s);
     let _ = writeln!(head, "# metadata: {metadata}");
-    head.push_str("time [s]");
-    for c in &trace.channels {
-        let _ = write!(head, ",{} [{}]", c.name, c.unit);
-    }
-    head.push('\n');
+    let mut header = vec!["time [s]".to_string()];
+    header.extend(
+        trace
+            .channels
+            .iter()
+            .map(|c| format!("{} [{}]", c.name, c.unit)),
+    );
+    let time = TimeColumn::of(trace);
     write_atomic(path, |out| {
         out.write_all(head.as_bytes())?;
-        let mut row = String::new();
+        let mut w = csv::WriterBuilder::new().from_writer(out);
+        w.write_record(&header)?;
+        let mut cell = String::new();
         for i in 0..trace.len() {
-            row.clear();
-            let _ = write!(row, "{}", trace.time_s(i));
+            cell.clear();
+            let _ = write!(cell, "{}", time.at(i));
+            w.write_field(&cell)?;
             for c in &trace.channels {
-                let _ = write!(row, ",{}", c.samples[i]);
+                cell.clear();
+                let _ = write!(cell, "{}", c.samples[i]);
+                w.write_field(&cell)?;
             }
-            row.push('\n');
-            out.write_all(row.as_bytes())?;
+            w.write_record(None::<&[u8]>)?;
         }
-        Ok(())
+        w.flush()
     })
     .map_err(|source| SignalsError::Io {
         path: path.to_path_buf(),
@@ -102,22 +182,67 @@ pub fn write_csv(path: &Path, trace: &Trace) -> Result<()> {
     })
 }
 
-/// True when `s` can sit in a header cell and be parsed back unchanged.
+/// The time column as written: sample index over rate, from the start's
+/// place on the sample grid when it has one.
+struct TimeColumn {
+    sample_rate_hz: f64,
+    start_time_s: f64,
+    /// `k` with `start_time_s = k / sample_rate_hz`, when there is one.
+    start_index: Option<f64>,
+}
+
+impl TimeColumn {
+    fn of(trace: &Trace) -> Self {
+        let fs = trace.sample_rate_hz;
+        let k = (trace.start_time_s * fs).round();
+        // Beyond 2^53 whole numbers are no longer exact in f64.
+        let on_grid = k.abs() < 2f64.powi(53)
+            && ((trace.start_time_s - k / fs) * fs).abs() <= START_ON_GRID_REL_TOL;
+        Self {
+            sample_rate_hz: fs,
+            start_time_s: trace.start_time_s,
+            start_index: on_grid.then_some(k),
+        }
+    }
+
+    /// Time of sample `i`, in s.
+    fn at(&self, i: usize) -> f64 {
+        match self.start_index {
+            Some(k) => (k + i as f64) / self.sample_rate_hz,
+            None => self.start_time_s + i as f64 / self.sample_rate_hz,
+        }
+    }
+}
+
+/// True when `s` can sit in a header cell unquoted and be parsed back unchanged.
 fn writable(s: &str) -> bool {
     s == s.trim() && !s.contains([',', '[', ']', '"', '\n', '\r'])
 }
 
-/// Reads a CSV trace (see the module docs for what is accepted).
+/// Reads a CSV trace, detecting its dialect (see the module docs).
 pub fn read_csv(path: &Path) -> Result<Trace> {
-    let text = std::fs::read_to_string(path).map_err(|source| SignalsError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    parse_csv(&text).map_err(|(line, kind)| SignalsError::Csv {
+    read_csv_with(path, &CsvReadOptions::default())
+}
+
+/// Reads a CSV trace with the separator and decimal mark given in `options`
+/// (each detected when `None`).
+pub fn read_csv_with(path: &Path, options: &CsvReadOptions) -> Result<Trace> {
+    let csv_err = |line, kind| SignalsError::Csv {
         path: path.to_path_buf(),
         line,
         kind,
-    })
+    };
+    let bytes = std::fs::read(path).map_err(|source| SignalsError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        let at = e.valid_up_to();
+        let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
+        let byte = bytes.get(at).copied().unwrap_or_default();
+        csv_err(line, CsvErrorKind::NotUtf8 { byte })
+    })?;
+    parse_csv_with(text, options).map_err(|(line, kind)| csv_err(line, kind))
 }
 
 /// A parse failure: one-based line number and what is wrong.
@@ -131,48 +256,175 @@ struct Declared {
     metadata: TraceMetadata,
 }
 
-/// Parses CSV text into a trace; errors carry one-based line numbers.
+/// Parses CSV text of any dialect, detected.
+#[cfg(test)]
 fn parse_csv(text: &str) -> Result<Trace, ParseError> {
+    parse_csv_with(text, &CsvReadOptions::default())
+}
+
+/// Parses CSV text into a trace; errors carry one-based line numbers.
+fn parse_csv_with(text: &str, options: &CsvReadOptions) -> Result<Trace, ParseError> {
+    if let Some(d) = options.delimiter
+        && !DELIMITERS.contains(&d)
+    {
+        return Err((
+            0,
+            CsvErrorKind::UnsupportedDelimiter {
+                delimiter: d as char,
+            },
+        ));
+    }
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty());
 
+    // The leading block, read line by line: blank lines, `# key: value`
+    // comments, a spreadsheet's `sep=` line. The header follows it.
     let mut declared = Declared::default();
-    let (header_line, header) = loop {
-        match lines.next() {
-            None => return Err((1, CsvErrorKind::Empty)),
-            Some((n, l)) if l.starts_with('#') => parse_comment(n, l, &mut declared)?,
-            Some(found) => break found,
+    let mut sep_line = None;
+    let mut offset = 0;
+    let mut line = 0;
+    let header_line = loop {
+        let rest = &text[offset..];
+        if rest.is_empty() {
+            return Err((1, CsvErrorKind::Empty));
         }
+        line += 1;
+        let end = rest.find('\n').map_or(rest.len(), |e| e + 1);
+        let raw = rest[..end].trim_end_matches(['\n', '\r']);
+        let trimmed = raw.trim();
+        if trimmed.starts_with('#') {
+            parse_comment(line, trimmed, &mut declared)?;
+        } else if let Some(sep) = raw.strip_prefix("sep=") {
+            sep_line = Some(match sep.as_bytes() {
+                [d] if DELIMITERS.contains(d) => *d,
+                _ => {
+                    return Err((
+                        line,
+                        CsvErrorKind::AmbiguousDelimiter {
+                            problem: format!("'sep={sep}' names no separator vlab reads"),
+                        },
+                    ));
+                }
+            });
+        } else if !trimmed.is_empty() {
+            break line;
+        }
+        offset += end;
     };
-    let columns = parse_header(header_line, header)?;
+    let body = &text[offset..];
 
-    let n_cols = columns.len() + 1;
+    // The csv crate does not report reliable line numbers around comments and
+    // blank lines, so they are taken out here, one record per kept line, and
+    // each record's file line remembered.
+    let mut kept = String::with_capacity(body.len());
+    let mut record_lines = Vec::new();
+    for (k, l) in body.lines().enumerate() {
+        let n = header_line + k;
+        let t = l.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let syntax = |problem: &str| {
+            (
+                n,
+                CsvErrorKind::Syntax {
+                    problem: problem.to_string(),
+                },
+            )
+        };
+        if l.contains('\r') {
+            return Err(syntax(
+                "a carriage return inside the line: save the file with LF or CRLF line ends",
+            ));
+        }
+        if l.bytes().filter(|&b| b == b'"').count() % 2 == 1 {
+            return Err(syntax(
+                "unbalanced double quote: a quoted cell must open and close on its line",
+            ));
+        }
+        kept.push_str(l);
+        kept.push('\n');
+        record_lines.push(n);
+    }
+
+    let delimiter = match options.delimiter.or(sep_line) {
+        Some(d) => d,
+        None => detect_delimiter(header_line, &kept)?,
+    };
+    let detected_comma = options.delimiter.or(sep_line).is_none() && delimiter == b',';
+
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .delimiter(delimiter)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(kept.as_bytes());
+
+    let mut mark = DecimalMark::new(options.decimal_comma);
+    let mut columns: Option<Vec<(String, String)>> = None;
     let mut time = Vec::new();
     let mut row_lines = Vec::new();
-    let mut data: Vec<Vec<f64>> = vec![Vec::new(); columns.len()];
-    for (n, l) in lines {
-        let cells: Vec<&str> = l.split(',').collect();
-        if cells.len() != n_cols {
+    let mut data: Vec<Vec<f64>> = Vec::new();
+    let mut record = csv::StringRecord::new();
+    for &n in &record_lines {
+        match reader.read_record(&mut record) {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => {
+                return Err((
+                    n,
+                    CsvErrorKind::Syntax {
+                        problem: e.to_string(),
+                    },
+                ));
+            }
+        }
+        // A spreadsheet's empty rows (";;;") are blank lines.
+        if record.iter().all(str::is_empty) {
+            continue;
+        }
+        // A separator closing every line leaves an empty last cell: drop it.
+        let used = match record.len() {
+            k if k > 1 && record[k - 1].is_empty() => k - 1,
+            k => k,
+        };
+        let cells = || record.iter().take(used);
+        let Some(columns) = &columns else {
+            let header: Vec<&str> = cells().collect();
+            let parsed = parse_header(n, &header)?;
+            data = vec![Vec::new(); parsed.len()];
+            columns = Some(parsed);
+            continue;
+        };
+        let n_cols = columns.len() + 1;
+        if used != n_cols {
+            if detected_comma && used > n_cols {
+                return Err((
+                    n,
+                    CsvErrorKind::AmbiguousDelimiter {
+                        problem: format!(
+                            "the header splits into {n_cols} columns at ',' but this row into \
+                             {used} cells: numbers with decimal commas in a ','-separated file? \
+                             They cannot be told apart from the separators unless quoted"
+                        ),
+                    },
+                ));
+            }
             return Err((
                 n,
                 CsvErrorKind::Ragged {
                     expected: n_cols,
-                    got: cells.len(),
+                    got: used,
                 },
             ));
         }
         row_lines.push(n);
-        for (j, cell) in cells.iter().enumerate() {
+        for (j, cell) in cells().enumerate() {
             let header = if j == 0 {
                 "time"
             } else {
                 columns[j - 1].0.as_str()
             };
-            let value = parse_number(n, header, cell)?;
+            let value = mark.parse(n, header, cell)?;
             if j == 0 {
                 time.push(value);
             } else {
@@ -180,6 +432,9 @@ fn parse_csv(text: &str) -> Result<Trace, ParseError> {
             }
         }
     }
+    let Some(columns) = columns else {
+        return Err((header_line, CsvErrorKind::Empty));
+    };
     if time.len() < 2 {
         return Err((header_line, CsvErrorKind::TooFewRows { got: time.len() }));
     }
@@ -211,6 +466,145 @@ fn parse_csv(text: &str) -> Result<Trace, ParseError> {
             })?;
     }
     Ok(trace)
+}
+
+/// How often `d` occurs in `line` outside double quotes.
+fn count_unquoted(line: &str, d: u8) -> usize {
+    let mut quoted = false;
+    let mut n = 0;
+    for &b in line.as_bytes() {
+        if b == b'"' {
+            quoted = !quoted;
+        } else if b == d && !quoted {
+            n += 1;
+        }
+    }
+    n
+}
+
+/// The separator of the `kept` lines (header first), see the module docs.
+fn detect_delimiter(header_line: usize, kept: &str) -> Result<u8, ParseError> {
+    let mut lines = kept.lines();
+    let header = lines.next().unwrap_or_default();
+    let first_row = lines.next();
+    let present: Vec<(u8, usize)> = [b';', b'\t', b',']
+        .into_iter()
+        .map(|d| (d, count_unquoted(header, d)))
+        .filter(|&(_, n)| n > 0)
+        .collect();
+    match present.as_slice() {
+        [] => return Ok(b','),
+        [(d, _)] => return Ok(*d),
+        _ => {}
+    }
+    let fitting: Vec<u8> = first_row.map_or_else(Vec::new, |row| {
+        present
+            .iter()
+            .filter(|&&(d, n)| count_unquoted(row, d) == n)
+            .map(|&(d, _)| d)
+            .collect()
+    });
+    if let [d] = fitting.as_slice() {
+        return Ok(*d);
+    }
+    let listed = present
+        .iter()
+        .map(|&(d, n)| format!("{} ({n}x)", delimiter_name(d)))
+        .collect::<Vec<_>>()
+        .join(" and ");
+    Err((
+        header_line,
+        CsvErrorKind::AmbiguousDelimiter {
+            problem: format!(
+                "the header holds {listed} outside quotes and the first data row does not tell \
+                 which one separates the columns"
+            ),
+        },
+    ))
+}
+
+/// The file's decimal mark: given, or decided by the first number that has one.
+struct DecimalMark {
+    /// `Some(true)`: `,`; `Some(false)`: `.`; `None`: not yet seen.
+    comma: Option<bool>,
+    /// Where it was decided: line and cell, or `None` when it was given.
+    decided_by: Option<(usize, String)>,
+}
+
+impl DecimalMark {
+    fn new(given: Option<bool>) -> Self {
+        Self {
+            comma: given,
+            decided_by: None,
+        }
+    }
+
+    /// Parses one numeric cell (already trimmed) of column `column` on `line`.
+    fn parse(&mut self, line: usize, column: &str, cell: &str) -> Result<f64, ParseError> {
+        let bad = |problem: String| {
+            (
+                line,
+                CsvErrorKind::DecimalMark {
+                    column: column.to_string(),
+                    text: cell.to_string(),
+                    problem,
+                },
+            )
+        };
+        let has_comma = cell.contains(',');
+        if has_comma && cell.contains('.') {
+            return Err(bad(
+                "has both ',' and '.': thousands separators are not read".into(),
+            ));
+        }
+        if has_comma || cell.contains('.') {
+            match (self.comma, &self.decided_by) {
+                (None, _) => {
+                    self.comma = Some(has_comma);
+                    self.decided_by = Some((line, cell.to_string()));
+                }
+                (Some(comma), _) if comma == has_comma => {}
+                (Some(comma), Some((first_line, first))) => {
+                    let (this, that) = if comma { (".", ",") } else { (",", ".") };
+                    return Err(bad(format!(
+                        "has '{this}' as the decimal mark but line {first_line} ('{first}') has \
+                         '{that}': one file, one decimal mark"
+                    )));
+                }
+                (Some(comma), None) => {
+                    return Err(bad(if comma {
+                        "has a '.' but the decimal mark was given as ','".into()
+                    } else {
+                        "has a ',' but the decimal mark was given as '.'".into()
+                    }));
+                }
+            }
+        }
+        let text = if has_comma {
+            Cow::Owned(cell.replace(',', "."))
+        } else {
+            Cow::Borrowed(cell)
+        };
+        let value = text.parse::<f64>().map_err(|_| {
+            (
+                line,
+                CsvErrorKind::NotANumber {
+                    column: column.to_string(),
+                    text: cell.to_string(),
+                },
+            )
+        })?;
+        if !value.is_finite() {
+            return Err((
+                line,
+                CsvErrorKind::NonFinite {
+                    column: column.to_string(),
+                    value,
+                },
+            ));
+        }
+        Ok(value)
+    }
 }
 
 /// Reads one `# key: value` comment into `declared`.
@@ -254,10 +648,10 @@ fn parse_comment(line: usize, text: &str, declared: &mut Declared) -> Result<(),
     Ok(())
 }
 
-/// Splits the header into (name, unit) per data column, checking the time column.
-fn parse_header(line: usize, header: &str) -> Result<Vec<(String, String)>, ParseError> {
-    let mut cells = header.split(',').map(str::trim);
-    let first = cells.next().unwrap_or_default();
+/// Splits the header cells into (name, unit) per data column, checking the
+/// time column.
+fn parse_header(line: usize, cells: &[&str]) -> Result<Vec<(String, String)>, ParseError> {
+    let first = cells.first().copied().unwrap_or_default();
     let (time_name, time_unit) = split_name_unit(first);
     let is_time = matches!(
         (time_name.to_ascii_lowercase().as_str(), time_unit),
@@ -273,8 +667,8 @@ fn parse_header(line: usize, header: &str) -> Result<Vec<(String, String)>, Pars
     }
     let mut seen = BTreeSet::new();
     let mut columns = Vec::new();
-    for (j, cell) in cells.enumerate() {
-        let column = j + 2;
+    for (j, &cell) in cells.iter().enumerate().skip(1) {
+        let column = j + 1;
         let bad = |problem: &str| {
             (
                 line,
@@ -307,30 +701,7 @@ fn split_name_unit(cell: &str) -> (&str, Option<&str>) {
     {
         return (name.trim(), Some(unit.trim()));
     }
-    (cell, None)
-}
-
-fn parse_number(line: usize, column: &str, cell: &str) -> Result<f64, ParseError> {
-    let text = cell.trim();
-    let value = text.parse::<f64>().map_err(|_| {
-        (
-            line,
-            CsvErrorKind::NotANumber {
-                column: column.to_string(),
-                text: text.to_string(),
-            },
-        )
-    })?;
-    if !value.is_finite() {
-        return Err((
-            line,
-            CsvErrorKind::NonFinite {
-                column: column.to_string(),
-                value,
-            },
-        ));
-    }
-    Ok(value)
+    (cell.trim(), None)
 }
 
 /// Sample rate and start time from the declarations and the time column,
@@ -459,6 +830,60 @@ mod tests {
         std::fs::remove_dir_all(dir).ok();
     }
 
+    /// The time cells of a written file, as text.
+    fn time_cells(path: &std::path::Path) -> Vec<String> {
+        std::fs::read_to_string(path)
+            .expect("text")
+            .lines()
+            .skip(5)
+            .map(|l| l.split(',').next().unwrap_or_default().to_string())
+            .collect()
+    }
+
+    #[test]
+    fn time_is_written_as_sample_index_over_rate() {
+        let dir = scratch("time");
+        let path = dir.join("t.csv");
+        let write_read = |start: f64| {
+            let mut t = Trace::new(40_000.0, start).expect("trace");
+            t.add_channel("x", "m", vec![1.0 / 3.0, -0.0, 2e-300, 7.0])
+                .expect("x");
+            write_csv(&path, &t).expect("write");
+            let back = read_csv(&path).expect("read");
+            assert_eq!(back.start_time_s.to_bits(), start.to_bits());
+            let bits = |c: &[f64]| c.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(&back.channels[0].samples),
+                bits(&t.channels[0].samples)
+            );
+            (t, time_cells(&path))
+        };
+        // Starts on the 40 kHz grid: (k + i) / fs, shortest text.
+        let on_grid: [(f64, [&str; 4]); 4] = [
+            (0.0, ["0", "0.000025", "0.00005", "0.000075"]),
+            // A start that should be 0, off by rounding (seen from vlab shake).
+            (
+                -1.3877787807814457e-17,
+                ["0", "0.000025", "0.00005", "0.000075"],
+            ),
+            (
+                3000.0 / 40_000.0,
+                ["0.075", "0.075025", "0.07505", "0.075075"],
+            ),
+            (-0.01, ["-0.01", "-0.009975", "-0.00995", "-0.009925"]),
+        ];
+        for (start, expected) in on_grid {
+            assert_eq!(write_read(start).1, expected, "start {start:e}");
+        }
+        // 0.4 of a period off the grid: start + i / fs, as the trace computes it
+        // (which is not the shortest decimal: 0.000035000000000000004).
+        let (t, cells) = write_read(1e-5);
+        let expected: Vec<String> = (0..4).map(|i| format!("{}", t.time_s(i))).collect();
+        assert_eq!(cells, expected);
+        assert_eq!(cells[1], "0.000035000000000000004");
+        std::fs::remove_dir_all(dir).ok();
+    }
+
     #[test]
     fn plain_lab_csv_infers_the_rate() {
         // Times printed to 7 decimals at 40 kHz are exact on the grid.
@@ -562,6 +987,296 @@ mod tests {
             Err(SignalsError::Io { .. })
         ));
         std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// The trace every dialect below spells: 4 samples at 40 kHz from 0.075 s.
+    fn dialect_reference() -> Trace {
+        let mut t = Trace::new(40_000.0, 0.075).expect("trace");
+        t.add_channel("force", "N", vec![0.25, -1.5e-3, 12.0, 0.0])
+            .expect("force");
+        t.add_channel("acceleration", "m/s^2", vec![1.0, 2.5, -3.25, 1e-7])
+            .expect("accel");
+        t
+    }
+
+    /// Rows of [`dialect_reference`] with `sep` between cells, `comma` for
+    /// decimal commas, `end` at the end of each line.
+    fn rows(sep: &str, comma: bool, end: &str) -> String {
+        let rows = [
+            ["0.075", "0.25", "1"],
+            ["0.075025", "-1.5e-3", "2.5"],
+            ["0.07505", "12", "-3.25"],
+            ["0.075075", "0.0", "1e-7"],
+        ];
+        rows.iter()
+            .map(|r| {
+                let cells: Vec<String> = r
+                    .iter()
+                    .map(|c| {
+                        if comma {
+                            c.replace('.', ",")
+                        } else {
+                            c.to_string()
+                        }
+                    })
+                    .collect();
+                format!("{}{end}", cells.join(sep))
+            })
+            .collect()
+    }
+
+    fn same_trace(a: &Trace, b: &Trace, what: &str) {
+        assert_eq!(a.sample_rate_hz, b.sample_rate_hz, "{what}: rate");
+        assert_eq!(
+            a.start_time_s.to_bits(),
+            b.start_time_s.to_bits(),
+            "{what}: start"
+        );
+        assert_eq!(a.channels, b.channels, "{what}: channels");
+    }
+
+    /// Each dialect a lab exports, with what it must be read as when named.
+    fn dialects() -> Vec<(&'static str, String, CsvReadOptions)> {
+        let named = |d: u8, comma: bool| CsvReadOptions {
+            delimiter: Some(d),
+            decimal_comma: Some(comma),
+        };
+        vec![
+            (
+                "plain",
+                format!(
+                    "time [s],force [N],acceleration [m/s^2]\n{}",
+                    rows(",", false, "\n")
+                ),
+                named(b',', false),
+            ),
+            (
+                "quoted headers",
+                format!(
+                    "\"time [s]\",\"force [N]\",\"acceleration [m/s^2]\"\n{}",
+                    rows(",", false, "\n")
+                ),
+                named(b',', false),
+            ),
+            (
+                "quoted decimal commas, comma-separated",
+                format!(
+                    "time [s],force [N],acceleration [m/s^2]\n{}",
+                    rows("\",\"", true, "\"\n")
+                        .replace('\n', "\n\"")
+                        .trim_end_matches('"')
+                )
+                .replacen("]\n", "]\n\"", 1),
+                named(b',', true),
+            ),
+            (
+                "semicolon, decimal comma",
+                format!(
+                    "time [s];force [N];acceleration [m/s^2]\n{}",
+                    rows(";", true, "\n")
+                ),
+                named(b';', true),
+            ),
+            (
+                "semicolon, decimal point",
+                format!(
+                    "time [s];force [N];acceleration [m/s^2]\n{}",
+                    rows(";", false, "\n")
+                ),
+                named(b';', false),
+            ),
+            (
+                "tab, decimal comma",
+                format!(
+                    "time [s]\tforce [N]\tacceleration [m/s^2]\n{}",
+                    rows("\t", true, "\n")
+                ),
+                named(b'\t', true),
+            ),
+            (
+                "tab, decimal point",
+                format!(
+                    "time [s]\tforce [N]\tacceleration [m/s^2]\n{}",
+                    rows("\t", false, "\n")
+                ),
+                named(b'\t', false),
+            ),
+            (
+                "comments everywhere",
+                format!(
+                    "# exported by a scope\n\n# channel 1: force\ntime [s],force [N],acceleration [m/s^2]\n# data\n{}\n# end\n",
+                    rows(",", false, "\n")
+                ),
+                named(b',', false),
+            ),
+            (
+                "CRLF, BOM, quoted, semicolon, decimal comma, trailing separator, empty rows",
+                format!(
+                    "\u{feff}\"time [s]\";\"force [N]\";\"acceleration [m/s^2]\";\r\n{};;;\r\n;;;\r\n",
+                    rows(";", true, ";\r\n")
+                ),
+                named(b';', true),
+            ),
+            (
+                "spreadsheet sep= line",
+                format!(
+                    "sep=;\r\ntime [s];force [N];acceleration, lab [m/s^2]\r\n{}",
+                    rows(";", true, "\r\n")
+                ),
+                named(b';', true),
+            ),
+        ]
+    }
+
+    #[test]
+    fn each_dialect_reads_the_same_trace_detected_or_named() {
+        let mut expected = dialect_reference();
+        for (what, text, named) in dialects() {
+            if what == "spreadsheet sep= line" {
+                expected.channels[1].name = "acceleration, lab".into();
+            }
+            let detected = parse_csv(&text).unwrap_or_else(|e| panic!("{what}: {e:?}\n{text}"));
+            same_trace(&detected, &expected, what);
+            let given = parse_csv_with(&text, &named).unwrap_or_else(|e| panic!("{what}: {e:?}"));
+            same_trace(&given, &detected, what);
+        }
+    }
+
+    #[test]
+    fn ambiguous_dialects_are_refused_with_the_line() {
+        // Unquoted decimal commas in a comma-separated file.
+        match kind("# x\ntime [s],force [N]\n0,25,1,5\n0,5,2\n") {
+            (3, CsvErrorKind::AmbiguousDelimiter { problem }) => {
+                assert!(problem.contains("decimal commas"), "{problem}")
+            }
+            other => panic!("{other:?}"),
+        }
+        // Named, the same file is plainly ragged.
+        let comma = CsvReadOptions {
+            delimiter: Some(b','),
+            ..CsvReadOptions::default()
+        };
+        assert!(matches!(
+            parse_csv_with("time [s],force [N]\n0,25,1,5\n", &comma),
+            Err((
+                2,
+                CsvErrorKind::Ragged {
+                    expected: 2,
+                    got: 4
+                }
+            ))
+        ));
+        // ';' and ',' both split header and first row alike.
+        match kind("time [s];force [N],x [m]\n0;1,2\n1;2,3\n") {
+            (1, CsvErrorKind::AmbiguousDelimiter { problem }) => {
+                assert!(problem.contains("';' (1x) and ',' (1x)"), "{problem}")
+            }
+            other => panic!("{other:?}"),
+        }
+        // Two decimal marks in one file: the line that decided is named.
+        match kind("time [s];f [N]\n0;1,5\n0,1;2.5\n") {
+            (
+                3,
+                CsvErrorKind::DecimalMark {
+                    column,
+                    text,
+                    problem,
+                },
+            ) => {
+                assert_eq!((column.as_str(), text.as_str()), ("f", "2.5"));
+                assert!(problem.contains("line 2 ('1,5')"), "{problem}");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(
+            kind("time [s];f [N]\n0;1.234,5\n0,1;2\n"),
+            (2, CsvErrorKind::DecimalMark { .. })
+        ));
+        // A mark that contradicts the one given.
+        let comma_mark = CsvReadOptions {
+            decimal_comma: Some(true),
+            ..CsvReadOptions::default()
+        };
+        assert!(matches!(
+            parse_csv_with("time [s];f [N]\n0;1\n0.1;2\n", &comma_mark),
+            Err((3, CsvErrorKind::DecimalMark { .. }))
+        ));
+        let point_mark = CsvReadOptions {
+            decimal_comma: Some(false),
+            ..CsvReadOptions::default()
+        };
+        assert!(matches!(
+            parse_csv_with("time [s];f [N]\n0;1\n0,1;2\n", &point_mark),
+            Err((3, CsvErrorKind::DecimalMark { .. }))
+        ));
+        assert!(matches!(
+            kind("sep=|\ntime [s]|f [N]\n0|1\n"),
+            (1, CsvErrorKind::AmbiguousDelimiter { .. })
+        ));
+        let pipe = CsvReadOptions {
+            delimiter: Some(b'|'),
+            ..CsvReadOptions::default()
+        };
+        assert!(matches!(
+            parse_csv_with("time [s]|f [N]\n0|1\n", &pipe),
+            Err((0, CsvErrorKind::UnsupportedDelimiter { delimiter: '|' }))
+        ));
+    }
+
+    #[test]
+    fn line_numbers_count_every_line_of_the_file() {
+        // Comments and blank lines after the header, CRLF, a BOM.
+        let text = "\u{feff}# a\r\n\r\ntime [s];f [N]\r\n# b\r\n0;1\r\n\r\n  \r\n0,1;x\r\n";
+        match kind(text) {
+            (8, CsvErrorKind::NotANumber { column, text }) => {
+                assert_eq!((column.as_str(), text.as_str()), ("f", "x"));
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(
+            kind("time [s],f [N]\n0,1\n\"0.1,2\n"),
+            (3, CsvErrorKind::Syntax { .. })
+        ));
+        // Carriage returns alone (old Mac text) make one long line.
+        assert!(matches!(
+            kind("time [s],f [N]\r0,1\r0.1,2\r"),
+            (1, CsvErrorKind::Syntax { .. })
+        ));
+    }
+
+    #[test]
+    fn text_that_is_not_utf8_is_refused_with_its_line() {
+        let dir = scratch("latin1");
+        let path = dir.join("latin1.csv");
+        // 0xB5 is the micro sign in Latin-1.
+        std::fs::write(&path, b"time [s],x [m]\n0,1\n1,2 \xb5m\n").expect("write");
+        let err = read_csv(&path).expect_err("latin-1");
+        assert!(
+            matches!(
+                err,
+                SignalsError::Csv {
+                    line: 3,
+                    kind: CsvErrorKind::NotUtf8 { byte: 0xB5 },
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn delimiter_names_from_the_command_line() {
+        assert_eq!(parse_delimiter(","), Ok(b','));
+        assert_eq!(parse_delimiter(";"), Ok(b';'));
+        for tab in ["\t", "\\t", "tab"] {
+            assert_eq!(parse_delimiter(tab), Ok(b'\t'));
+        }
+        assert!(
+            parse_delimiter("|")
+                .unwrap_err()
+                .contains("',', ';' or tab")
+        );
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //! the parameter, channel, file, line or column at fault, with the unit and the
 //! valid range where there is one, so that a lab user can fix the input without
 //! reading the source. File-format problems carry a nested kind
-//! ([`CsvErrorKind`], [`WavErrorKind`]) so callers can match on them.
+//! ([`CsvErrorKind`], [`WavErrorKind`], [`TdmsErrorKind`]) so callers can match
+//! on them.
 
 use std::io;
 use std::path::PathBuf;
@@ -131,7 +132,7 @@ pub enum SignalsError {
         reason: String,
     },
     /// A trace file whose kind cannot be told from its name.
-    #[error("{}: unknown kind of trace file: expected .csv (a time column first) or .wav (with its .wav.json sidecar)", path.display())]
+    #[error("{}: unknown kind of trace file: expected .csv (a time column first), .wav (with its .wav.json sidecar) or .tdms", path.display())]
     UnknownTraceFormat {
         /// The file.
         path: PathBuf,
@@ -171,6 +172,14 @@ pub enum SignalsError {
         path: PathBuf,
         /// What is wrong.
         kind: WavErrorKind,
+    },
+    /// A TDMS trace file is unreadable or unusable as a trace.
+    #[error("{}: {kind}", path.display())]
+    Tdms {
+        /// The TDMS file.
+        path: PathBuf,
+        /// What is wrong.
+        kind: TdmsErrorKind,
     },
     /// A plot could not be drawn.
     #[error("{}: plot: {message}", path.display())]
@@ -260,6 +269,42 @@ pub enum CsvErrorKind {
         /// What is wrong.
         problem: String,
     },
+    /// The bytes are not UTF-8 text.
+    #[error(
+        "byte 0x{byte:02X} is not UTF-8 text: save the file as UTF-8 (a spreadsheet's \"CSV UTF-8\")"
+    )]
+    NotUtf8 {
+        /// The first offending byte.
+        byte: u8,
+    },
+    /// The field separator cannot be told from the file.
+    #[error("{problem}; name it with --delimiter (',', ';' or tab)")]
+    AmbiguousDelimiter {
+        /// What makes it ambiguous.
+        problem: String,
+    },
+    /// A number's decimal mark contradicts the file's (or the one asked for).
+    #[error("column '{column}': '{text}' {problem}")]
+    DecimalMark {
+        /// Column header.
+        column: String,
+        /// The cell text.
+        text: String,
+        /// What is wrong, and where the file's decimal mark was decided.
+        problem: String,
+    },
+    /// A delimiter other than the three vlab reads was asked for.
+    #[error("delimiter {delimiter:?}: vlab reads ',', ';' or tab")]
+    UnsupportedDelimiter {
+        /// The delimiter asked for.
+        delimiter: char,
+    },
+    /// The CSV parser itself refused the text.
+    #[error("{problem}")]
+    Syntax {
+        /// The parser's message.
+        problem: String,
+    },
     /// A channel name or unit cannot be written into a CSV header.
     #[error(
         "channel '{name}' unit '{unit}': names and units must not contain ',', '[', ']', '\"' or line breaks"
@@ -345,6 +390,113 @@ pub enum WavErrorKind {
     /// Sample format not supported.
     #[error("unsupported WAV sample format: {0}")]
     UnsupportedFormat(String),
+}
+
+/// What is wrong with a TDMS trace file.
+#[derive(Debug, thiserror::Error)]
+pub enum TdmsErrorKind {
+    /// The TDMS reader (crate `tdms-rs`) could not read the file.
+    #[error("TDMS: {0}")]
+    Reader(#[source] tdms_rs::TdmsError),
+    /// A segment does not start with the TDMS tag.
+    #[error(
+        "byte {offset}: expected a TDMS segment (tag 'TDSm'), found {found:?}: not a TDMS file, or a damaged one"
+    )]
+    NotTdms {
+        /// Byte offset of the segment.
+        offset: u64,
+        /// What was there, as text.
+        found: String,
+    },
+    /// A segment uses a layout the reader does not support.
+    #[error(
+        "segment at byte {offset} holds {layout}, which vlab does not read: export the channels as plain little-endian f64/f32 waveforms"
+    )]
+    UnsupportedLayout {
+        /// Byte offset of the segment.
+        offset: u64,
+        /// The layout, in words.
+        layout: &'static str,
+    },
+    /// The raw data in the file do not add up to the channels found.
+    #[error(
+        "the segments hold {in_segments} bytes of raw data but the channels account for {in_channels}: \
+         a layout vlab does not read (several data chunks per segment?)"
+    )]
+    RawDataUnaccounted {
+        /// Raw bytes in the segments.
+        in_segments: u64,
+        /// Raw bytes the channels' indices describe.
+        in_channels: u64,
+    },
+    /// No channel holds data.
+    #[error("no channels: the file holds no waveform to read")]
+    NoChannels,
+    /// Channels in more than one group.
+    #[error("channels in {count} groups [{groups}]: vlab reads one group (one record) per file")]
+    SeveralGroups {
+        /// Number of groups with channels.
+        count: usize,
+        /// Their names.
+        groups: String,
+    },
+    /// A channel is not of a floating-point type.
+    #[error(
+        "channel '{channel}' holds {data_type} values: vlab reads f64 and f32 channels in physical units"
+    )]
+    UnsupportedDataType {
+        /// Channel name.
+        channel: String,
+        /// Its TDMS data type.
+        data_type: String,
+    },
+    /// A channel's waveform timing is missing or unusable.
+    #[error("channel '{channel}': {problem}")]
+    BadTiming {
+        /// Channel name.
+        channel: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// Channels of different lengths.
+    #[error(
+        "channel '{channel}' has {len} samples but '{first}' has {first_len}: \
+         the channels of a record must have equal length"
+    )]
+    UnequalLength {
+        /// First channel.
+        first: String,
+        /// Its length.
+        first_len: usize,
+        /// The channel that differs.
+        channel: String,
+        /// Its length.
+        len: usize,
+    },
+    /// A segment runs past the end of the file.
+    #[error(
+        "segment at byte {offset} runs to byte {end} but the file ends at byte {len}: a truncated file"
+    )]
+    Truncated {
+        /// Byte offset of the segment.
+        offset: u64,
+        /// Where the segment says it ends.
+        end: u64,
+        /// File length in bytes.
+        len: u64,
+    },
+    /// A channel's samples cannot make a trace channel (empty name, NaN, ...).
+    #[error("{problem}")]
+    BadChannel {
+        /// What is wrong, naming the channel.
+        problem: String,
+    },
+    /// The file-level `vlab_metadata` property is unusable.
+    #[error("property 'vlab_metadata': {problem}")]
+    BadMetadata {
+        /// What is wrong.
+        problem: String,
+    },
 }
 
 /// Checks that `value` is positive and finite; names the parameter otherwise.

@@ -2,14 +2,15 @@
 //! thesis Chapter 7 — usable on real lab records alone.
 //!
 //! - [`trace`]: multichannel uniformly sampled records ([`Trace`]);
-//! - [`csv`], [`wav`]: trace files (CSV with units in the header; 32-bit float
-//!   WAV with a JSON sidecar);
+//! - [`csv`], [`wav`], [`tdms`](mod@tdms): trace files (CSV with units in the
+//!   header, read in the dialects lab software exports; 32-bit float WAV with a
+//!   JSON sidecar; National Instruments TDMS, read only);
 //! - [`spectrum`]: one-sided amplitude spectra (scaling convention stated there);
 //! - [`power`]: Yang's structure-independent dissipated power, eq. 7.8-7.12,
 //!   and the damping efficiency, eq. 7.7 / 6.10;
 //! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
 //! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
-//! - [`trace_file`]: either format, told apart by the file's extension;
+//! - [`trace_file`]: any of these formats, told apart by the file's extension;
 //! - [`plot`]: small SVG plots;
 //! - [`bench`](mod@bench): a timing hook for `vlab bench`.
 //!
@@ -25,6 +26,7 @@ pub mod impacts;
 pub mod plot;
 pub mod power;
 pub mod spectrum;
+pub mod tdms;
 pub mod trace;
 pub mod trace_file;
 pub mod wav;
@@ -34,8 +36,8 @@ mod testutil;
 
 pub use bench::{YangBenchReport, bench_yang_power};
 pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
-pub use csv::{read_csv, write_csv};
-pub use error::{CsvErrorKind, Result, SignalsError, WavErrorKind};
+pub use csv::{CsvReadOptions, read_csv, read_csv_with, write_csv};
+pub use error::{CsvErrorKind, Result, SignalsError, TdmsErrorKind, WavErrorKind};
 pub use impacts::{
     CorEstimate, DropTestResult, Impact, ImpactDetection, ImpactParams, Polarity, detect_impacts,
     estimate_cor, restitution_from_impact_times,
@@ -48,8 +50,9 @@ pub use power::{
     wrap_phase_rad, yang_power, yang_power_of_trace,
 };
 pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
+pub use tdms::read_tdms;
 pub use trace::{Channel, Sensitivity, Trace, TraceMetadata};
-pub use trace_file::read_trace;
+pub use trace_file::{TraceFormat, read_trace, read_trace_with};
 pub use wav::{
     WavChannelInfo, WavSidecar, read_wav, read_wav_with, sidecar_path, write_wav,
     write_wav_with_full_scale,
