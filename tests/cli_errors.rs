@@ -161,3 +161,33 @@ fn failed_run_leaves_no_folders() {
         "the failed run left deep/ behind"
     );
 }
+
+/// A bad value reads the same wherever it was given: `<key> = <value>
+/// <unit>: must be <valid>`, with the scene key, the rig key or the flag.
+#[test]
+fn one_message_shape_for_a_scene_file_a_rig_file_and_a_flag() {
+    let dir = Scratch::new("shape");
+    dir.write("scene.toml", "[particles]\ndiameter_m = -0.005\n");
+    let rig = vlab::rig::builtin_toml("ideal")
+        .expect("built in")
+        .replace("sensitivity_v_per_n = ", "sensitivity_v_per_n = -");
+    dir.write("rig.toml", &rig);
+    let scene = refuses_in(&dir, &["shake", "--scene", "scene.toml"], &[]);
+    let rig = refuses_in(&dir, &["shake", "--rig", "rig.toml"], &[]);
+    let flag = refuses_in(&dir, &["shake", "--freq", "-40"], &[]);
+    let cycles = refuses_in(&dir, &["shake", "--cycles", "0"], &[]);
+    for (line, shape) in [
+        (
+            &scene,
+            "particles.diameter_m = -0.005 m: must be positive and finite",
+        ),
+        (&rig, "force.sensitivity_v_per_n = -"),
+        (&flag, "--freq = -40 Hz: must be positive and finite"),
+        (&cycles, "--cycles = 0: must be at least 1"),
+    ] {
+        assert!(line.contains(shape), "'{line}' lacks '{shape}'");
+    }
+    assert!(rig.contains(" V/N: must be positive and finite"), "{rig}");
+    assert!(scene.contains("scene.toml"), "{scene}");
+    assert!(rig.contains("rig.toml"), "{rig}");
+}

@@ -8,7 +8,7 @@ use clap::Args;
 
 use vlab::dem::restitution::realised_restitution;
 use vlab::scene::damper::contact_laws;
-use vlab::scene::file::{Scene, THESIS_DAMPER_TOML};
+use vlab::scene::file::{Scene, THESIS_DAMPER_TOML, THESIS_SCENE_FILE};
 
 #[derive(Debug, Clone, Args)]
 pub struct SceneArgs {
@@ -36,7 +36,17 @@ pub fn run(a: SceneArgs) -> Result<()> {
     let (pp, pw) = contact_laws(&scene);
     let p = &scene.particles;
     let e = &scene.enclosure;
-    println!("scene \"{}\"", scene.name);
+    match &a.scene {
+        Some(path) => println!(
+            "scene \"{}\" ({} over the built-in {THESIS_SCENE_FILE})",
+            scene.name,
+            path.display()
+        ),
+        None => println!(
+            "scene \"{}\" (built in: {THESIS_SCENE_FILE}; `vlab scene --print` shows it)",
+            scene.name
+        ),
+    }
     println!(
         "  particles        {} spheres of {} mm, {:.4} kg in all",
         p.count,
@@ -53,7 +63,8 @@ pub fn run(a: SceneArgs) -> Result<()> {
     );
     for (name, law) in [("particle-particle", pp), ("particle-wall", pw)] {
         println!(
-            "  {name:18} e = {}, mu = {}, E* = {:.3e} Pa, G* = {:.3e} Pa, damping factor {:.4} ({} mode: realised e = {:.4})",
+            "  {name:18} {}: e = {}, mu = {}, E* = {:.3e} Pa, G* = {:.3e} Pa, damping factor {:.4} ({} mode: realised e = {:.4})",
+            law.describe(),
             law.restitution,
             law.friction,
             law.e_star_pa,

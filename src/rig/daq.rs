@@ -214,7 +214,18 @@ impl Daq {
             let from = (k0 - first) as usize;
             c.samples()[from..from + (k1 - k0) as usize].to_vec()
         };
-        let start_time_s = k0 as f64 * period - self.record_start_s;
+        // Time of the first sample from the record start; a record that starts
+        // on a sample (whole drive cycles at a whole-hertz rate) starts at 0
+        // exactly, not at a rounding error of it.
+        let start_time_s = {
+            let t = k0 as f64 * period - self.record_start_s;
+            let on_grid = (t / period).round() * period + 0.0;
+            if (t - on_grid).abs() < 1e-9 * period {
+                on_grid
+            } else {
+                t
+            }
+        };
         let mut trace = Trace::new(self.spec.daq.sample_rate_hz, start_time_s)?;
         trace.add_channel(ACCEL_CHANNEL, "m/s^2", cut(&self.accel))?;
         trace.add_channel(FORCE_CHANNEL, "N", cut(&self.force))?;

@@ -22,6 +22,9 @@ use crate::validation::{
     self, Bound, InvalidParameter, count_in, in_range, non_negative, positive, require,
 };
 
+/// Where the built-in thesis damper lives in the source tree (embedded).
+pub const THESIS_SCENE_FILE: &str = "scenes/thesis-damper.toml";
+
 /// The embedded thesis damper preset.
 pub const THESIS_DAMPER_TOML: &str = include_str!("../../scenes/thesis-damper.toml");
 
