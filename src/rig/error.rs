@@ -92,10 +92,10 @@ pub enum RigError {
     WrongKind {
         /// File path or built-in name.
         origin: String,
-        /// Kind of the file.
-        found: super::file::RigKind,
+        /// Kind of the file (`shaker`, `drop-test`).
+        found: &'static str,
         /// Kind needed.
-        wanted: super::file::RigKind,
+        wanted: &'static str,
     },
     /// A rig file of another format version.
     #[error(

@@ -163,8 +163,8 @@ pub trait RigFile: Sized + Serialize + DeserializeOwned {
             {
                 return Err(RigError::WrongKind {
                     origin: origin.to_string(),
-                    found,
-                    wanted: Self::KIND,
+                    found: found.as_str(),
+                    wanted: Self::KIND.as_str(),
                 });
             }
         }
@@ -209,8 +209,8 @@ pub(crate) fn check_header(
     if kind != wanted {
         return Err(RigError::WrongKind {
             origin: format!("rig '{name}'"),
-            found: kind,
-            wanted,
+            found: kind.as_str(),
+            wanted: wanted.as_str(),
         });
     }
     crate::validation::require(
