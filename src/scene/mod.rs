@@ -10,5 +10,6 @@ pub mod fill;
 pub mod impact;
 pub mod measurement;
 pub mod record;
+pub mod settle;
 pub mod shake;
 pub mod validity;
