@@ -188,6 +188,8 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         d.cycles,
         if st.reached {
             "steady"
+        } else if st.lossless {
+            "lossless: no steady state"
         } else if st.capped {
             "NOT steady: stopped at the cycle cap"
         } else {
@@ -216,21 +218,31 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         100.0 * pc.pw_tangential / total
     );
     println!(
-        "    energy ledger                 integration error {:+.1e}, residual {:.0e} of the dissipated energy",
+        "    energy ledger                 integration error {:+.1e}, residual {:.0e} of the energy that flowed",
         d.integrator_rel, d.ledger_residual_rel
     );
     println!(
         "  measured by rig {} ({} shaker), Yang's method over {} periods:",
         s.rig, s.shaker, m.n_periods
     );
+    let versus = if m.error_vs_dem_rel.is_finite() {
+        format!(
+            "{:+.2} % vs DEM: {:+.2} % the chain, {:+.2} % the bed's unsteadiness",
+            100.0 * m.error_vs_dem_rel,
+            100.0 * m.error_vs_dem_work_rel,
+            100.0 * m.unsteadiness_rel
+        )
+    } else {
+        format!(
+            "{:+.2} % vs the DEM's input work, the chain alone; the DEM dissipated nothing",
+            100.0 * m.error_vs_dem_work_rel
+        )
+    };
     println!(
-        "    energy per cycle              {:.4e}{} J  ({:+.2} % vs DEM: {:+.2} % the chain, {:+.2} % the bed's unsteadiness)",
+        "    energy per cycle              {:.4e}{} J  ({versus})",
         m.energy_per_cycle_j,
         m.energy_per_cycle_stderr_j
             .map_or(String::new(), |x| format!(" +- {x:.1e}")),
-        100.0 * m.error_vs_dem_rel,
-        100.0 * m.error_vs_dem_work_rel,
-        100.0 * m.unsteadiness_rel
     );
     println!(
         "    damping efficiency            {:.3}{}",
@@ -239,7 +251,7 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
             .map_or(String::new(), |x| format!(" +- {x:.3}"))
     );
     println!(
-        "    (+- is the standard error from the cycle-to-cycle spread: statistical; the % vs DEM is the measurement chain)"
+        "    (+- : standard error from the cycle-to-cycle spread, the statistical part; % vs DEM: the measurement chain's error plus the bed's unsteadiness over the record)"
     );
     println!(
         "    phase correction              {:.3} mrad ({})",

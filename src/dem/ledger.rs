@@ -169,10 +169,28 @@ impl LedgerBalance {
         }
     }
 
-    /// |residual| / dissipated, the figure of merit of the integration.
+    /// The energy that flowed: the dissipated energy, or the work put in when
+    /// that is larger (a lossless bed dissipates nothing and heats up) (J).
+    pub fn energy_flowed_j(&self) -> f64 {
+        self.dissipated_j.max(self.work_in_j.abs())
+    }
+
+    /// |residual| / [`Self::energy_flowed_j`], the figure of merit of the
+    /// books (infinite when no energy flowed).
     pub fn residual_relative(&self) -> f64 {
-        if self.dissipated_j > 0.0 {
-            self.residual_j.abs() / self.dissipated_j
+        self.relative(self.residual_j.abs())
+    }
+
+    /// The integration's own energy error / [`Self::energy_flowed_j`]
+    /// (positive: it lost energy).
+    pub fn integrator_relative(&self) -> f64 {
+        self.relative(self.integrator_j)
+    }
+
+    fn relative(&self, x_j: f64) -> f64 {
+        let scale = self.energy_flowed_j();
+        if scale > 0.0 {
+            x_j / scale
         } else {
             f64::INFINITY
         }

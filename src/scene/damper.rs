@@ -173,6 +173,10 @@ pub struct Steadiness {
     pub reached: bool,
     /// The drive stopped at its most cycles without being steady.
     pub capped: bool,
+    /// The bed dissipated nothing over the window (e = 1 and μ = 0): the
+    /// enclosure's work only heats it, it has no steady state, and a drive
+    /// run until steady stops at its fewest cycles.
+    pub lossless: bool,
 }
 
 /// DEM truth of a drive.
@@ -247,6 +251,7 @@ fn steadiness(
         stderr_rel,
         reached: balance_rel.abs() <= criteria.balance_rel && stderr_rel <= criteria.stderr_rel,
         capped: false,
+        lossless: b.dissipated_j == 0.0,
     }
 }
 
@@ -306,7 +311,7 @@ pub fn run_drive(
                         let first = transient_cycles(done) as usize;
                         let s = steadiness(&snapshots, first, e_max_j, &criteria);
                         latest = Some(s);
-                        if s.reached {
+                        if s.reached || s.lossless {
                             Some((first, s))
                         } else if done >= max_cycles {
                             Some((first, Steadiness { capped: true, ..s }))

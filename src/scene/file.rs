@@ -82,9 +82,10 @@ pub enum SceneError {
         column_m: f64,
     },
     /// The bed cannot be closed in its enclosure: the lid, lowered as a piston,
-    /// would crush it.
+    /// would crush it. `reached` is the packing fraction of the poured bed,
+    /// floor to the top of its highest sphere.
     #[error(
-        "the particles do not fit: a fill of {fill:.3} needs a packing fraction of {fill:.3} under the lid, and the settled bed, pushed down by the lid, packs at {reached:.3} at most ({cause}); reduce particles.count or lengthen enclosure.inner_length_m"
+        "the particles do not fit: a fill of {fill:.3} needs the bed to pack at {fill:.3} from floor to lid; poured, it packs at {reached:.3} from the floor to its highest sphere, and {cause}; reduce particles.count or lengthen enclosure.inner_length_m"
     )]
     DoesNotFit {
         fill: f64,

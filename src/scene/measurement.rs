@@ -24,8 +24,9 @@ use crate::scene::damper::{DriveOutcome, DrivePlan, Progress, StepObserver, run_
 use crate::scene::file::{Orientation, Scene, SceneError};
 use crate::scene::record::{TruthRecorder, TruthSamples};
 use crate::signals::{
-    PhaseCalibration, PhaseCorrection, PhaseErrorPoint, PowerOptions, PowerResult, Trace,
-    TraceMetadata, estimate_phase_error, max_energy_per_cycle_j, yang_power, yang_power_of_trace,
+    PhaseCalibration, PhaseCorrection, PhaseErrorPoint, PowerOptions, PowerResult, PowerWindow,
+    Trace, TraceMetadata, estimate_phase_error, max_energy_per_cycle_j, yang_power,
+    yang_power_of_trace,
 };
 use crate::stats::{MeanStderr, mean_stderr};
 
@@ -268,30 +269,29 @@ fn block_power(
     freq_hz: f64,
     calibration: &PhaseCalibration,
 ) -> Result<Option<MeanStderr>, SceneError> {
-    let block = (2.0 * trace.sample_rate_hz / freq_hz).round() as usize;
-    let n_blocks = trace.len() / block.max(1);
+    // Blocks start on whole periods, rounded to a sample: at drive
+    // frequencies that are not a divisor of the sample rate (1024 Hz: 39.06
+    // samples a period) a block is two periods to within half a sample.
+    let block_samples = 2.0 * trace.sample_rate_hz / freq_hz;
+    let n_blocks = (trace.len() as f64 / block_samples + 1e-9).floor() as usize;
     if n_blocks < 2 {
         return Ok(None);
     }
     let force = &trace.channel(crate::rig::FORCE_CHANNEL)?.samples;
     let accel = &trace.channel(crate::rig::ACCEL_CHANNEL)?.samples;
-    let options = PowerOptions {
-        phase_correction: PhaseCorrection::Table(calibration),
-        ..PowerOptions::default()
-    };
     let mut powers = Vec::with_capacity(n_blocks);
     for b in 0..n_blocks {
-        let r = b * block..(b + 1) * block;
-        powers.push(
-            yang_power(
-                &force[r.clone()],
-                &accel[r],
-                trace.sample_rate_hz,
-                freq_hz,
-                &options,
-            )?
-            .power_w,
-        );
+        let start = (b as f64 * block_samples).round() as usize;
+        let end = (((b + 1) as f64 * block_samples).round() as usize).min(trace.len());
+        let options = PowerOptions {
+            phase_correction: PhaseCorrection::Table(calibration),
+            window: PowerWindow::Explicit {
+                start,
+                len: end - start,
+            },
+            ..PowerOptions::default()
+        };
+        powers.push(yang_power(force, accel, trace.sample_rate_hz, freq_hz, &options)?.power_w);
     }
     Ok(Some(mean_stderr(&powers)))
 }

@@ -37,8 +37,10 @@
 //! alike; each step resolves the fastest fall the pour column allows with
 //! [`SETTLE_STEPS_PER_CONTACT`] steps. In the thesis cylinder (D/d = 8) this
 //! pours to a packing fraction of 0.59 in the bulk, whatever the test
-//! contacts, and fills up to about 0.57 close under the lid (0.59 and 0.6 are
-//! refused: the pour and the lid do not pack that densely). A bed is at rest
+//! contacts, and fills up to 0.57 close under the lid; 0.58 (446 spheres of
+//! 5 mm), 0.59 and 0.6 are refused: the layers at the floor and lid pack
+//! looser than the bulk, and the lid would have to squeeze the bed to close.
+//! (A lab taps or vibrates such a fill denser; vlab does not yet.) A bed is at rest
 //! when its kinetic energy is below [`REST_KINETIC_FRACTION`] of `M g d`
 //! ([`at_rest`]); one that does not come to rest in [`MAX_POUR_S`] of
 //! simulated time is an error of its own.
@@ -317,6 +319,9 @@ fn close_lid(
     // Frictionless while the lid pushes: spheres slide into the gaps below
     // them, as a tapped or vibrated fill does.
     let rest_overlap = world.max_overlap_ratio();
+    // Packing of the whole poured bed, floor to the top of its highest sphere.
+    let area = PI * (0.5 * scene.enclosure.inner_diameter_m).powi(2);
+    let poured = scene.particles.count as f64 * scene.particle_volume_m3() / (area * top);
     let (pp, pw) = (world.pp_law, world.pw_law);
     world.set_contact_laws(pp.without_friction(), pw.without_friction())?;
     let dt = world.dt_s();
@@ -332,7 +337,7 @@ fn close_lid(
         z = (z - drop).max(length);
         world.walls.move_plane(LID, DVec3::new(0.0, 0.0, z));
         world.refresh_wall_gaps();
-        world.step(0.0).map_err(|e| crushed(e, world, scene))?;
+        world.step(0.0).map_err(|e| crushed(e, poured, scene))?;
         if k % 1000 == 0 {
             progress(Progress {
                 phase: "closing",
@@ -347,7 +352,7 @@ fn close_lid(
     world.numerics.energy_check_steps = check;
     world.set_contact_laws(pp, pw)?;
     run_until_rest(world, 0.0, MAX_POUR_S, "closing", started, progress).map_err(|e| match e {
-        SceneError::Dem(d) => crushed(d, world, scene),
+        SceneError::Dem(d) => crushed(d, poured, scene),
         other => other,
     })?;
     // A bed the lid holds down harder than its own weight did is crushed, not
@@ -366,32 +371,31 @@ fn close_lid(
                 speed_mps: 0.0,
                 dt_s: world.dt_s(),
             },
-            world,
+            poured,
             scene,
         ));
     }
     Ok(())
 }
 
-/// The refusal of a bed the lid cannot close on.
-fn crushed(e: DemError, world: &World, scene: &Scene) -> SceneError {
+/// The refusal of a bed the lid cannot close on; `poured` is the packing
+/// fraction of the whole poured bed before the lid pushed it.
+fn crushed(e: DemError, poured: f64, scene: &Scene) -> SceneError {
     match e {
         DemError::ExcessiveOverlap { .. } | DemError::Escaped { .. } => {
-            let area = PI * (0.5 * scene.enclosure.inner_diameter_m).powi(2);
-            let v_p = scene.particles.count as f64 * scene.particle_volume_m3();
             let cause = match &e {
                 DemError::ExcessiveOverlap {
                     overlap_percent,
                     limit_percent,
                     ..
                 } => format!(
-                    "the lid squeezes a contact by {overlap_percent:.2} % of a radius, more than {limit_percent:.2} %"
+                    "pushed down to it, the bed is squeezed: a contact overlaps by {overlap_percent:.2} % of a radius, more than {limit_percent:.2} %"
                 ),
                 other => other.to_string(),
             };
             SceneError::DoesNotFit {
                 fill: scene.fill_ratio(),
-                reached: v_p / (area * top_of_bed(world).max(f64::MIN_POSITIVE)),
+                reached: poured,
                 cause,
             }
         }

@@ -140,11 +140,13 @@ pub struct DemTruth {
     /// (work in − dissipated) / dissipated over the steady cycles: zero in a
     /// steady state; otherwise the bed stored or gave back energy.
     pub steadiness_rel: f64,
-    /// |ledger residual| / dissipated energy over the whole drive: rounding
-    /// once the integration's own error is booked.
+    /// |ledger residual| / dissipated energy over the whole drive (or the
+    /// work put in, when larger: a lossless bed): rounding once the
+    /// integration's own error is booked.
     pub ledger_residual_rel: f64,
     /// Energy the time integration lost / dissipated energy over the whole
-    /// drive (negative: it made energy); O(Δt²).
+    /// drive (or the work put in, when larger) (negative: it made energy);
+    /// O(Δt²).
     pub integrator_rel: f64,
     /// Energy balance of the whole drive (J).
     pub ledger: LedgerBalance,
@@ -176,7 +178,7 @@ impl DemTruth {
             work_in_per_cycle_j: out.work_in_per_cycle_j,
             steadiness_rel: out.work_in_per_cycle_j / out.energy_per_cycle_j - 1.0,
             ledger_residual_rel: out.whole.residual_relative(),
-            integrator_rel: out.whole.integrator_j / out.whole.dissipated_j,
+            integrator_rel: out.whole.integrator_relative(),
             ledger: out.whole,
             steady_ledger: out.steady,
             largest_particle_speed_mps: out.largest_speed_mps,
@@ -215,7 +217,12 @@ impl DemTruth {
             }
         }
         let s = &self.steadiness;
-        if s.capped {
+        if s.lossless {
+            w.push(format!(
+                "the bed dissipated no energy (every contact elastic and frictionless): the enclosure's work, {:.3e} J per cycle, only heats it, so it has no steady state and no efficiency; the drive stopped after {} cycles",
+                self.work_in_per_cycle_j, self.cycles
+            ));
+        } else if s.capped {
             w.push(format!(
                 "the drive stopped at its cap of {} cycles without reaching a steady state: over the last {} cycles the enclosure's work and the dissipation differ by {:+.2} % and the energy per cycle has a standard error of {:.2} % (both should be within drive.balance_rel and drive.stderr_rel); the figures are those of an unsteady bed",
                 self.cycles,
