@@ -54,7 +54,7 @@ pub fn run(a: SceneArgs) -> Result<()> {
         scene.particle_mass_kg()
     );
     println!(
-        "  enclosure        {} mm x {} mm closed cylinder, {}; fill ratio {:.3} (eq. 6.1; at most {} particles fit)",
+        "  enclosure        {} mm x {} mm closed cylinder, {}; fill ratio {:.3} (eq. 6.1; {} would fill it at random close packing; pouring and closing reach about 0.57 in the thesis cylinder)",
         e.inner_diameter_m * 1e3,
         e.inner_length_m * 1e3,
         e.orientation.as_str(),
