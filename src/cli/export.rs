@@ -84,14 +84,7 @@ fn run_lammps(a: LammpsArgs, quiet: bool) -> Result<()> {
     let s = &deck.summary;
     println!(
         "LAMMPS deck for the {} damper at {} Hz, Gamma {}: {} spheres ({:.4} kg), {} cycles = {} steps of {:e} s",
-        s.scene,
-        s.freq_hz,
-        s.gamma,
-        s.n_particles,
-        s.particle_mass_kg,
-        s.cycles,
-        s.steps,
-        s.dt_s
+        s.scene, s.freq_hz, s.gamma, s.n_particles, s.particle_mass_kg, s.cycles, s.steps, s.dt_s
     );
     let show = |what: &str, t: &ContactTranslation| {
         println!(

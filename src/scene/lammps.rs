@@ -361,8 +361,14 @@ pub fn lammps_deck(
         0.0,
         Some(8.0 * pw_law.g_star_pa),
     )?;
-    debug_assert!((pw.effective_youngs_pa - effective_youngs_pa(&pm, &wm)).abs() <= 1e-9 * pw.effective_youngs_pa);
-    debug_assert!((pw.effective_shear_pa - effective_shear_pa(&pm, &wm)).abs() <= 1e-9 * pw.effective_shear_pa);
+    debug_assert!(
+        (pw.effective_youngs_pa - effective_youngs_pa(&pm, &wm)).abs()
+            <= 1e-9 * pw.effective_youngs_pa
+    );
+    debug_assert!(
+        (pw.effective_shear_pa - effective_shear_pa(&pm, &wm)).abs()
+            <= 1e-9 * pw.effective_shear_pa
+    );
     let side_factor = (1.0 - radius / (2.0 * cyl_r)).sqrt();
     let keys = scene_key_uses(scene, dt)?;
     let mass = particles.total_mass_kg();
@@ -384,8 +390,18 @@ pub fn lammps_deck(
     let _ = writeln!(data, "{} atoms", particles.len());
     let _ = writeln!(data, "1 atom types");
     let _ = writeln!(data);
-    let _ = writeln!(data, "{:.9e} {:.9e} xlo xhi", -cyl_r - margin, cyl_r + margin);
-    let _ = writeln!(data, "{:.9e} {:.9e} ylo yhi", -cyl_r - margin, cyl_r + margin);
+    let _ = writeln!(
+        data,
+        "{:.9e} {:.9e} xlo xhi",
+        -cyl_r - margin,
+        cyl_r + margin
+    );
+    let _ = writeln!(
+        data,
+        "{:.9e} {:.9e} ylo yhi",
+        -cyl_r - margin,
+        cyl_r + margin
+    );
     let _ = writeln!(
         data,
         "{:.9e} {:.9e} zlo zhi",
@@ -442,17 +458,35 @@ pub fn lammps_deck(
         scene.name, export.freq_hz, export.gamma, export.cycles
     );
     line(&mut s, "# Run:  lmp -in in.damper          (one core)");
-    line(&mut s, "#       mpirun -np 4 lmp -in in.damper   (a cluster: any number of ranks)");
-    line(&mut s, "# then: vlab replay record.txt --out replay   (the record through vlab's rig)");
-    line(&mut s, "# Needs the GRANULAR package (Debian: apt-get install lammps). SI units throughout.");
+    line(
+        &mut s,
+        "#       mpirun -np 4 lmp -in in.damper   (a cluster: any number of ranks)",
+    );
+    line(
+        &mut s,
+        "# then: vlab replay record.txt --out replay   (the record through vlab's rig)",
+    );
+    line(
+        &mut s,
+        "# Needs the GRANULAR package (Debian: apt-get install lammps). SI units throughout.",
+    );
     line(&mut s, "#");
-    line(&mut s, "# Every key of the scene and what this deck does with it:");
+    line(
+        &mut s,
+        "# Every key of the scene and what this deck does with it:",
+    );
     for (key, value, use_) in &keys {
         let _ = writeln!(s, "#   {key} = {value}: {use_}");
     }
     line(&mut s, "#");
-    line(&mut s, "# Contact law (vlab: Hertz eq. 5.7, Mindlin eq. 5.24 with Coulomb cap eq. 5.16,");
-    line(&mut s, "# restitution damping eq. 5.32/5.33, never pulling):");
+    line(
+        &mut s,
+        "# Contact law (vlab: Hertz eq. 5.7, Mindlin eq. 5.24 with Coulomb cap eq. 5.16,",
+    );
+    line(
+        &mut s,
+        "# restitution damping eq. 5.32/5.33, never pulling):",
+    );
     for (what, t) in [("particle-particle", &pp), ("particle-wall", &pw)] {
         let _ = writeln!(
             s,
@@ -465,16 +499,30 @@ pub fn lammps_deck(
             },
             t.damping_factor,
             t.tsuji_alpha,
-            t.lammps_restitution
-                .map_or_else(|| "none (e = 1, no damping)".to_string(), |e| format!("{e:.6}")),
+            t.lammps_restitution.map_or_else(
+                || "none (e = 1, no damping)".to_string(),
+                |e| format!("{e:.6}")
+            ),
             t.friction,
             t.tangential_damping_ratio
         );
     }
-    line(&mut s, "#   The e given to LAMMPS is not the e it realises: LAMMPS' tsuji polynomial alpha(e) does");
-    line(&mut s, "#   not realise e for a Hertz contact whose force is clamped at zero (limit_damping); the");
-    line(&mut s, "#   e above makes alpha = sqrt(5) beta, vlab's damping, so LAMMPS realises vlab's e");
-    line(&mut s, "#   (head-on: 0.86000 vs vlab 0.86006 at 1e-8 s steps, 0.8614 vs 0.8611 at 1e-6 s).");
+    line(
+        &mut s,
+        "#   The e given to LAMMPS is not the e it realises: LAMMPS' tsuji polynomial alpha(e) does",
+    );
+    line(
+        &mut s,
+        "#   not realise e for a Hertz contact whose force is clamped at zero (limit_damping); the",
+    );
+    line(
+        &mut s,
+        "#   e above makes alpha = sqrt(5) beta, vlab's damping, so LAMMPS realises vlab's e",
+    );
+    line(
+        &mut s,
+        "#   (head-on: 0.86000 vs vlab 0.86006 at 1e-8 s steps, 0.8614 vs 0.8611 at 1e-6 s).",
+    );
     let _ = writeln!(
         s,
         "#   Walls: nu = 0 and E = 2 E*_pw = {:.6e} Pa (LAMMPS 2021 takes a wall's E* as E/(2(1-nu))),",
@@ -489,9 +537,18 @@ pub fn lammps_deck(
         s,
         "#   Side wall: E and k_t scaled by sqrt(1 - R/(2 R_c)) = {side_factor:.6}: LAMMPS takes the inside of a"
     );
-    line(&mut s, "#   region cylinder as concave (contact radius -2 R_c), vlab every wall as flat (R* = R).");
-    line(&mut s, "#   Remaining differences: the slip rule (LAMMPS: spring + damping carry mu F_n; vlab:");
-    line(&mut s, "#   the spring carries mu F_n) and the settled contacts' tangential history (starts at 0).");
+    line(
+        &mut s,
+        "#   region cylinder as concave (contact radius -2 R_c), vlab every wall as flat (R* = R).",
+    );
+    line(
+        &mut s,
+        "#   Remaining differences: the slip rule (LAMMPS: spring + damping carry mu F_n; vlab:",
+    );
+    line(
+        &mut s,
+        "#   the spring carries mu F_n) and the settled contacts' tangential history (starts at 0).",
+    );
     line(&mut s, "");
     line(&mut s, "units           si");
     line(&mut s, "atom_style      sphere");
@@ -511,23 +568,41 @@ pub fn lammps_deck(
     line(&mut s, "neigh_modify    delay 0 every 1 check yes");
     let _ = writeln!(s, "timestep        {dt:e}");
     line(&mut s, "");
-    line(&mut s, "# The drive, from t = 0 at the settled packing (thesis eq. 6.2): u = Gamma g / w^2 sin(w t).");
+    line(
+        &mut s,
+        "# The drive, from t = 0 at the settled packing (thesis eq. 6.2): u = Gamma g / w^2 sin(w t).",
+    );
     let _ = writeln!(s, "variable        drive_freq_hz equal {}", export.freq_hz);
     let _ = writeln!(s, "variable        amplitude_m equal {amplitude:.17e}");
     line(&mut s, "variable        omega equal 2.0*PI*v_drive_freq_hz");
     line(&mut s, "variable        time equal time");
-    line(&mut s, "variable        enclosure_displacement equal v_amplitude_m*sin(v_omega*time)");
-    line(&mut s, "variable        enclosure_velocity equal v_amplitude_m*v_omega*cos(v_omega*time)");
-    line(&mut s, "variable        enclosure_acceleration equal -v_amplitude_m*v_omega*v_omega*sin(v_omega*time)");
+    line(
+        &mut s,
+        "variable        enclosure_displacement equal v_amplitude_m*sin(v_omega*time)",
+    );
+    line(
+        &mut s,
+        "variable        enclosure_velocity equal v_amplitude_m*v_omega*cos(v_omega*time)",
+    );
+    line(
+        &mut s,
+        "variable        enclosure_acceleration equal -v_amplitude_m*v_omega*v_omega*sin(v_omega*time)",
+    );
     line(&mut s, "");
-    line(&mut s, "# The enclosure: side, floor and lid, moving together along z.");
+    line(
+        &mut s,
+        "# The enclosure: side, floor and lid, moving together along z.",
+    );
     let _ = writeln!(
         s,
         "region          side cylinder z 0 0 {cyl_r:?} {:?} {:?} side in open 1 open 2 move NULL NULL v_enclosure_displacement",
         -2.0 * radius,
         length + 2.0 * radius
     );
-    line(&mut s, "region          floor plane 0 0 0 0 0 1 side in move NULL NULL v_enclosure_displacement");
+    line(
+        &mut s,
+        "region          floor plane 0 0 0 0 0 1 side in move NULL NULL v_enclosure_displacement",
+    );
     let _ = writeln!(
         s,
         "region          lid plane 0 0 {length:?} 0 0 -1 side in move NULL NULL v_enclosure_displacement"
@@ -549,20 +624,41 @@ pub fn lammps_deck(
     line(&mut s, "");
     line(&mut s, "fix             integrate all nve/sphere");
     if g > 0.0 {
-        let _ = writeln!(s, "fix             gravity all gravity {g} vector {gx} {gy} {gz}");
+        let _ = writeln!(
+            s,
+            "fix             gravity all gravity {g} vector {gx} {gy} {gz}"
+        );
     }
     line(&mut s, "");
-    line(&mut s, "# The particles' force on the enclosure along z: minus the walls' forces on the atoms.");
-    line(&mut s, "compute         side_fz all reduce sum f_side_wall[4]");
-    line(&mut s, "compute         floor_fz all reduce sum f_floor_wall[4]");
-    line(&mut s, "compute         lid_fz all reduce sum f_lid_wall[4]");
-    line(&mut s, "variable        particle_force_axial equal -(c_side_fz+c_floor_fz+c_lid_fz)");
+    line(
+        &mut s,
+        "# The particles' force on the enclosure along z: minus the walls' forces on the atoms.",
+    );
+    line(
+        &mut s,
+        "compute         side_fz all reduce sum f_side_wall[4]",
+    );
+    line(
+        &mut s,
+        "compute         floor_fz all reduce sum f_floor_wall[4]",
+    );
+    line(
+        &mut s,
+        "compute         lid_fz all reduce sum f_lid_wall[4]",
+    );
+    line(
+        &mut s,
+        "variable        particle_force_axial equal -(c_side_fz+c_floor_fz+c_lid_fz)",
+    );
     line(&mut s, "");
     let _ = writeln!(
         s,
         "# The record vlab replay reads: each row the mean over {every} steps (one 40 kHz sample),"
     );
-    line(&mut s, "# time included, which thus gives each window's centre.");
+    line(
+        &mut s,
+        "# time included, which thus gives each window's centre.",
+    );
     let _ = writeln!(
         s,
         "fix             record all ave/time 1 {every} {every} v_time v_enclosure_displacement v_enclosure_velocity v_enclosure_acceleration v_particle_force_axial file {RECORD_FILE} format \" %.17g\" title1 \"\"\"# vlab replay record: {} damper, {} Hz, Gamma {}, from a LAMMPS deck of vlab {version}",
@@ -574,13 +670,17 @@ pub fn lammps_deck(
     let _ = writeln!(s, "# particle_mass_kg: {mass:?}");
     let _ = writeln!(s, "# gravity_mps2: {g}");
     let _ = writeln!(s, "# orientation: {}", scene.enclosure.orientation.as_str());
+    let _ = writeln!(s, "# steady_cycles: {}", scene.drive.steady_cycles);
     let _ = writeln!(s, "# record_every_steps: {every}");
     line(
         &mut s,
         "# particle_force_axial: the particles' force on the enclosure along +z (N); each row a window mean\"\"\"",
     );
     line(&mut s, "");
-    line(&mut s, "thermo_style    custom step time atoms ke v_enclosure_displacement v_particle_force_axial");
+    line(
+        &mut s,
+        "thermo_style    custom step time atoms ke v_enclosure_displacement v_particle_force_axial",
+    );
     line(&mut s, "thermo_modify   lost error norm no");
     let _ = writeln!(s, "thermo          {}", (steps / 20).max(1));
     let _ = writeln!(s, "run             {steps}");

@@ -161,6 +161,19 @@ pub fn run_measured_shake(
     let dt = world.dt_s();
     let mut daq = Daq::new(rig, dt, record_start, scene.simulation.seed)?;
     daq.reserve(plan.steady_cycles as f64 * period + 0.01);
+    // The conditioner has long settled on the damper at rest (the settled
+    // bed's weight on the gauge), not on the first step of the drive, whose
+    // dashpot jolt would otherwise stand in the AC coupling for seconds.
+    let resting_particle_force = -world.wall_force().dot(world.walls.axis);
+    daq.settle_at(
+        0.0,
+        transducer_force_n(
+            rig.enclosure.mass_kg,
+            0.0,
+            resting_particle_force,
+            static_weight_n(scene, rig),
+        ),
+    );
     let mut instruments = Instruments {
         truth: TruthRecorder::new(rig.daq.sample_rate_hz, 0.0),
         daq,

@@ -20,9 +20,11 @@
 //!
 //! **Resampling without aliasing.** Each record value stands for its sample
 //! interval `[t_i - h/2, t_i + h/2]`: the force is held over it (exact for a
-//! window mean, and for a value at every DEM step), the acceleration is the
-//! velocity's change over each interval, so an impact between two samples
-//! keeps its impulse. The rig is stepped at `h / n`, `n = ceil(h / 1 µs)`
+//! window mean, and for a value at every DEM step), the velocity is the
+//! smooth curve whose mean over the interval is its sample
+//! ([`RecordedMotion`]), so the work the pushed signals carry is the
+//! record's own `Σ F_i v_i h` and an impact between two samples keeps its
+//! impulse. The rig is stepped at `h / n`, `n = ceil(h / 1 µs)`
 //! (the DEM step of the thesis, so the rig's filters are discretised as in
 //! a shake), and its own anti-alias filters and sampling take it to the DAQ
 //! rate. A record must therefore be sampled at every DEM step or averaged
@@ -30,13 +32,15 @@
 //! impulsive force every `N` steps has aliased before vlab sees it.
 //!
 //! **Truth.** The record's own dissipated power is its mean input power over
-//! the window, `P = (1/T_w) ∫ -F_p v dt` (the work the enclosure did on the
-//! particles; in a steady state what they dissipate, thesis eq. 6.3-6.9), and
+//! the window, `P = (1/T_w) Σ -F_i v_i h` (the work the enclosure did on the
+//! particles; in a steady state what they dissipate, thesis eq. 6.3-6.9;
+//! [`EnclosureRecord::input_power_w`]), and
 //! `E_cycle = P / f`, efficiency `E_cycle / (4 (Γ g / ω)² M)` (eq. 6.8-6.10)
 //! when the particle mass `M` is known.
 //!
-//! **Window.** The last `steady_cycles` (default 5, the thesis' protocol)
-//! whole drive periods the record covers, ending on a whole number of periods
+//! **Window.** The last `steady_cycles` (given, else the record's declared
+//! `steady_cycles`, else 5, the thesis' protocol) whole drive periods the
+//! record covers, ending on a whole number of periods
 //! of the record's time axis (`t = k / f`, the drive start for vlab and for
 //! `vlab export lammps` decks). Measurement and truth use the same window.
 //!
@@ -109,7 +113,8 @@ pub struct ReplayOptions {
     pub particle_mass_kg: Option<f64>,
     pub orientation: Option<Orientation>,
     pub gravity_mps2: Option<f64>,
-    /// Whole periods measured; `None`: 5, or all the record holds if fewer.
+    /// Whole periods measured; `None`: the record's declared
+    /// `steady_cycles`, else 5, or all the record holds if fewer.
     pub steady_cycles: Option<u32>,
     pub columns: ColumnMap,
     pub calibration: CalibrationSource,
@@ -168,6 +173,26 @@ impl EnclosureRecord {
         self.start_s + (self.force_axial_n.len() - 1) as f64 * self.step_s
     }
 
+    /// The record's mean input power over `[from_s, to_s]`, W: the mean of
+    /// `-F_p v` over the rows, each weighted by the part of its interval
+    /// `[t_i - h/2, t_i + h/2]` inside the window.
+    pub fn input_power_w(&self, from_s: f64, to_s: f64) -> f64 {
+        let h = self.step_s;
+        let v = self.motion.velocity_samples_mps();
+        let work: f64 = self
+            .force_axial_n
+            .iter()
+            .zip(v)
+            .enumerate()
+            .map(|(i, (f, v))| {
+                let t = self.start_s + i as f64 * h;
+                let inside = ((t + 0.5 * h).min(to_s) - (t - 0.5 * h).max(from_s)).max(0.0);
+                -f * v * inside
+            })
+            .sum();
+        work / (to_s - from_s)
+    }
+
     /// The particles' force at `t_s`: the value of the row whose interval
     /// `[t_i - h/2, t_i + h/2)` holds `t_s` (the first or last row outside).
     pub fn force_at_n(&self, t_s: f64) -> f64 {
@@ -178,7 +203,10 @@ impl EnclosureRecord {
 }
 
 /// Reads the record at `path` and picks its columns (see the module docs).
-pub fn read_enclosure_record(path: &Path, names: &ColumnMap) -> Result<EnclosureRecord, SceneError> {
+pub fn read_enclosure_record(
+    path: &Path,
+    names: &ColumnMap,
+) -> Result<EnclosureRecord, SceneError> {
     let table = read_table(path)?;
     EnclosureRecord::from_table(table, names)
 }
@@ -198,7 +226,10 @@ impl EnclosureRecord {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        let find = |given: &Option<String>, role: &str, known: &[&str]| -> Result<Option<&Channel>, SceneError> {
+        let find = |given: &Option<String>,
+                    role: &str,
+                    known: &[&str]|
+         -> Result<Option<&Channel>, SceneError> {
             if let Some(name) = given {
                 return table.column(name).map(Some).ok_or_else(|| {
                     refuse(format!(
@@ -262,7 +293,10 @@ impl EnclosureRecord {
         let start_s = table.time_s[0];
         let motion = match kind {
             "velocity" => {
-                let x0 = displacement.map_or(0.0, |x| x.samples[0]);
+                // Displacement at the start of the first row's interval.
+                let x0 = displacement.map_or(0.0, |x| {
+                    x.samples[0] - 0.5 * motion_column.samples[0] * step_s
+                });
                 RecordedMotion::from_velocity(start_s, step_s, motion_column.samples.clone(), x0)?
             }
             "displacement" => {
@@ -477,7 +511,17 @@ pub fn replay_record(
             ),
         });
     }
-    let periods = match options.steady_cycles {
+    let declared_cycles = match table.declared_f64("steady_cycles")? {
+        Some(n) if n >= 1.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX) => Some(n as u32),
+        Some(n) => {
+            return Err(SceneError::Record {
+                path: table.path.clone(),
+                problem: format!("steady_cycles = {n}: must be a whole number of periods"),
+            });
+        }
+        None => None,
+    };
+    let periods = match options.steady_cycles.or(declared_cycles) {
         Some(n) if n < 2 => {
             return Err(InvalidParameter::new(
                 "steady_cycles",
@@ -518,7 +562,8 @@ pub fn replay_record(
     };
     positive("gravity_mps2", g, "m/s^2")?;
     let omega = 2.0 * PI * freq_hz;
-    let achieved_gamma = fundamental_velocity_mps(record, freq_hz, window_start, window_end) * omega / g;
+    let achieved_gamma =
+        fundamental_velocity_mps(record, freq_hz, window_start, window_end) * omega / g;
     let (gamma, gamma_source) = match (options.gamma, table.declared_f64("gamma")?) {
         (Some(x), _) => (x, Source::Given),
         (None, Some(x)) => (x, Source::Record),
@@ -526,35 +571,36 @@ pub fn replay_record(
     };
     positive("gamma", gamma, "")?;
     check_limits(rig, freq_hz, gamma, g)?;
-    let (orientation, orientation_source) = match (options.orientation, table.declared_text("orientation")) {
-        (Some(o), _) => (o, Source::Given),
-        (None, Some(text)) => match text.trim() {
-            "vertical" => (Orientation::Vertical, Source::Record),
-            "horizontal" => (Orientation::Horizontal, Source::Record),
-            other => {
-                return Err(SceneError::Record {
-                    path: table.path.clone(),
-                    problem: format!(
-                        "orientation '{other}': must be vertical or horizontal"
-                    ),
-                });
-            }
-        },
-        (None, None) => (Orientation::Vertical, Source::Default),
-    };
-    let (particle_mass_kg, particle_mass_source) =
-        match (options.particle_mass_kg, table.declared_f64("particle_mass_kg")?) {
-            (Some(m), _) => (Some(m), Some(Source::Given)),
-            (None, Some(m)) => (Some(m), Some(Source::Record)),
-            (None, None) => {
-                warnings.push(
-                    "the record does not state the particle mass: no efficiency (give \
-                     --particle-mass-kg)"
-                        .into(),
-                );
-                (None, None)
-            }
+    let (orientation, orientation_source) =
+        match (options.orientation, table.declared_text("orientation")) {
+            (Some(o), _) => (o, Source::Given),
+            (None, Some(text)) => match text.trim() {
+                "vertical" => (Orientation::Vertical, Source::Record),
+                "horizontal" => (Orientation::Horizontal, Source::Record),
+                other => {
+                    return Err(SceneError::Record {
+                        path: table.path.clone(),
+                        problem: format!("orientation '{other}': must be vertical or horizontal"),
+                    });
+                }
+            },
+            (None, None) => (Orientation::Vertical, Source::Default),
         };
+    let (particle_mass_kg, particle_mass_source) = match (
+        options.particle_mass_kg,
+        table.declared_f64("particle_mass_kg")?,
+    ) {
+        (Some(m), _) => (Some(m), Some(Source::Given)),
+        (None, Some(m)) => (Some(m), Some(Source::Record)),
+        (None, None) => {
+            warnings.push(
+                "the record does not state the particle mass: no efficiency (give \
+                     --particle-mass-kg)"
+                    .into(),
+            );
+            (None, None)
+        }
+    };
     if let Some(m) = particle_mass_kg {
         positive("particle_mass_kg", m, "kg")?;
     }
@@ -588,19 +634,22 @@ pub fn replay_record(
     };
     daq.settle_at(0.0, transducer_force_n(m_enc, 0.0, mean_force, weight));
     let mut motion = record.motion.clone();
-    let mut work_j = 0.0;
     for m in first..=last {
         let t = m as f64 * dt;
-        let k = motion.advance(t, dt, 0.0);
+        let a = motion.advance(t, dt, 0.0).acceleration_mps2;
         let f_p = record.force_at_n(t);
-        if t > window_start && t <= window_end + 1e-12 * period {
-            work_j -= f_p * k.velocity_mps * dt;
-        }
-        let a = k.acceleration_mps2;
         daq.push(t + shift, a, transducer_force_n(m_enc, a, f_p, weight));
     }
-    let truth_power = work_j / (window_end - window_start);
-    let metadata = replay_metadata(record, freq_hz, gamma, particle_mass_kg, g, orientation, rig);
+    let truth_power = record.input_power_w(window_start, window_end);
+    let metadata = replay_metadata(
+        record,
+        freq_hz,
+        gamma,
+        particle_mass_kg,
+        g,
+        orientation,
+        rig,
+    );
     let (trace, daq_report) = daq.finish(metadata)?;
 
     let calibration = match &options.calibration {
@@ -678,7 +727,9 @@ pub fn replay_record(
         clipping: daq_report.clipping_warnings(),
     };
     warnings.extend(measured.clipping.iter().cloned());
-    if table.format == crate::signals::TableFormat::LammpsText && !table.comments.contains_key("units") {
+    if table.format == crate::signals::TableFormat::LammpsText
+        && !table.comments.contains_key("units")
+    {
         warnings.push(
             "the record does not state its LAMMPS unit system (a '# units: si' comment); it was \
              read as SI"

@@ -369,7 +369,8 @@ pub fn write_rig_record(dir: &Path, trace: &Trace, daq: &DaqReport) -> Result<()
 /// The truth record as a trace: the enclosure's kinematics and the particles'
 /// force on it, at the lab's sample rate. Its metadata says what `vlab
 /// replay` needs to replay it: drive frequency and Γ, and in `extra` the
-/// particle mass (`particle_mass_kg`), `gravity_mps2` and `orientation`.
+/// particle mass (`particle_mass_kg`), `gravity_mps2`, `orientation` and the
+/// whole periods the shake measured (`steady_cycles`).
 pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Trace, SceneError> {
     let start = samples.time_s.first().copied().unwrap_or(0.0);
     let mut trace = Trace::new(summary.sample_rate_hz, start)?;
@@ -387,6 +388,10 @@ pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Tra
         serde_json::json!(summary.orientation),
     );
     extra.insert("scene".to_string(), serde_json::json!(summary.scene));
+    extra.insert(
+        "steady_cycles".to_string(),
+        serde_json::json!(summary.steady_cycles),
+    );
     trace.metadata = TraceMetadata {
         source: format!("vlab {} shake: DEM truth", summary.vlab_version),
         rig: "none (DEM truth, no sensors)".into(),
