@@ -506,7 +506,7 @@ pub fn replay_record(
             problem: format!(
                 "the record covers {:.3} periods of the {freq_hz} Hz drive ({} rows of {h:.4e} s); \
                  Yang's method needs 2 whole periods",
-                (record.end_s() + h - covered_from) / period,
+                (record.end_s() + 0.5 * h - covered_from) / period,
                 record.force_axial_n.len()
             ),
         });
