@@ -120,8 +120,9 @@ impl EnclosureMotion for SineMotion {
 ///
 /// The motion is the smooth curve whose mean over every interval is its
 /// sample: the displacement is the natural cubic spline through the running
-/// integral of the samples at the interval edges, `x(t_0 - h/2 + j h) = x_0
-/// + h Σ_{i<j} v_i`, so the velocity is a C¹ quadratic spline with
+/// integral of the samples at the interval edges,
+/// `x(t_0 - h/2 + j h) = x_0 + h Σ_{i<j} v_i`, so the velocity is a C¹
+/// quadratic spline with
 /// `(1/h) ∫ v dt = v_i` over interval `i` and the acceleration is continuous
 /// and linear within each interval. Hence a force held over an interval
 /// does work `F_i v_i h` on it, exactly the record's own `Σ F v h`, and the
