@@ -8,8 +8,10 @@
 //! 2. AC-coupling first-order high-pass (corner in Hz, 0 = DC-coupled), then
 //!    the anti-alias Butterworth low-pass, both discretised by Tustin at the
 //!    DEM step ([`super::filter`]); the filters start in the steady state of
-//!    the first input, as a conditioner that has been on for hours (the static
-//!    weight on the force gauge causes no start transient);
+//!    a constant input, as a conditioner that has been on for hours (the static
+//!    weight on the force gauge causes no start transient): the level given to
+//!    [`MeasurementChannel::settle_at`] before the first push, else the first
+//!    input;
 //! 3. sampling at the DAQ rate, sample `k` at `t_k + skew`, `t_k = k / fs`:
 //!    [`Sampling::Point`] interpolates linearly between the two DEM steps
 //!    around the instant; [`Sampling::Boxcar`] averages the DEM steps nearest
