@@ -17,11 +17,11 @@ use std::process::Command;
 use common::{Scratch, json, stderr, vlab};
 use vlab::dem::restitution::exact_damping_factor;
 use vlab::rig::{RigFile, RigSpec, ShakerKind};
-use vlab::scene::damper::settle_bed;
 use vlab::scene::file::Scene;
 use vlab::scene::lammps::{LammpsExport, RECORD_FILE, lammps_deck, tsuji_restitution_for};
 use vlab::scene::measurement::{CalibrationSource, ShakeSetup, run_measured_shake};
 use vlab::scene::replay::{ColumnMap, ReplayOptions, read_enclosure_record, replay_record};
+use vlab::scene::settle::{prepare_drive, settle_bed};
 
 /// True when LAMMPS can be run; otherwise says why the test is skipped.
 fn lammps_available(test: &str) -> bool {
@@ -192,9 +192,21 @@ fn deck_is_complete_si_and_has_no_placeholder() {
         assert!(input.contains(&format!("region {region} contacts")));
     }
 
-    // The numbers are the scene's: time step, gravity along -y (horizontal),
-    // drive, materials, the record's declarations.
-    assert!(input.contains("timestep        1e-6"));
+    // The numbers are the scene's: time step (vlab's drive step for this
+    // drive, from the scene's rule), gravity along -y (horizontal), drive,
+    // materials, the record's declarations.
+    let small = Scene::merge_over_preset(
+        &std::fs::read_to_string(dir.path("small.toml")).expect("small.toml"),
+        "small.toml",
+    )
+    .expect("scene");
+    let dt = small.drive_dt_s(40.0, 10.0);
+    assert!(
+        dt < 8e-6 && dt > 1e-7,
+        "a contacts-rule step for 5 mm acrylic: {dt}"
+    );
+    assert!(input.contains(&format!("timestep        {dt:e}\n")));
+    assert_eq!(summary["dt_s"].as_f64(), Some(dt));
     assert!(input.contains("fix             gravity all gravity 9.81 vector 0 -1 0"));
     assert!(input.contains("variable        drive_freq_hz equal 40"));
     let amp = 10.0 * 9.81 / (2.0 * std::f64::consts::PI * 40.0f64).powi(2);
@@ -204,8 +216,18 @@ fn deck_is_complete_si_and_has_no_placeholder() {
         input.contains(" 0.37 tangential mindlin NULL"),
         "acrylic nu"
     );
-    assert_eq!(summary["steps"], 150_000);
-    assert_eq!(summary["record_every_steps"], 25);
+    // Whole 40 kHz rows covering the 6 cycles (0.15 s), at most one row more.
+    let every = (25e-6 / dt).round().max(1.0) as u64;
+    assert_eq!(summary["record_every_steps"], every);
+    let steps = summary["steps"].as_u64().expect("steps");
+    assert_eq!(steps % every, 0);
+    let run_s = steps as f64 * dt;
+    assert!(
+        run_s >= 0.15 - 1e-12 && run_s < 0.15 + every as f64 * dt,
+        "{steps} steps of {dt} s"
+    );
+    assert_eq!(summary["cycles"], 6);
+    assert_eq!(summary["steady_cycles"], 3);
     let pw = &summary["particle_wall"];
     assert_eq!(pw["restitution"], 0.7);
     assert_eq!(pw["friction"], 0.3);
@@ -290,11 +312,12 @@ fn lammps_realises_vlabs_restitution() {
     );
 }
 
-/// The thesis damper at 40 Hz, Gamma 20: vlab's settled packing exported,
-/// run by LAMMPS, replayed through the thesis rig. LAMMPS' efficiency is
-/// vlab's within 5 %, and the rig measures the LAMMPS record's own
-/// dissipation within 1 %. About a minute of LAMMPS and half a minute of
-/// vlab on 2 cores.
+/// The thesis damper at 40 Hz, Gamma 20: vlab drives its settled packing
+/// until steady (the scene's rule), then the same packing is exported for
+/// the same number of cycles and the same steady window, run by LAMMPS and
+/// replayed through the thesis rig. LAMMPS' efficiency is vlab's within 5 %,
+/// and the rig measures the LAMMPS record's own dissipation within 1 %.
+/// Minutes of LAMMPS on one core (about 50 k steps a minute).
 #[test]
 fn round_trip_through_lammps_agrees_with_vlab() {
     if !lammps_available("round_trip_through_lammps_agrees_with_vlab") {
@@ -302,41 +325,50 @@ fn round_trip_through_lammps_agrees_with_vlab() {
     }
     let dir = Scratch::new("lammps-roundtrip");
     let scene = Scene::thesis();
-    let bed = settle_bed(&scene, scene.dt_s(), &mut |_| {}).expect("bed settles");
-    let export = LammpsExport {
-        freq_hz: 40.0,
-        gamma: 20.0,
-        cycles: scene.drive.cycles,
-    };
-    let deck = lammps_deck(&scene, &bed, &export).expect("deck");
-    deck.write(&dir.0).expect("write deck");
-    run_lammps(&dir.0, "in.damper");
+    let (freq, gamma) = (40.0, 20.0);
+    let bed = settle_bed(&scene, &mut |_| {}).expect("bed settles");
 
-    // vlab on the same packing, prescribed drive (the deck's).
+    // vlab on the packing, prescribed drive (the deck's), until steady.
     let rig = RigSpec::from_name_or_path("ideal").expect("ideal rig");
     let setup = ShakeSetup {
         rig,
         shaker: ShakerKind::Prescribed,
-        freq_hz: 40.0,
-        gamma: 20.0,
+        freq_hz: freq,
+        gamma,
         calibration: CalibrationSource::OnTheFly,
     };
-    let mut world = bed.world.clone();
+    let mut world = prepare_drive(&bed, &scene, scene.drive_dt_s(freq, gamma)).expect("drive");
     let vlab_run = run_measured_shake(&scene, &mut world, &setup, &mut |_| {}).expect("vlab");
-    let vlab_eta = vlab_run.outcome.efficiency;
+    let outcome = &vlab_run.outcome;
+    assert!(outcome.steadiness.reached, "{:?}", outcome.steadiness);
+    let vlab_eta = outcome.efficiency;
+
+    // LAMMPS on the same packing, as long, with the same window.
+    let export = LammpsExport {
+        freq_hz: freq,
+        gamma,
+        cycles: outcome.cycles,
+        steady_cycles: outcome.cycles - outcome.steady_first_cycle,
+    };
+    let deck = lammps_deck(&scene, &bed, &export).expect("deck");
+    deck.write(&dir.0).expect("write deck");
+    run_lammps(&dir.0, "in.damper");
 
     let record =
         read_enclosure_record(&dir.path(RECORD_FILE), &ColumnMap::default()).expect("record");
     let thesis = RigSpec::from_name_or_path("thesis-shaker").expect("thesis rig");
     let replay = replay_record(&record, &ReplayOptions::new(thesis)).expect("replay");
     let s = &replay.summary;
-    assert_eq!(s.periods, 5);
+    assert_eq!(s.periods, export.steady_cycles);
     let lammps_eta = s
         .truth
         .efficiency
         .expect("the record gives the particle mass");
     eprintln!(
-        "round trip: LAMMPS efficiency {lammps_eta:.4}, vlab {vlab_eta:.4} ({:+.2} %); replay measures {:.5} W vs the record's {:.5} W ({:+.3} %)",
+        "round trip: {} cycles, the last {}; LAMMPS efficiency {lammps_eta:.4}, vlab {vlab_eta:.4} \
+         ({:+.2} %); replay measures {:.5} W vs the record's {:.5} W ({:+.3} %)",
+        export.cycles,
+        export.steady_cycles,
         100.0 * (lammps_eta / vlab_eta - 1.0),
         s.measured.power_w,
         s.truth.power_w,

@@ -8,11 +8,10 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
 use vlab::atomic_write::OutputDir;
-use vlab::scene::damper::settle_bed;
 use vlab::scene::lammps::{
     ContactTranslation, DATA_FILE, INPUT_FILE, LammpsExport, RECORD_FILE, lammps_deck,
 };
-use vlab::scene::shake::check_drive;
+use vlab::scene::settle::settle_bed;
 
 use super::args;
 use super::progress::ProgressLine;
@@ -61,16 +60,12 @@ fn run_lammps(a: LammpsArgs, quiet: bool) -> Result<()> {
         .set(true, "freq_hz", "--freq")
         .set(true, "gamma", "--gamma");
     let scene = a.scene.resolve()?;
-    check_drive(&scene, a.freq_hz).map_err(|e| flags.name_flags(e.into()))?;
-    let export = LammpsExport {
-        freq_hz: a.freq_hz,
-        gamma: a.gamma,
-        cycles: scene.drive.cycles,
-    };
+    let export = LammpsExport::for_scene(&scene, a.freq_hz, a.gamma)
+        .map_err(|e| flags.name_flags(e.into()))?;
     let made = OutputDir::prepare(&a.out)
         .with_context(|| format!("cannot create output folder {}", a.out.display()))?;
     let mut progress = ProgressLine::new("export", quiet);
-    let result = settle_bed(&scene, scene.dt_s(), &mut |p| progress.update(p))
+    let result = settle_bed(&scene, &mut |p| progress.update(p))
         .context("settling the packing")
         .and_then(|bed| {
             lammps_deck(&scene, &bed, &export)
@@ -83,8 +78,16 @@ fn run_lammps(a: LammpsArgs, quiet: bool) -> Result<()> {
     made.keep_if_ok(written)?;
     let s = &deck.summary;
     println!(
-        "LAMMPS deck for the {} damper at {} Hz, Gamma {}: {} spheres ({:.4} kg), {} cycles = {} steps of {:e} s",
-        s.scene, s.freq_hz, s.gamma, s.n_particles, s.particle_mass_kg, s.cycles, s.steps, s.dt_s
+        "LAMMPS deck for the {} damper at {} Hz, Gamma {}: {} spheres ({:.4} kg), {} cycles (the last {} the window) = {} steps of {:e} s",
+        s.scene,
+        s.freq_hz,
+        s.gamma,
+        s.n_particles,
+        s.particle_mass_kg,
+        s.cycles,
+        s.steady_cycles,
+        s.steps,
+        s.dt_s
     );
     let show = |what: &str, t: &ContactTranslation| {
         println!(

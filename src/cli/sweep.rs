@@ -13,8 +13,9 @@ use serde::Serialize;
 
 use vlab::atomic_write::{OutputDir, write_atomic};
 use vlab::rig::SineMotion;
-use vlab::scene::damper::{DrivePlan, NoObserver, SettledBed, run_drive, settle_bed};
+use vlab::scene::damper::{DrivePlan, NoObserver, run_drive};
 use vlab::scene::file::Scene;
+use vlab::scene::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::scene::shake::check_drive;
 use vlab::signals::{Series, SeriesStyle, plot_xy_svg};
 
@@ -77,7 +78,9 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
     }
     let gammas = a.gammas.clone();
     let scene = a.scene.resolve()?;
-    check_drive(&scene, a.freq_hz)?;
+    for &g in &gammas {
+        check_drive(&scene, a.freq_hz, g)?;
+    }
     let out_dir = a.out.clone().unwrap_or_else(|| {
         PathBuf::from("signals").join(format!("sweep-{}-{}Hz", scene.name, a.freq_hz))
     });
@@ -98,7 +101,7 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
             .map(|&seed| {
                 let mut s = scene.clone();
                 s.simulation.seed = seed;
-                let bed = settle_bed(&s, s.dt_s(), &mut |_| {})
+                let bed = settle_bed(&s, &mut |_| {})
                     .with_context(|| format!("settling the bed of seed {seed}"));
                 tick(format!("bed of seed {seed} settled"));
                 bed
@@ -150,14 +153,13 @@ fn drive_once(
     freq_hz: f64,
     gamma: f64,
 ) -> Result<SweepRow> {
-    let mut world = bed.world.clone();
+    let mut world = prepare_drive(bed, scene, scene.drive_dt_s(freq_hz, gamma))?;
     let g = scene.simulation.gravity_mps2;
     let plan = DrivePlan {
         freq_hz,
         gamma,
         gravity_mps2: g,
-        cycles: scene.drive.cycles,
-        steady_cycles: scene.drive.steady_cycles,
+        length: scene.drive_length(),
     };
     let mut drive = SineMotion::new(freq_hz, gamma, g);
     let out = run_drive(&mut world, &plan, &mut drive, &mut NoObserver, &mut |_| {})

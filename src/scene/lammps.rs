@@ -7,7 +7,7 @@
 //! # What the deck holds
 //!
 //! - `units si`; spheres (`atom_style sphere`) read from `packing.data`:
-//!   vlab's settled packing ([`settle_bed`](crate::scene::damper::settle_bed)),
+//!   vlab's settled packing ([`settle_bed`](crate::scene::settle::settle_bed)),
 //!   positions, velocities, spins, diameters and densities; enclosure axis z,
 //!   floor at z = 0, lid at the scene's inner length;
 //! - `pair_style granular`, `hertz/material` (thesis eq. 5.7 with E* of eq.
@@ -18,8 +18,12 @@
 //!   regions that move with the drive (`move NULL NULL v_enclosure_displacement`,
 //!   `u = Γ g / ω² sin ωt`, eq. 6.2, from t = 0 at the settled packing, as a
 //!   vlab shake): the side (an open cylinder), the floor and the lid (planes);
-//! - gravity along -z (vertical) or -y (horizontal), the scene's time step
-//!   and `cycles` whole drive periods;
+//! - gravity along -z (vertical) or -y (horizontal), the time step vlab's
+//!   drive would take at this frequency and Γ ([`Scene::drive_dt_s`]: the
+//!   scene's `simulation.dt_s` rule) and `cycles` whole drive periods
+//!   ([`LammpsExport::for_scene`]: a scene that runs until steady runs
+//!   `drive.min_cycles` unless told otherwise, as LAMMPS keeps no ledger of
+//!   the dissipation to judge steadiness by);
 //! - `fix ave/time 1 N N` writing `record.txt`: time, enclosure displacement,
 //!   velocity and acceleration and the particles' axial force on the
 //!   enclosure (minus the sum of the three walls' forces on the atoms, from
@@ -73,10 +77,11 @@ use crate::atomic_write::write_bytes_atomic;
 use crate::dem::contact::Tangential;
 use crate::dem::material::{effective_shear_pa, effective_youngs_pa};
 use crate::dem::{ContactLaw, RestitutionMode};
-use crate::scene::damper::{SettledBed, contact_laws};
+use crate::scene::damper::{DriveLength, contact_laws, transient_cycles};
 use crate::scene::file::{Orientation, Scene, SceneError};
+use crate::scene::settle::SettledBed;
 use crate::scene::shake::{TRUTH_SAMPLE_RATE_HZ, check_drive};
-use crate::validation::{InvalidParameter, count_in, positive};
+use crate::validation::{InvalidParameter, count_in};
 
 /// File name of the LAMMPS input.
 pub const INPUT_FILE: &str = "in.damper";
@@ -119,8 +124,48 @@ pub fn tsuji_restitution_for(alpha: f64) -> Option<f64> {
 pub struct LammpsExport {
     pub freq_hz: f64,
     pub gamma: f64,
-    /// Drive cycles run (the scene's `drive.cycles` unless given).
+    /// Drive cycles run.
     pub cycles: u32,
+    /// The last this many cycles are the steady window the record declares
+    /// (what `vlab replay` measures unless told otherwise).
+    pub steady_cycles: u32,
+}
+
+/// Fewest cycles a deck runs: a transient cycle and the two whole periods
+/// Yang's method needs.
+pub const MIN_EXPORT_CYCLES: u32 = 3;
+
+impl LammpsExport {
+    /// The run for `scene` at `freq_hz` and `gamma`, as long as the scene's
+    /// drive (`vlab export lammps --cycles N --steady-cycles M` set it).
+    ///
+    /// A scene with a number of cycles (`drive.cycles = N`) runs them, its
+    /// last `drive.steady_cycles` the window. A scene that runs until steady
+    /// (`drive.cycles = "steady"`, the thesis scene) runs `drive.min_cycles`
+    /// (8), its last 5/8 the window as in vlab's drive
+    /// ([`transient_cycles`]): a deck cannot stop when steady, as LAMMPS
+    /// keeps no ledger of the dissipation to hold the enclosure's work
+    /// against. `vlab shake`'s `summary.json` says how many cycles the scene
+    /// took in vlab (`cycles`, `steady_cycles`), to give as `--cycles` and
+    /// `--steady-cycles`.
+    pub fn for_scene(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<Self, SceneError> {
+        check_drive(scene, freq_hz, gamma)?;
+        let (cycles, steady_cycles) = match scene.drive_length() {
+            DriveLength::Fixed {
+                cycles,
+                steady_cycles,
+            } => (cycles, steady_cycles),
+            DriveLength::UntilSteady { min_cycles, .. } => {
+                (min_cycles, min_cycles - transient_cycles(min_cycles))
+            }
+        };
+        Ok(LammpsExport {
+            freq_hz,
+            gamma,
+            cycles,
+            steady_cycles,
+        })
+    }
 }
 
 /// How one of vlab's contact laws is given to LAMMPS.
@@ -159,6 +204,10 @@ pub struct DeckSummary {
     pub gamma: f64,
     pub amplitude_m: f64,
     pub cycles: u32,
+    /// The last this many cycles: the window the record declares.
+    pub steady_cycles: u32,
+    /// The time step: vlab's drive step at this frequency and Γ
+    /// ([`Scene::drive_dt_s`]).
     pub dt_s: f64,
     pub steps: u64,
     /// Steps averaged per record row (one 40 kHz sample).
@@ -255,7 +304,11 @@ fn granular_words(t: &ContactTranslation, youngs_pa: f64, poisson: f64, kt: Opti
 
 /// What the deck does with each scene key (dotted), for its header; `Err`
 /// names a key the deck does not translate.
-fn scene_key_uses(scene: &Scene, dt_s: f64) -> Result<Vec<(String, String, String)>, SceneError> {
+fn scene_key_uses(
+    scene: &Scene,
+    export: &LammpsExport,
+    dt_s: f64,
+) -> Result<Vec<(String, String, String)>, SceneError> {
     let value: toml::Value = toml::Value::try_from(scene).map_err(|e| SceneError::Parse {
         path: scene.name.clone(),
         message: e.to_string(),
@@ -283,9 +336,14 @@ fn scene_key_uses(scene: &Scene, dt_s: f64) -> Result<Vec<(String, String, Strin
             }
             k if k.starts_with("contact.particle_particle") => "pair_coeff: tsuji e, friction".into(),
             k if k.starts_with("contact.particle_wall") => "wall fixes: tsuji e, friction".into(),
-            "simulation.dt_s" => format!("timestep {dt_s:e}"),
+            "simulation.dt_s" => format!(
+                "timestep {dt_s:e}: vlab's drive step at this frequency and Gamma"
+            ),
             "simulation.rayleigh_safety_factor" => format!(
-                "time step rule when dt_s is not given; here dt = {dt_s:e} s"
+                "caps the time step rule (Rayleigh step x factor); here dt = {dt_s:e} s"
+            ),
+            "simulation.steps_per_contact" => format!(
+                "steps per shortest expected collision (dt_s = \"contacts\"); here dt = {dt_s:e} s"
             ),
             "simulation.settle_s" => format!("vlab settled the packing in {DATA_FILE} (the deck does not settle)"),
             "simulation.gravity_mps2" => "fix gravity magnitude".into(),
@@ -293,8 +351,21 @@ fn scene_key_uses(scene: &Scene, dt_s: f64) -> Result<Vec<(String, String, Strin
             "simulation.parallel_min_pairs" => {
                 "vlab's threading threshold; LAMMPS parallelises by domains (mpirun -np N)".into()
             }
-            "drive.cycles" => "run length, unless --cycles is given".into(),
-            "drive.steady_cycles" => "the cycles vlab replay measures (its --steady-cycles)".into(),
+            "drive.cycles" => format!(
+                "run length: {} cycles (a number: itself; \"steady\": drive.min_cycles, as LAMMPS keeps no dissipation ledger to judge steadiness by)",
+                export.cycles
+            ),
+            "drive.steady_cycles" => format!(
+                "with a number of cycles, the window; here the last {} cycles, declared as steady_cycles in {RECORD_FILE} for vlab replay",
+                export.steady_cycles
+            ),
+            "drive.min_cycles" => format!(
+                "the run length of a scene run until steady ({} cycles here)",
+                export.cycles
+            ),
+            "drive.max_cycles" | "drive.balance_rel" | "drive.stderr_rel" => {
+                "vlab's until-steady rule only: not translated (the deck runs a fixed number of cycles; vlab replay reports the record's cycle-to-cycle spread)".into()
+            }
             other => {
                 return Err(InvalidParameter::new(
                     other,
@@ -332,18 +403,28 @@ pub fn lammps_deck(
     bed: &SettledBed,
     export: &LammpsExport,
 ) -> Result<LammpsDeck, SceneError> {
-    check_drive(scene, export.freq_hz)?;
-    positive("gamma", export.gamma, "")?;
-    count_in("drive.cycles", export.cycles, "", 1, None)?;
+    check_drive(scene, export.freq_hz, export.gamma)?;
+    count_in("cycles", export.cycles, "", MIN_EXPORT_CYCLES, None)?;
+    count_in(
+        "steady_cycles",
+        export.steady_cycles,
+        "",
+        2,
+        Some(export.cycles),
+    )?;
     let world = &bed.world;
     let particles = &world.particles;
-    let dt = world.dt_s();
+    let dt = scene.drive_dt_s(export.freq_hz, export.gamma);
     let g = scene.simulation.gravity_mps2;
     let period = 1.0 / export.freq_hz;
     let omega = 2.0 * PI * export.freq_hz;
     let amplitude = export.gamma * g / (omega * omega);
-    let steps = (f64::from(export.cycles) * period / dt).round() as u64;
     let every = ((1.0 / TRUTH_SAMPLE_RATE_HZ / dt).round() as u64).max(1);
+    // Whole record rows, the last ending at or past the last cycle's end: the
+    // step need not divide the period (it is vlab's, from the scene's rule),
+    // and a record short of the boundary would lose the last period.
+    let rows = (f64::from(export.cycles) * period / (every as f64 * dt) - 1e-9).ceil() as u64;
+    let steps = rows * every;
     let radius = scene.radius_m();
     let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
     let length = scene.enclosure.inner_length_m;
@@ -370,7 +451,7 @@ pub fn lammps_deck(
             <= 1e-9 * pw.effective_shear_pa
     );
     let side_factor = (1.0 - radius / (2.0 * cyl_r)).sqrt();
-    let keys = scene_key_uses(scene, dt)?;
+    let keys = scene_key_uses(scene, export, dt)?;
     let mass = particles.total_mass_kg();
     let (gx, gy, gz) = match scene.enclosure.orientation {
         Orientation::Vertical => (0, 0, -1),
@@ -670,7 +751,7 @@ pub fn lammps_deck(
     let _ = writeln!(s, "# particle_mass_kg: {mass:?}");
     let _ = writeln!(s, "# gravity_mps2: {g}");
     let _ = writeln!(s, "# orientation: {}", scene.enclosure.orientation.as_str());
-    let _ = writeln!(s, "# steady_cycles: {}", scene.drive.steady_cycles);
+    let _ = writeln!(s, "# steady_cycles: {}", export.steady_cycles);
     let _ = writeln!(s, "# record_every_steps: {every}");
     line(
         &mut s,
@@ -692,6 +773,7 @@ pub fn lammps_deck(
         gamma: export.gamma,
         amplitude_m: amplitude,
         cycles: export.cycles,
+        steady_cycles: export.steady_cycles,
         dt_s: dt,
         steps,
         record_every_steps: every,

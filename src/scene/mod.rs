@@ -12,5 +12,6 @@ pub mod lammps;
 pub mod measurement;
 pub mod record;
 pub mod replay;
+pub mod settle;
 pub mod shake;
 pub mod validity;

@@ -59,7 +59,6 @@ use crate::rig::{
     Daq, DaqReport, EnclosureMotion, RecordedMotion, RigSpec, ShakerKind, check_limits,
     transducer_force_n,
 };
-use crate::scene::damper::DrivePlan;
 use crate::scene::file::{Orientation, Scene, SceneError};
 use crate::scene::measurement::{CalibrationSource, analyse, calibrate_rig};
 use crate::scene::shake::write_rig_record;
@@ -655,13 +654,6 @@ pub fn replay_record(
     let calibration = match &options.calibration {
         CalibrationSource::Given(table, _) => table.clone(),
         CalibrationSource::OnTheFly => {
-            let plan = DrivePlan {
-                freq_hz,
-                gamma,
-                gravity_mps2: g,
-                cycles: transient + periods,
-                steady_cycles: periods,
-            };
             calibrate_rig(
                 rig,
                 ShakerKind::Prescribed,
@@ -669,7 +661,8 @@ pub fn replay_record(
                 &[0.5 * gamma, gamma],
                 g,
                 dt,
-                &plan,
+                transient + periods,
+                periods,
                 options.seed,
             )?
             .0
