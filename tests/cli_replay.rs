@@ -316,8 +316,8 @@ fn unusable_records_are_refused_with_the_reason() {
     );
 }
 
-/// A small damper shaken through the thesis rig on its electrodynamic
-/// shaker; its own kinematics.csv replayed through the same rig gives the
+/// A small damper shaken through the thesis rig, prescribed drive; its own
+/// kinematics.csv replayed through the same rig gives the
 /// shake's measurement back, and the record's truth is the DEM's input work.
 #[test]
 fn replay_of_a_shake_gives_its_measurement_back() {
@@ -357,7 +357,14 @@ fn replay_of_a_shake_gives_its_measurement_back() {
         r["window_start_s"].as_f64().expect("window"),
         s["steady_start_s"].as_f64().expect("steady start"),
     );
-    assert!((w0 - s0).abs() < 1e-9, "window {w0} vs shake's record {s0}");
+    // The shake's steady start is the DEM step nearest the cycle boundary
+    // (the step need not divide the period); the replay's window starts on
+    // the boundary itself, as the shake's record does.
+    let dt = s["dt_s"].as_f64().expect("dt");
+    assert!(
+        (w0 - s0).abs() <= 0.5 * dt + 1e-12,
+        "window {w0} vs shake's steady start {s0} (dt {dt:e})"
+    );
     let work = s["dem"]["work_in_per_cycle_j"].as_f64().expect("work") * 40.0;
     let truth = r["truth"]["power_w"].as_f64().expect("truth");
     // Window means of the force times the velocity at their centres: 40 kHz
@@ -369,14 +376,24 @@ fn replay_of_a_shake_gives_its_measurement_back() {
     let shake = s["measured"]["power_w"].as_f64().expect("shake");
     let replay = r["measured"]["power_w"].as_f64().expect("replay");
     // The rig measures what the rows carry, and 40 kHz rows carry this
-    // 200-sphere bed's work (a few impacts a cycle) to about 0.4 %: the
-    // replay agrees with the shake to that (measured: -0.10 %). On the
-    // thesis bed the rows carry it to 1e-5 and the replay agrees with the
-    // shake to 0.01 % (tests/cli_shake.rs).
+    // 200-sphere bed's work (a few impacts a cycle) to a fraction of a per
+    // cent: the replay agrees with the shake to that (measured on this VM:
+    // -0.22 %). On the thesis bed the rows carry it to 1e-5 and the replay
+    // agrees with the shake to 0.1 % (tests/cli_shake.rs).
     assert!(
         (replay / shake - 1.0).abs() < 5e-3,
         "replay {replay} vs shake {shake}"
     );
+    // The thesis rig's own error on this weakly dissipating bed (0.18 W, the
+    // enclosure's phase leak half of it) is the shake's, and the replay
+    // makes it again (measured: -1.685 % vs the record, the shake -1.661 %
+    // vs the DEM's work; on the ideal rig +0.05 %).
     let m = r["measured"]["error_vs_record_rel"].as_f64().expect("err");
-    assert!(m.abs() < 2e-3, "replay measures its record to {m:+.4}");
+    let chain = s["measured"]["error_vs_dem_work_rel"]
+        .as_f64()
+        .expect("shake's error");
+    assert!(
+        (m - chain).abs() < 2e-3,
+        "replay measures its record to {m:+.4}, the shake the DEM's work to {chain:+.4}"
+    );
 }
