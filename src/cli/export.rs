@@ -26,7 +26,11 @@ pub struct ExportArgs {
 #[derive(Debug, Clone, Subcommand)]
 enum ExportTarget {
     /// A LAMMPS input deck (pair_style granular, moving region walls) and vlab's
-    /// settled packing; the deck writes record.txt for `vlab replay`.
+    /// settled packing; the deck writes record.txt for `vlab replay`. It runs
+    /// --cycles (the last --steady-cycles the window) at vlab's time step for
+    /// this drive; a scene run until steady runs drive.min_cycles, its last
+    /// 5/8 the window (LAMMPS keeps no dissipation ledger to judge
+    /// steadiness): give the cycles `vlab shake` took (its summary.json).
     Lammps(LammpsArgs),
 }
 
