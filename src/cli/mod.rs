@@ -9,8 +9,10 @@ mod bench;
 mod calibrate;
 mod cor;
 mod drop;
+mod export;
 mod impact;
 mod progress;
+mod replay;
 mod rig_cmd;
 mod scene_cmd;
 mod shake;
@@ -60,6 +62,12 @@ enum Command {
     Drop(drop::DropArgs),
     /// Estimate the restitution from a force record of a drop test (CSV or WAV).
     Cor(cor::CorArgs),
+    /// Put another DEM code's record (enclosure motion, particle force) through the
+    /// rig and measure it as a shake is measured.
+    Replay(replay::ReplayArgs),
+    /// Write the damper for another DEM code: `vlab export lammps` writes a LAMMPS
+    /// deck and the settled packing.
+    Export(export::ExportArgs),
 }
 
 /// Name of a shaker kind, as on the command line.
@@ -121,5 +129,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bench(a) => bench::run(a, quiet),
         Command::Drop(a) => drop::run(a),
         Command::Cor(a) => cor::run(a),
+        Command::Replay(a) => replay::run(a),
+        Command::Export(a) => export::run(a, quiet),
     })
 }

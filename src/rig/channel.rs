@@ -8,8 +8,10 @@
 //! 2. AC-coupling first-order high-pass (corner in Hz, 0 = DC-coupled), then
 //!    the anti-alias Butterworth low-pass, both discretised by Tustin at the
 //!    DEM step ([`super::filter`]); the filters start in the steady state of
-//!    the first input, as a conditioner that has been on for hours (the static
-//!    weight on the force gauge causes no start transient);
+//!    a constant input, as a conditioner that has been on for hours (the static
+//!    weight on the force gauge causes no start transient): the level given to
+//!    [`MeasurementChannel::settle_at`] before the first push, else the first
+//!    input;
 //! 3. sampling at the DAQ rate, sample `k` at `t_k + skew`, `t_k = k / fs`:
 //!    [`Sampling::Point`] interpolates linearly between the two DEM steps
 //!    around the instant; [`Sampling::Boxcar`] averages the DEM steps nearest
@@ -84,6 +86,8 @@ pub struct MeasurementChannel {
     adc: Option<Adc>,
     full_scale_v: f64,
     started: bool,
+    /// The filters were settled by [`Self::settle_at`] before the first push.
+    preset: bool,
     prev_t: f64,
     prev_y: f64,
     next_k: i64,
@@ -143,6 +147,7 @@ impl MeasurementChannel {
             adc: (!daq.ideal_adc).then(|| Adc::new(daq.bits, daq.full_scale_v)),
             full_scale_v: daq.full_scale_v,
             started: false,
+            preset: false,
             prev_t: 0.0,
             prev_y: 0.0,
             next_k: 0,
@@ -173,6 +178,19 @@ impl MeasurementChannel {
         &self.params
     }
 
+    /// Settles the filters at the constant input `x` (physical units), as if
+    /// the channel had seen it for hours, before the first
+    /// [`Self::push`] (which otherwise settles them at its own value). For a
+    /// record that starts with a transient, `x` is the level the
+    /// conditioner had settled to before it: the record's mean. No effect
+    /// once pushing has started.
+    pub fn settle_at(&mut self, x: f64) {
+        if !self.started {
+            self.filters.settle_dc(x * self.volts_per_unit);
+            self.preset = true;
+        }
+    }
+
     /// Feeds the value `x` (physical units) at time `t_s` (one DEM step after
     /// the previous call).
     #[inline]
@@ -181,7 +199,9 @@ impl MeasurementChannel {
         let skew = self.params.sample_skew_s;
         if !self.started {
             self.started = true;
-            self.filters.settle_dc(v);
+            if !self.preset {
+                self.filters.settle_dc(v);
+            }
             self.prev_t = t_s;
             self.next_k = self
                 .k_start

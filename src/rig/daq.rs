@@ -155,6 +155,17 @@ impl Daq {
         self.force.reserve(duration_s);
     }
 
+    /// Settles both channels' filters at a constant acceleration (m/s^2) and
+    /// transducer force (N) before the first [`Self::push`], which otherwise
+    /// settles them at its own values: a record that starts with a transient
+    /// (a replayed DEM record's drive-start jolt) then passes through the
+    /// AC coupling as a transient, not as the level it had settled to
+    /// ([`MeasurementChannel::settle_at`]).
+    pub fn settle_at(&mut self, enclosure_accel_mps2: f64, transducer_force_n: f64) {
+        self.accel.settle_at(enclosure_accel_mps2);
+        self.force.settle_at(transducer_force_n);
+    }
+
     /// One DEM step: time from the drive start (s), enclosure acceleration
     /// (m/s^2), force the transducer carries (N). O(1), no allocation after
     /// [`Self::reserve`].

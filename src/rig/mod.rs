@@ -7,7 +7,8 @@
 //! - [`spec`]: shaker rigs (`kind = "shaker"`) and the built-in rigs
 //!   `thesis-shaker` (default) and `ideal`; the model's own phase error;
 //! - [`motion`]: the one enclosure-motion abstraction ([`EnclosureMotion`],
-//!   [`Kinematics`]) and the prescribed sine of eq. 6.2 / 7.6 ([`SineMotion`]);
+//!   [`Kinematics`]), the prescribed sine of eq. 6.2 / 7.6 ([`SineMotion`])
+//!   and a recorded motion replayed ([`RecordedMotion`], `vlab replay`);
 //! - [`shaker`]: the rig's drive, prescribed or a lumped electrodynamic
 //!   shaker whose motion the particles disturb, with the rig's stroke and
 //!   acceleration limits;
@@ -52,7 +53,7 @@ pub use drop_rig::{DROP_FORCE_CHANNEL, DropRig, DropRigReport};
 pub use drop_spec::{DROP_RIG, DropRigSpec, MountSpec, PlateSpec, RecordSpec};
 pub use error::{Result, RigError};
 pub use file::{RIG_VERSION, RigFile, RigKind, builtin_rigs, builtin_toml};
-pub use motion::{EnclosureMotion, Kinematics, SineMotion};
+pub use motion::{EnclosureMotion, Kinematics, RecordedMotion, SineMotion};
 pub use plate::Plate;
 pub use shaker::{ElectrodynamicShaker, Shaker, ShakerReport, check_limits};
 pub use spec::{

@@ -108,6 +108,12 @@ pub enum SceneError {
         path: std::path::PathBuf,
         source: std::io::Error,
     },
+    /// A record given to `vlab replay` that cannot be replayed.
+    #[error("record {}: {problem}", path.display())]
+    Record {
+        path: std::path::PathBuf,
+        problem: String,
+    },
     #[error(transparent)]
     Dem(#[from] DemError),
     #[error(transparent)]

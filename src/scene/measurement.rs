@@ -3,7 +3,11 @@
 //! The rig's shaker moves the enclosure (prescribed, or electrodynamic and
 //! disturbed by the particles); every DEM step the force transducer reads
 //! `m_enc a - F_p + W` and the accelerometer reads `a`, and the rig's channels
-//! digitise both from the start of the steady cycles. Yang's method (eq.
+//! digitise both from the start of the steady cycles. The conditioner has
+//! settled on the damper at rest before the drive starts (its filters start
+//! at the settled bed's load on the gauge, not at the first drive step, whose
+//! dashpot jolt as the floor meets the resting bed would otherwise decay
+//! through the AC coupling over the whole record). Yang's method (eq.
 //! 7.8–7.12) turns the record into dissipated power, less the phase error
 //! calibrated on the empty enclosure (Fig. 7.9), and the result is held against
 //! the DEM's own tally of dissipated energy.
@@ -174,6 +178,19 @@ pub fn run_measured_shake(
     let dt = world.dt_s();
     let mut daq = Daq::new(rig, dt, record_start, scene.simulation.seed)?;
     daq.reserve(f64::from(plan.length.max_cycles().min(64)) * period + 0.01);
+    // The conditioner has long settled on the damper at rest (the settled
+    // bed's weight on the gauge), not on the first step of the drive, whose
+    // dashpot jolt would otherwise stand in the AC coupling for seconds.
+    let resting_particle_force = -world.wall_force().dot(world.walls.axis);
+    daq.settle_at(
+        0.0,
+        transducer_force_n(
+            rig.enclosure.mass_kg,
+            0.0,
+            resting_particle_force,
+            static_weight_n(scene, rig),
+        ),
+    );
     let mut instruments = Instruments {
         truth: TruthRecorder::new(rig.daq.sample_rate_hz, 0.0),
         daq,

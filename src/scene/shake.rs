@@ -31,7 +31,7 @@ use serde::Serialize;
 
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
-use crate::rig::{RigFile, RigSpec, ShakerKind, check_limits};
+use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
 use crate::scene::damper::{DriveOutcome, Progress, Steadiness};
 use crate::scene::file::{Scene, SceneError};
 use crate::scene::measurement::{Measured, ShakeExperiment, ShakeSetup, run_measured_shake};
@@ -264,6 +264,7 @@ pub struct ShakeSummary {
     pub freq_hz: f64,
     pub gamma: f64,
     pub orientation: &'static str,
+    pub gravity_mps2: f64,
     pub n_particles: usize,
     pub particle_mass_kg: f64,
     pub fill_ratio: f64,
@@ -322,6 +323,7 @@ pub fn run_shake(
         freq_hz: setup.freq_hz,
         gamma: setup.gamma,
         orientation: scene.enclosure.orientation.as_str(),
+        gravity_mps2: scene.simulation.gravity_mps2,
         n_particles: n,
         particle_mass_kg: world.particles.total_mass_kg(),
         fill_ratio: scene.fill_ratio(),
@@ -362,18 +364,7 @@ impl ShakeRun {
         let e = &self.experiment;
         let truth = truth_trace(&e.truth, &self.summary)?;
         write_csv(&dir.join("kinematics.csv"), &truth)?;
-        write_csv(&dir.join("trace.csv"), &e.trace)?;
-        // Full scale of the WAV = the ADC's, so that ADC codes are stored exactly.
-        let full_scale: BTreeMap<String, f64> = if e.daq.ideal_adc {
-            BTreeMap::new()
-        } else {
-            e.daq
-                .channels
-                .iter()
-                .map(|c| (c.name.clone(), c.full_scale))
-                .collect()
-        };
-        write_wav_with_full_scale(&dir.join("trace.wav"), &e.trace, &full_scale)?;
+        write_rig_record(dir, &e.trace, &e.daq)?;
         e.calibration.save_json(&dir.join("calibration.json"))?;
         #[cfg_attr(not(feature = "plot"), allow(unused_mut))]
         let mut files = vec![
@@ -386,7 +377,16 @@ impl ShakeRun {
         ];
         #[cfg(feature = "plot")]
         {
-            plot_record(&dir.join("trace.svg"), &e.trace, scene, setup)?;
+            plot_record(
+                &dir.join("trace.svg"),
+                &e.trace,
+                setup.rig.enclosure.mass_kg + scene.particle_mass_kg(),
+                &format!(
+                    "{} damper, {} Hz, Gamma {}: rig {} record (cf. thesis Fig. 7.12)",
+                    scene.name, setup.freq_hz, setup.gamma, setup.rig.name
+                ),
+                setup.freq_hz,
+            )?;
             files.push("trace.svg");
         }
         #[cfg(not(feature = "plot"))]
@@ -405,16 +405,55 @@ impl ShakeRun {
     }
 }
 
+/// Writes what a rig recorded: `trace.csv`, and `trace.wav` with its
+/// `trace.wav.json` sidecar whose full scales are the ADC's, so that the WAV
+/// stores the ADC codes exactly (each file atomically).
+pub fn write_rig_record(dir: &Path, trace: &Trace, daq: &DaqReport) -> Result<(), SceneError> {
+    write_csv(&dir.join("trace.csv"), trace)?;
+    let full_scale: BTreeMap<String, f64> = if daq.ideal_adc {
+        BTreeMap::new()
+    } else {
+        daq.channels
+            .iter()
+            .map(|c| (c.name.clone(), c.full_scale))
+            .collect()
+    };
+    write_wav_with_full_scale(&dir.join("trace.wav"), trace, &full_scale)?;
+    Ok(())
+}
+
 /// The truth record as a trace: the enclosure's kinematics and the particles'
-/// force on it, at the lab's sample rate.
+/// force on it, at the lab's sample rate. Its metadata says what `vlab
+/// replay` needs to replay it: drive frequency and Γ, and in `extra` the
+/// particle mass (`particle_mass_kg`), `gravity_mps2`, `orientation` and the
+/// whole periods the shake measured (`steady_cycles`).
 pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Trace, SceneError> {
     let start = samples.time_s.first().copied().unwrap_or(0.0);
     let mut trace = Trace::new(summary.sample_rate_hz, start)?;
+    let mut extra = BTreeMap::new();
+    extra.insert(
+        "particle_mass_kg".to_string(),
+        serde_json::json!(summary.particle_mass_kg),
+    );
+    extra.insert(
+        "gravity_mps2".to_string(),
+        serde_json::json!(summary.gravity_mps2),
+    );
+    extra.insert(
+        "orientation".to_string(),
+        serde_json::json!(summary.orientation),
+    );
+    extra.insert("scene".to_string(), serde_json::json!(summary.scene));
+    extra.insert(
+        "steady_cycles".to_string(),
+        serde_json::json!(summary.steady_cycles),
+    );
     trace.metadata = TraceMetadata {
         source: format!("vlab {} shake: DEM truth", summary.vlab_version),
         rig: "none (DEM truth, no sensors)".into(),
         drive_freq_hz: Some(summary.freq_hz),
         gamma: Some(summary.gamma),
+        extra,
         ..Default::default()
     };
     let columns: [(&str, &str, &Vec<f64>); 6] = [
@@ -435,20 +474,22 @@ pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Tra
     Ok(trace)
 }
 
-/// Two cycles of the record as the thesis plots them (Fig. 7.12): the
-/// acceleration and the force divided by the total mass, both in m/s².
+/// Two cycles of a rig record as the thesis plots them (Fig. 7.12): the
+/// acceleration and the force divided by the total mass `m_total_kg`
+/// (enclosure and particles), both in m/s².
 #[cfg(feature = "plot")]
-fn plot_record(
+pub fn plot_record(
     path: &Path,
     trace: &Trace,
-    scene: &Scene,
-    setup: &ShakeSetup,
+    m_total_kg: f64,
+    title: &str,
+    freq_hz: f64,
 ) -> Result<(), SceneError> {
     use crate::signals::{Series, SeriesStyle, plot_xy_svg};
     let a = &trace.channel(crate::rig::ACCEL_CHANNEL)?.samples;
     let f = &trace.channel(crate::rig::FORCE_CHANNEL)?.samples;
-    let m_total = setup.rig.enclosure.mass_kg + scene.particle_mass_kg();
-    let n = ((2.0 * trace.sample_rate_hz / setup.freq_hz).round() as usize).min(a.len());
+    let m_total = m_total_kg;
+    let n = ((2.0 * trace.sample_rate_hz / freq_hz).round() as usize).min(a.len());
     let t = |i: usize| 1e3 * trace.time_s(i);
     // The static weight is a constant offset of the force; remove its mean.
     let f_mean = f[..n].iter().sum::<f64>() / n.max(1) as f64;
@@ -466,10 +507,7 @@ fn plot_record(
     ];
     plot_xy_svg(
         path,
-        &format!(
-            "{} damper, {} Hz, Gamma {}: rig {} record (cf. thesis Fig. 7.12)",
-            scene.name, setup.freq_hz, setup.gamma, setup.rig.name
-        ),
+        title,
         "time from the record start (ms)",
         "m/s^2",
         &series,

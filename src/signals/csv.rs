@@ -69,13 +69,14 @@
 //! counting every line of the file) and what is wrong with it.
 
 use std::borrow::Cow;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
 
 use super::error::{CsvErrorKind, Result, SignalsError};
-use super::trace::{Trace, TraceMetadata};
+use super::table::{Table, TableFormat};
+use super::trace::{Channel, Trace, TraceMetadata};
 use crate::atomic_write::write_atomic;
 
 /// How far a time value may be from the uniform grid, as a fraction of the
@@ -227,22 +228,31 @@ pub fn read_csv(path: &Path) -> Result<Trace> {
 /// Reads a CSV trace with the separator and decimal mark given in `options`
 /// (each detected when `None`).
 pub fn read_csv_with(path: &Path, options: &CsvReadOptions) -> Result<Trace> {
-    let csv_err = |line, kind| SignalsError::Csv {
+    let text = read_utf8(path)?;
+    parse_csv_with(&text, options).map_err(|(line, kind)| SignalsError::Csv {
         path: path.to_path_buf(),
         line,
         kind,
-    };
+    })
+}
+
+/// The file's text, refused with the line of the first byte that is not UTF-8.
+pub(crate) fn read_utf8(path: &Path) -> Result<String> {
     let bytes = std::fs::read(path).map_err(|source| SignalsError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| {
-        let at = e.valid_up_to();
+    String::from_utf8(bytes).map_err(|e| {
+        let bytes = e.as_bytes();
+        let at = e.utf8_error().valid_up_to();
         let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
         let byte = bytes.get(at).copied().unwrap_or_default();
-        csv_err(line, CsvErrorKind::NotUtf8 { byte })
-    })?;
-    parse_csv_with(text, options).map_err(|(line, kind)| csv_err(line, kind))
+        SignalsError::Csv {
+            path: path.to_path_buf(),
+            line,
+            kind: CsvErrorKind::NotUtf8 { byte },
+        }
+    })
 }
 
 /// A parse failure: one-based line number and what is wrong.
@@ -254,6 +264,8 @@ struct Declared {
     sample_rate_hz: Option<f64>,
     start_time_s: Option<f64>,
     metadata: TraceMetadata,
+    /// Every other `# key: value` comment, as text.
+    comments: BTreeMap<String, String>,
 }
 
 /// Parses CSV text of any dialect, detected.
@@ -264,6 +276,103 @@ fn parse_csv(text: &str) -> Result<Trace, ParseError> {
 
 /// Parses CSV text into a trace; errors carry one-based line numbers.
 fn parse_csv_with(text: &str, options: &CsvReadOptions) -> Result<Trace, ParseError> {
+    let raw = parse_rows(text, options)?;
+    let header_line = raw.header_line;
+    if raw.time.len() < 2 {
+        return Err((
+            header_line,
+            CsvErrorKind::TooFewRows {
+                got: raw.time.len(),
+            },
+        ));
+    }
+    let (sample_rate_hz, start_time_s) = sample_grid(&raw.time, &raw.declared, &raw.row_lines)?;
+    let mut trace = Trace::new(sample_rate_hz, start_time_s).map_err(|e| {
+        (
+            header_line,
+            CsvErrorKind::BadComment {
+                key: "sample_rate_hz".into(),
+                problem: e.to_string(),
+            },
+        )
+    })?;
+    trace.metadata = raw.declared.metadata;
+    for ((name, unit), samples) in raw.columns.into_iter().zip(raw.data) {
+        // Names were checked unique and samples finite above; this cannot fail,
+        // but report it as a header problem rather than panic if it ever does.
+        trace
+            .add_channel(name.clone(), unit, samples)
+            .map_err(|e| {
+                (
+                    header_line,
+                    CsvErrorKind::BadHeader {
+                        column: 0,
+                        header: name,
+                        problem: e.to_string(),
+                    },
+                )
+            })?;
+    }
+    Ok(trace)
+}
+
+/// Reads a CSV file as a [`Table`]: the same dialects, header and comments as
+/// [`read_csv_with`], but the time column is kept as written, not checked
+/// against a uniform grid (a record from another program, whose time axis the
+/// caller validates, e.g. with [`Table::uniform_step_s`]).
+pub fn read_csv_table(path: &Path, options: &CsvReadOptions) -> Result<Table> {
+    let csv_err = |line, kind| SignalsError::Csv {
+        path: path.to_path_buf(),
+        line,
+        kind,
+    };
+    let text = read_utf8(path)?;
+    let raw = parse_rows(&text, options).map_err(|(line, kind)| csv_err(line, kind))?;
+    let time_header = raw.time_header.clone();
+    let columns = raw
+        .columns
+        .into_iter()
+        .zip(raw.data)
+        .map(|((name, unit), samples)| Channel {
+            name,
+            unit,
+            samples,
+        })
+        .collect();
+    let mut comments = raw.declared.comments;
+    if let Some(fs) = raw.declared.sample_rate_hz {
+        comments.insert("sample_rate_hz".into(), fs.to_string());
+    }
+    Ok(Table {
+        path: path.to_path_buf(),
+        format: TableFormat::Csv,
+        time_column: time_header,
+        time_s: raw.time,
+        columns,
+        metadata: raw.declared.metadata,
+        comments,
+        lines: raw.row_lines,
+    })
+}
+
+/// What [`parse_rows`] read: the header, the columns and the leading comments.
+struct RawRows {
+    /// One-based line of the header.
+    header_line: usize,
+    /// The time column's header cell.
+    time_header: String,
+    /// (name, unit) per data column.
+    columns: Vec<(String, String)>,
+    time: Vec<f64>,
+    data: Vec<Vec<f64>>,
+    declared: Declared,
+    /// File line of each row.
+    row_lines: Vec<usize>,
+}
+
+/// Parses CSV text of any dialect into its rows; errors carry one-based line
+/// numbers. The time axis is not checked here.
+fn parse_rows(text: &str, options: &CsvReadOptions) -> Result<RawRows, ParseError> {
     if let Some(d) = options.delimiter
         && !DELIMITERS.contains(&d)
     {
@@ -361,6 +470,7 @@ fn parse_csv_with(text: &str, options: &CsvReadOptions) -> Result<Trace, ParseEr
 
     let mut mark = DecimalMark::new(options.decimal_comma);
     let mut columns: Option<Vec<(String, String)>> = None;
+    let mut time_header = String::new();
     let mut time = Vec::new();
     let mut row_lines = Vec::new();
     let mut data: Vec<Vec<f64>> = Vec::new();
@@ -391,6 +501,7 @@ fn parse_csv_with(text: &str, options: &CsvReadOptions) -> Result<Trace, ParseEr
         let Some(columns) = &columns else {
             let header: Vec<&str> = cells().collect();
             let parsed = parse_header(n, &header)?;
+            time_header = header.first().copied().unwrap_or_default().to_string();
             data = vec![Vec::new(); parsed.len()];
             columns = Some(parsed);
             continue;
@@ -435,37 +546,15 @@ fn parse_csv_with(text: &str, options: &CsvReadOptions) -> Result<Trace, ParseEr
     let Some(columns) = columns else {
         return Err((header_line, CsvErrorKind::Empty));
     };
-    if time.len() < 2 {
-        return Err((header_line, CsvErrorKind::TooFewRows { got: time.len() }));
-    }
-    let (sample_rate_hz, start_time_s) = sample_grid(&time, &declared, &row_lines)?;
-    let mut trace = Trace::new(sample_rate_hz, start_time_s).map_err(|e| {
-        (
-            header_line,
-            CsvErrorKind::BadComment {
-                key: "sample_rate_hz".into(),
-                problem: e.to_string(),
-            },
-        )
-    })?;
-    trace.metadata = declared.metadata;
-    for ((name, unit), samples) in columns.into_iter().zip(data) {
-        // Names were checked unique and samples finite above; this cannot fail,
-        // but report it as a header problem rather than panic if it ever does.
-        trace
-            .add_channel(name.clone(), unit, samples)
-            .map_err(|e| {
-                (
-                    header_line,
-                    CsvErrorKind::BadHeader {
-                        column: 0,
-                        header: name,
-                        problem: e.to_string(),
-                    },
-                )
-            })?;
-    }
-    Ok(trace)
+    Ok(RawRows {
+        header_line,
+        time_header,
+        columns,
+        time,
+        data,
+        declared,
+        row_lines,
+    })
 }
 
 /// How often `d` occurs in `line` outside double quotes.
@@ -643,7 +732,9 @@ fn parse_comment(line: usize, text: &str, declared: &mut Declared) -> Result<(),
             declared.metadata = serde_json::from_str(value)
                 .map_err(|e| bad(format!("invalid metadata JSON: {e}")))?;
         }
-        _ => {}
+        _ => {
+            declared.comments.insert(key.to_string(), value.to_string());
+        }
     }
     Ok(())
 }

@@ -11,6 +11,10 @@
 //! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
 //! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
 //! - [`trace_file`]: any of these formats, told apart by the file's extension;
+//! - [`table`], [`lammps`]: records of named columns from other programs (a
+//!   DEM code's enclosure motion and force): CSV, or the text LAMMPS and
+//!   LIGGGHTS write with `fix ave/time` / `fix print`; time axis checked for
+//!   gaps and reversals;
 //! - [`plot`]: small SVG plots;
 //! - [`bench`](mod@bench): a timing hook for `vlab bench`.
 //!
@@ -22,10 +26,12 @@ pub mod calibration;
 pub mod csv;
 pub mod error;
 pub mod impacts;
+pub mod lammps;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod power;
 pub mod spectrum;
+pub mod table;
 pub mod tdms;
 pub mod trace;
 pub mod trace_file;
@@ -36,12 +42,13 @@ mod testutil;
 
 pub use bench::{YangBenchReport, bench_yang_power};
 pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
-pub use csv::{CsvReadOptions, read_csv, read_csv_with, write_csv};
-pub use error::{CsvErrorKind, Result, SignalsError, TdmsErrorKind, WavErrorKind};
+pub use csv::{CsvReadOptions, read_csv, read_csv_table, read_csv_with, write_csv};
+pub use error::{CsvErrorKind, RecordErrorKind, Result, SignalsError, TdmsErrorKind, WavErrorKind};
 pub use impacts::{
     CorEstimate, DropTestResult, Impact, ImpactDetection, ImpactParams, Polarity, detect_impacts,
     estimate_cor, restitution_from_impact_times,
 };
+pub use lammps::read_lammps_text;
 #[cfg(feature = "plot")]
 pub use plot::{Series, SeriesStyle, plot_xy_svg};
 pub use power::{
@@ -50,6 +57,7 @@ pub use power::{
     wrap_phase_rad, yang_power, yang_power_of_trace,
 };
 pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
+pub use table::{Table, TableFormat, read_table};
 pub use tdms::read_tdms;
 pub use trace::{Channel, Sensitivity, Trace, TraceMetadata};
 pub use trace_file::{TraceFormat, read_trace, read_trace_with};

@@ -1,0 +1,222 @@
+//! `vlab replay`: another DEM code's record of the enclosure's motion and
+//! the particles' force on it, put through vlab's rig and measured as `vlab
+//! shake` measures. The work is [`vlab::scene::replay`]'s; this is its
+//! command line.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+
+use vlab::atomic_write::OutputDir;
+use vlab::rig::{RigFile, RigSpec};
+use vlab::scene::file::Orientation;
+use vlab::scene::measurement::CalibrationSource;
+use vlab::scene::replay::{
+    ColumnMap, ReplayOptions, ReplaySummary, Source, default_out_dir, read_enclosure_record,
+    replay_record,
+};
+use vlab::signals::PhaseCalibration;
+
+use super::args;
+
+#[derive(Debug, Clone, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct ReplayArgs {
+    /// The record: vlab's kinematics.csv, a CSV with named columns, or the text of
+    /// LAMMPS / LIGGGHTS `fix ave/time` or `fix print` (any name not ending in .csv).
+    #[arg(value_name = "RECORD")]
+    record: PathBuf,
+    /// The rig that measures the record: a built-in name (thesis-shaker, ideal) or a
+    /// rig file (TOML). Its shaker is replaced by the recorded motion.
+    #[arg(long, value_name = "NAME|FILE", default_value = vlab::rig::DEFAULT_RIG)]
+    rig: String,
+    /// Drive frequency (Hz) [default: the record's, else estimated from its velocity].
+    #[arg(long = "freq", value_name = "HZ", value_parser = args::freq_hz)]
+    freq_hz: Option<f64>,
+    /// Amplitude Γ [default: the record's, else its velocity's fundamental].
+    #[arg(long, value_parser = args::gamma)]
+    gamma: Option<f64>,
+    /// Particle mass (kg), for the efficiency [default: the record's].
+    #[arg(long = "particle-mass-kg", value_name = "KG", value_parser = args::positive_kg)]
+    particle_mass_kg: Option<f64>,
+    /// Gravity relative to the drive axis, for the gauge's static load [default: the
+    /// record's, else vertical].
+    #[arg(long, value_enum)]
+    orientation: Option<Orientation>,
+    /// Whole drive periods measured, the last ones of the record [default: 5, or all
+    /// the record holds if fewer].
+    #[arg(long, value_name = "N")]
+    steady_cycles: Option<u32>,
+    /// A column of the record by role, when its name is not one vlab knows:
+    /// force=NAME (the particles' force on the enclosure, N), velocity=NAME (m/s),
+    /// displacement=NAME (m), acceleration=NAME (m/s^2). Repeatable.
+    #[arg(long = "column", value_name = "ROLE=NAME")]
+    columns: Vec<String>,
+    /// Phase-error table of the rig (from `vlab calibrate`) [default: measure one now
+    /// on the empty enclosure at the drive frequency].
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<PathBuf>,
+    /// Seed of the rig's noise.
+    #[arg(long, default_value = "1")]
+    seed: u64,
+    /// Output folder [default: signals/replay-<record name>].
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Print the summary as JSON on standard output.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The `--column ROLE=NAME` flags as a column map.
+fn column_map(flags: &[String]) -> Result<ColumnMap> {
+    let mut map = ColumnMap::default();
+    for flag in flags {
+        let Some((role, name)) = flag.split_once('=') else {
+            bail!("--column = '{flag}': must be ROLE=NAME, e.g. force=particle_force_axial");
+        };
+        let slot = match role.trim() {
+            "force" => &mut map.force,
+            "velocity" => &mut map.velocity,
+            "displacement" => &mut map.displacement,
+            "acceleration" => &mut map.acceleration,
+            other => bail!(
+                "--column = '{flag}': role '{other}' must be force, velocity, displacement or acceleration"
+            ),
+        };
+        if name.trim().is_empty() {
+            bail!("--column = '{flag}': the column name is empty");
+        }
+        *slot = Some(name.trim().to_string());
+    }
+    Ok(map)
+}
+
+/// Runs the command.
+pub fn run(a: ReplayArgs) -> Result<()> {
+    let flags = args::FlagKeys::new()
+        .set(a.freq_hz.is_some(), "freq_hz", "--freq")
+        .set(a.gamma.is_some(), "gamma", "--gamma")
+        .set(true, "steady_cycles", "--steady-cycles")
+        .set(true, "particle_mass_kg", "--particle-mass-kg");
+    let columns = column_map(&a.columns)?;
+    let rig = RigSpec::from_name_or_path(&a.rig).with_context(|| format!("--rig {}", a.rig))?;
+    let calibration = match &a.calibration {
+        Some(path) => {
+            let table = PhaseCalibration::load_json(path)
+                .with_context(|| format!("--calibration {}", path.display()))?;
+            CalibrationSource::Given(table, format!("table {}", path.display()))
+        }
+        None => CalibrationSource::OnTheFly,
+    };
+    let record = read_enclosure_record(&a.record, &columns)?;
+    let options = ReplayOptions {
+        freq_hz: a.freq_hz,
+        gamma: a.gamma,
+        particle_mass_kg: a.particle_mass_kg,
+        orientation: a.orientation,
+        gravity_mps2: None,
+        steady_cycles: a.steady_cycles,
+        columns,
+        calibration,
+        seed: a.seed,
+        rig: rig.clone(),
+    };
+    let out_dir = a.out.clone().unwrap_or_else(|| default_out_dir(&a.record));
+    let made = OutputDir::prepare(&out_dir)
+        .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
+    let result = replay_record(&record, &options)
+        .map_err(|e| flags.name_flags(e.into()))
+        .with_context(|| format!("replaying {} through rig {}", a.record.display(), rig.name));
+    let mut run = made.keep_if_ok(result)?;
+    run.write(&out_dir, &rig)?;
+    for w in &run.summary.warnings {
+        eprintln!("warning: {w}");
+    }
+    if a.json {
+        print!("{}", run.summary_json());
+    } else {
+        print_summary(&run.summary, &out_dir);
+    }
+    Ok(())
+}
+
+fn source(s: Source) -> &'static str {
+    match s {
+        Source::Given => "given",
+        Source::Record => "from the record",
+        Source::Estimated => "estimated from the record",
+        Source::Default => "default",
+    }
+}
+
+fn print_summary(s: &ReplaySummary, dir: &Path) {
+    let c = &s.columns;
+    println!(
+        "record {} ({}): {} rows every {:.4e} s from {:.6} s to {:.6} s",
+        s.record, s.format, s.record_rows, s.record_step_s, s.record_start_s, s.record_end_s
+    );
+    println!(
+        "  columns: time '{}', force '{}', {} '{}'{}",
+        c.time,
+        c.force,
+        c.motion_kind,
+        c.motion,
+        if c.ignored.is_empty() {
+            String::new()
+        } else {
+            format!("; not used: {}", c.ignored.join(", "))
+        }
+    );
+    println!(
+        "  drive {} Hz ({}), Gamma {:.4} ({}; the record's fundamental {:.4}), {} ({})",
+        s.freq_hz,
+        source(s.freq_source),
+        s.gamma,
+        source(s.gamma_source),
+        s.achieved_gamma,
+        s.orientation,
+        source(s.orientation_source)
+    );
+    println!(
+        "  window {:.6}-{:.6} s: the last {} whole periods",
+        s.window_start_s, s.window_end_s, s.periods
+    );
+    let t = &s.truth;
+    println!("  the record's own dissipation (mean of -F_p v):");
+    println!(
+        "    power {:.5} W, energy per cycle {:.4e} J{}",
+        t.power_w,
+        t.energy_per_cycle_j,
+        match (t.efficiency, s.particle_mass_kg) {
+            (Some(eta), Some(m)) => format!(", efficiency {eta:.4} (M = {m:.4} kg)"),
+            _ => String::new(),
+        }
+    );
+    let m = &s.measured;
+    println!(
+        "  measured by rig {} (recorded motion), Yang's method over {} periods:",
+        s.rig, m.n_periods
+    );
+    println!(
+        "    power {:.5} W, energy per cycle {:.4e} J ({:+.3} % vs the record){}",
+        m.power_w,
+        m.energy_per_cycle_j,
+        100.0 * m.error_vs_record_rel,
+        m.efficiency
+            .map(|e| format!(", efficiency {e:.4}"))
+            .unwrap_or_default()
+    );
+    println!(
+        "    phase correction {:.3} mrad ({})",
+        1e3 * m.phase_correction_rad,
+        m.calibration
+    );
+    println!(
+        "    without the correction {:.4e} J ({:+.2} % vs the record; predicted leak {:+.2} %)",
+        m.uncorrected_energy_per_cycle_j,
+        100.0 * m.uncorrected_error_vs_record_rel,
+        100.0 * m.predicted_leak_per_cycle_j / t.energy_per_cycle_j
+    );
+    println!("  wrote {}", dir.display());
+}

@@ -1,0 +1,833 @@
+//! A LAMMPS input deck for a vlab damper (`vlab export lammps`): the same
+//! spheres, contact law, enclosure, drive and settled packing, run by LAMMPS
+//! (one core, or `mpirun` on a cluster for beds too big for one machine),
+//! with the enclosure's motion and the particles' force on it written in the
+//! text `vlab replay` reads ([`crate::signals::lammps`]).
+//!
+//! # What the deck holds
+//!
+//! - `units si`; spheres (`atom_style sphere`) read from `packing.data`:
+//!   vlab's settled packing ([`settle_bed`](crate::scene::settle::settle_bed)),
+//!   positions, velocities, spins, diameters and densities; enclosure axis z,
+//!   floor at z = 0, lid at the scene's inner length;
+//! - `pair_style granular`, `hertz/material` (thesis eq. 5.7 with E* of eq.
+//!   5.6), `tangential mindlin` (k_t = 8 G* √(R* δ), eq. 5.24, vector history,
+//!   Coulomb cap μ F_n, eq. 5.16) and `damping tsuji` with `limit_damping` (a
+//!   dashpot `α √(m* k_n)`, `k_n = 4/3 E* a`, whose force never pulls);
+//! - the cylinder as three `fix wall/gran/region` walls of the same law on
+//!   regions that move with the drive (`move NULL NULL v_enclosure_displacement`,
+//!   `u = Γ g / ω² sin ωt`, eq. 6.2, from t = 0 at the settled packing, as a
+//!   vlab shake): the side (an open cylinder), the floor and the lid (planes);
+//! - gravity along -z (vertical) or -y (horizontal), the time step vlab's
+//!   drive would take at this frequency and Γ ([`Scene::drive_dt_s`]: the
+//!   scene's `simulation.dt_s` rule) and `cycles` whole drive periods
+//!   ([`LammpsExport::for_scene`]: a scene that runs until steady runs
+//!   `drive.min_cycles` unless told otherwise, as LAMMPS keeps no ledger of
+//!   the dissipation to judge steadiness by);
+//! - `fix ave/time 1 N N` writing `record.txt`: time, enclosure displacement,
+//!   velocity and acceleration and the particles' axial force on the
+//!   enclosure (minus the sum of the three walls' forces on the atoms, from
+//!   each wall's `contacts` per-atom array), each the mean over `N` steps
+//!   (`N` = steps per 40 kHz sample, so no impact aliases), with `# key:
+//!   value` comments giving the drive, the particle mass, g and the
+//!   orientation.
+//!
+//! # Matching vlab's contact law, and what remains
+//!
+//! - **Restitution.** vlab damps with `c_n = 2 √(5/6) β √(S_n m*)` (eq. 5.32),
+//!   `S_n = 2 E* a`, i.e. `√5 β √(k_n m*)`; LAMMPS' `tsuji` damping is
+//!   `α √(k_n m*)` with `α(e)` a polynomial fit. The deck sets `α = √5 β`,
+//!   with β that of the scene's restitution mode (`exact`: calibrated so that
+//!   the clamped contact realises e), by giving LAMMPS the `e_lammps` whose
+//!   polynomial value is that α (0.803 for e = 0.86). With `limit_damping`
+//!   (LAMMPS' no-pull clamp) the contact is then vlab's own equation and
+//!   realises vlab's e: measured head-on, 0.86000 in LAMMPS and 0.86006 in
+//!   vlab at 1e-8 s steps, 0.8614 and 0.8611 at the thesis' 1e-6 s. LAMMPS'
+//!   own `tsuji` value for e = 0.86 (α = 0.0762) would realise 0.900.
+//! - **Tangential damping.** vlab's `c_t = √(k_t / S_n) c_n = √(4 G*/E*) c_n`
+//!   (eq. 5.33); LAMMPS scales the normal damping by `x_γ,t`: set to
+//!   `√(4 G*/E*)` (0.879 for acrylic).
+//! - **Walls.** LAMMPS 2021 computes a wall's E* as `E / (2 (1 - ν))` (not
+//!   `1 - ν²`) and its `mindlin NULL` stiffness wrongly; the deck gives the
+//!   wall fixes `ν = 0` and `E = 2 E*_pw` (the same E* whichever formula a
+//!   LAMMPS version uses) and the Mindlin coefficient `8 G*_pw` explicitly.
+//!   LAMMPS treats the inside of a region cylinder as concave with contact
+//!   radius `-2 R_c` (R* = 2.67 mm for a 2.5 mm sphere in the 40 mm
+//!   cylinder) where vlab takes every wall flat (R* = R, thesis); the side
+//!   wall's E and k_t coefficient are scaled by `√(1 - R / (2 R_c))` so that
+//!   its force against overlap is vlab's.
+//! - **What differs.** The slip rule: when `|F_t| > μ F_n` LAMMPS resets the
+//!   spring so that spring plus damping carry `μ F_n`, vlab shortens the
+//!   spring to carry `μ F_n` alone; and the order of the history update.
+//!   Oblique impacts at 30° differ by 1 % (wall) to 2.5 % (sphere) in the
+//!   rebound spin, 0.1° in the rebound angle. Tangential spring histories of
+//!   the settled packing are not carried over (they start at zero). LAMMPS
+//!   reports no energy ledger: the record's input power is its truth.
+//!
+//! A scene key with no translation is an error, not a silent omission: the
+//! deck's header lists every key of the scene with what the deck did with it.
+
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::atomic_write::write_bytes_atomic;
+use crate::dem::contact::Tangential;
+use crate::dem::material::{effective_shear_pa, effective_youngs_pa};
+use crate::dem::{ContactLaw, RestitutionMode};
+use crate::scene::damper::{DriveLength, contact_laws, transient_cycles};
+use crate::scene::file::{Orientation, Scene, SceneError};
+use crate::scene::settle::SettledBed;
+use crate::scene::shake::{TRUTH_SAMPLE_RATE_HZ, check_drive};
+use crate::validation::{InvalidParameter, count_in};
+
+/// File name of the LAMMPS input.
+pub const INPUT_FILE: &str = "in.damper";
+/// File name of the packing.
+pub const DATA_FILE: &str = "packing.data";
+/// File name of the record the deck writes.
+pub const RECORD_FILE: &str = "record.txt";
+/// File name of vlab's account of the export.
+pub const SUMMARY_FILE: &str = "export.json";
+
+/// Tsuji et al.'s damping coefficient α(e) as LAMMPS computes it for
+/// `damping tsuji` (a polynomial fit; LAMMPS' `pair_style granular` docs).
+pub fn tsuji_alpha(e: f64) -> f64 {
+    1.2728 - 4.2783 * e + 11.087 * e.powi(2) - 22.348 * e.powi(3) + 27.467 * e.powi(4)
+        - 18.022 * e.powi(5)
+        + 4.8218 * e.powi(6)
+}
+
+/// The `e` to give LAMMPS' `tsuji` damping so that its α is `alpha`: the
+/// root of [`tsuji_alpha`] in [0, 1], which falls monotonically from 1.2728 at
+/// 0 to 0.0005 at 1; `None` outside that range.
+pub fn tsuji_restitution_for(alpha: f64) -> Option<f64> {
+    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+    if !(tsuji_alpha(hi)..=tsuji_alpha(lo)).contains(&alpha) {
+        return None;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if tsuji_alpha(mid) > alpha {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(0.5 * (lo + hi))
+}
+
+/// What `vlab export lammps` asks for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LammpsExport {
+    pub freq_hz: f64,
+    pub gamma: f64,
+    /// Drive cycles run.
+    pub cycles: u32,
+    /// The last this many cycles are the steady window the record declares
+    /// (what `vlab replay` measures unless told otherwise).
+    pub steady_cycles: u32,
+}
+
+/// Fewest cycles a deck runs: a transient cycle and the two whole periods
+/// Yang's method needs.
+pub const MIN_EXPORT_CYCLES: u32 = 3;
+
+impl LammpsExport {
+    /// The run for `scene` at `freq_hz` and `gamma`, as long as the scene's
+    /// drive (`vlab export lammps --cycles N --steady-cycles M` set it).
+    ///
+    /// A scene with a number of cycles (`drive.cycles = N`) runs them, its
+    /// last `drive.steady_cycles` the window. A scene that runs until steady
+    /// (`drive.cycles = "steady"`, the thesis scene) runs `drive.min_cycles`
+    /// (8), its last 5/8 the window as in vlab's drive
+    /// ([`transient_cycles`]): a deck cannot stop when steady, as LAMMPS
+    /// keeps no ledger of the dissipation to hold the enclosure's work
+    /// against. `vlab shake`'s `summary.json` says how many cycles the scene
+    /// took in vlab (`cycles`, `steady_cycles`), to give as `--cycles` and
+    /// `--steady-cycles`.
+    pub fn for_scene(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<Self, SceneError> {
+        check_drive(scene, freq_hz, gamma)?;
+        let (cycles, steady_cycles) = match scene.drive_length() {
+            DriveLength::Fixed {
+                cycles,
+                steady_cycles,
+            } => (cycles, steady_cycles),
+            DriveLength::UntilSteady { min_cycles, .. } => {
+                (min_cycles, min_cycles - transient_cycles(min_cycles))
+            }
+        };
+        Ok(LammpsExport {
+            freq_hz,
+            gamma,
+            cycles,
+            steady_cycles,
+        })
+    }
+}
+
+/// How one of vlab's contact laws is given to LAMMPS.
+#[derive(Debug, Clone, Serialize)]
+pub struct ContactTranslation {
+    /// The scene's restitution e and how vlab derives β from it.
+    pub restitution: f64,
+    pub restitution_mode: RestitutionMode,
+    /// vlab's damping factor β (eq. 5.32).
+    pub damping_factor: f64,
+    /// LAMMPS' Tsuji α = √5 β.
+    pub tsuji_alpha: f64,
+    /// The e written in the deck so that LAMMPS' polynomial gives that α
+    /// (`None` when e = 1: no damping at all).
+    pub lammps_restitution: Option<f64>,
+    pub friction: f64,
+    /// E* (Pa) and G* (Pa) of the contact, eq. 5.6 and 5.14.
+    pub effective_youngs_pa: f64,
+    pub effective_shear_pa: f64,
+    /// `x_γ,t = √(4 G*/E*)`: tangential over normal damping.
+    pub tangential_damping_ratio: f64,
+    /// Young's modulus (Pa) and Poisson's ratio written in the deck.
+    pub lammps_youngs_pa: f64,
+    pub lammps_poisson: f64,
+    /// The Mindlin coefficient written in the deck (Pa; `None`: LAMMPS'
+    /// NULL, from E and ν).
+    pub lammps_tangential_pa: Option<f64>,
+}
+
+/// vlab's account of an export (`export.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct DeckSummary {
+    pub vlab_version: &'static str,
+    pub scene: String,
+    pub freq_hz: f64,
+    pub gamma: f64,
+    pub amplitude_m: f64,
+    pub cycles: u32,
+    /// The last this many cycles: the window the record declares.
+    pub steady_cycles: u32,
+    /// The time step: vlab's drive step at this frequency and Γ
+    /// ([`Scene::drive_dt_s`]).
+    pub dt_s: f64,
+    pub steps: u64,
+    /// Steps averaged per record row (one 40 kHz sample).
+    pub record_every_steps: u64,
+    pub n_particles: usize,
+    pub particle_mass_kg: f64,
+    pub orientation: &'static str,
+    pub gravity_mps2: f64,
+    pub particle_particle: ContactTranslation,
+    pub particle_wall: ContactTranslation,
+    /// Factor on the side wall's E and k_t coefficient for LAMMPS' concave
+    /// cylinder contact, `√(1 - R / (2 R_c))`.
+    pub side_wall_factor: f64,
+    /// Every scene key and what the deck did with it.
+    pub scene_keys: Vec<(String, String, String)>,
+    pub files: Vec<String>,
+}
+
+/// The deck: the LAMMPS input, the packing and vlab's account of it.
+#[derive(Debug, Clone)]
+pub struct LammpsDeck {
+    pub input: String,
+    pub data: String,
+    pub summary: DeckSummary,
+}
+
+/// How a contact law becomes LAMMPS parameters: the damping and friction
+/// words, with `youngs_pa`, `poisson` and the Mindlin coefficient `kt_pa`
+/// (`None`: NULL) that the deck writes.
+fn translate(
+    law: &ContactLaw,
+    mode: RestitutionMode,
+    youngs_pa: f64,
+    poisson: f64,
+    kt_pa: Option<f64>,
+) -> Result<ContactTranslation, SceneError> {
+    let beta = law.damping_factor;
+    let alpha = 5f64.sqrt() * beta;
+    let lammps_restitution = if beta > 0.0 {
+        Some(tsuji_restitution_for(alpha).ok_or_else(|| {
+            InvalidParameter::new(
+                "contact.restitution",
+                law.restitution,
+                "",
+                format!(
+                    "at least the e whose damping LAMMPS' tsuji polynomial can give (alpha = \
+                     sqrt(5) beta = {alpha:.4} exceeds its largest value {:.4})",
+                    tsuji_alpha(0.0)
+                ),
+            )
+        })?)
+    } else {
+        None
+    };
+    let (friction, ratio) = match law.tangential {
+        Tangential::MindlinCoulomb {
+            damping_ratio,
+            friction,
+            ..
+        } => (friction, damping_ratio),
+        Tangential::Frictionless => (0.0, (4.0 * law.g_star_pa / law.e_star_pa).sqrt()),
+    };
+    Ok(ContactTranslation {
+        restitution: law.restitution,
+        restitution_mode: mode,
+        damping_factor: beta,
+        tsuji_alpha: alpha,
+        lammps_restitution,
+        friction,
+        effective_youngs_pa: law.e_star_pa,
+        effective_shear_pa: law.g_star_pa,
+        tangential_damping_ratio: ratio,
+        lammps_youngs_pa: youngs_pa,
+        lammps_poisson: poisson,
+        lammps_tangential_pa: kt_pa,
+    })
+}
+
+/// The `hertz/material ... damping ...` words of a pair or wall command.
+fn granular_words(t: &ContactTranslation, youngs_pa: f64, poisson: f64, kt: Option<f64>) -> String {
+    let kt = kt.map_or_else(|| "NULL".to_string(), |k| format!("{k:.10e}"));
+    match t.lammps_restitution {
+        Some(e) => format!(
+            "hertz/material {youngs_pa:.10e} {e:.12} {poisson} tangential mindlin {kt} {:.12} {} damping tsuji limit_damping",
+            t.tangential_damping_ratio, t.friction
+        ),
+        // e = 1: no damping (velocity damping with a zero coefficient).
+        None => format!(
+            "hertz/material {youngs_pa:.10e} 0.0 {poisson} tangential mindlin {kt} 0.0 {} damping velocity",
+            t.friction
+        ),
+    }
+}
+
+/// What the deck does with each scene key (dotted), for its header; `Err`
+/// names a key the deck does not translate.
+fn scene_key_uses(
+    scene: &Scene,
+    export: &LammpsExport,
+    dt_s: f64,
+) -> Result<Vec<(String, String, String)>, SceneError> {
+    let value: toml::Value = toml::Value::try_from(scene).map_err(|e| SceneError::Parse {
+        path: scene.name.clone(),
+        message: e.to_string(),
+    })?;
+    let mut leaves = Vec::new();
+    flatten("", &value, &mut leaves);
+    let mut out = Vec::new();
+    for (key, value) in leaves {
+        let use_ = match key.as_str() {
+            "version" => "scene file version: the deck is written from the resolved scene".into(),
+            "name" => "named in the deck's header and in record.txt".into(),
+            "particles.count" => format!("{} atoms in {DATA_FILE}", scene.particles.count),
+            "particles.diameter_m" => format!("atom diameter in {DATA_FILE}"),
+            k if k.starts_with("particles.material") => {
+                "sphere E and nu in pair_coeff (E* of eq. 5.6) and the wall fixes; density in packing.data".into()
+            }
+            "enclosure.inner_diameter_m" => "radius of region side (cylinder)".into(),
+            "enclosure.inner_length_m" => "height of region lid (plane)".into(),
+            "enclosure.orientation" => "direction of fix gravity".into(),
+            k if k.starts_with("enclosure.material") => {
+                "wall E*_pw and G*_pw in the wall fixes".into()
+            }
+            "contact.restitution_mode" => {
+                "how beta, hence the tsuji e, follows from the restitution".into()
+            }
+            k if k.starts_with("contact.particle_particle") => "pair_coeff: tsuji e, friction".into(),
+            k if k.starts_with("contact.particle_wall") => "wall fixes: tsuji e, friction".into(),
+            "simulation.dt_s" => format!(
+                "timestep {dt_s:e}: vlab's drive step at this frequency and Gamma"
+            ),
+            "simulation.rayleigh_safety_factor" => format!(
+                "caps the time step rule (Rayleigh step x factor); here dt = {dt_s:e} s"
+            ),
+            "simulation.steps_per_contact" => format!(
+                "steps per shortest expected collision (dt_s = \"contacts\"); here dt = {dt_s:e} s"
+            ),
+            "simulation.settle_s" => format!("vlab settled the packing in {DATA_FILE} (the deck does not settle)"),
+            "simulation.gravity_mps2" => "fix gravity magnitude".into(),
+            "simulation.seed" => format!("seed of vlab's random fill, settled into {DATA_FILE}"),
+            "simulation.parallel_min_pairs" => {
+                "vlab's threading threshold; LAMMPS parallelises by domains (mpirun -np N)".into()
+            }
+            "drive.cycles" => format!(
+                "run length: {} cycles (a number: itself; \"steady\": drive.min_cycles, as LAMMPS keeps no dissipation ledger to judge steadiness by)",
+                export.cycles
+            ),
+            "drive.steady_cycles" => format!(
+                "with a number of cycles, the window; here the last {} cycles, declared as steady_cycles in {RECORD_FILE} for vlab replay",
+                export.steady_cycles
+            ),
+            "drive.min_cycles" => format!(
+                "the run length of a scene run until steady ({} cycles here)",
+                export.cycles
+            ),
+            "drive.max_cycles" | "drive.balance_rel" | "drive.stderr_rel" => {
+                "vlab's until-steady rule only: not translated (the deck runs a fixed number of cycles; vlab replay reports the record's cycle-to-cycle spread)".into()
+            }
+            other => {
+                return Err(InvalidParameter::new(
+                    other,
+                    &value,
+                    "",
+                    "a key the LAMMPS export translates (vlab export lammps does not know this one)",
+                )
+                .into());
+            }
+        };
+        out.push((key, value, use_));
+    }
+    Ok(out)
+}
+
+fn flatten(prefix: &str, value: &toml::Value, out: &mut Vec<(String, String)>) {
+    match value {
+        toml::Value::Table(t) => {
+            for (k, v) in t {
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                flatten(&key, v, out);
+            }
+        }
+        other => out.push((prefix.to_string(), other.to_string())),
+    }
+}
+
+/// The deck for `scene`'s settled `bed` (see the module docs).
+pub fn lammps_deck(
+    scene: &Scene,
+    bed: &SettledBed,
+    export: &LammpsExport,
+) -> Result<LammpsDeck, SceneError> {
+    check_drive(scene, export.freq_hz, export.gamma)?;
+    count_in("cycles", export.cycles, "", MIN_EXPORT_CYCLES, None)?;
+    count_in(
+        "steady_cycles",
+        export.steady_cycles,
+        "",
+        2,
+        Some(export.cycles),
+    )?;
+    let world = &bed.world;
+    let particles = &world.particles;
+    let dt = scene.drive_dt_s(export.freq_hz, export.gamma);
+    let g = scene.simulation.gravity_mps2;
+    let period = 1.0 / export.freq_hz;
+    let omega = 2.0 * PI * export.freq_hz;
+    let amplitude = export.gamma * g / (omega * omega);
+    let every = ((1.0 / TRUTH_SAMPLE_RATE_HZ / dt).round() as u64).max(1);
+    // Whole record rows, the last ending at or past the last cycle's end: the
+    // step need not divide the period (it is vlab's, from the scene's rule),
+    // and a record short of the boundary would lose the last period.
+    let rows = (f64::from(export.cycles) * period / (every as f64 * dt) - 1e-9).ceil() as u64;
+    let steps = rows * every;
+    let radius = scene.radius_m();
+    let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
+    let length = scene.enclosure.inner_length_m;
+    let mode = scene.contact.restitution_mode;
+    let (pp_law, pw_law) = contact_laws(scene);
+    let pm = scene.particle_material();
+    let wm = scene.wall_material();
+    // Spheres: their own E and nu (LAMMPS mixes E* of eq. 5.6 correctly).
+    // Walls: nu = 0 and E = 2 E*_pw, Mindlin 8 G*_pw (see the module docs).
+    let pp = translate(&pp_law, mode, pm.youngs_pa, pm.poisson, None)?;
+    let pw = translate(
+        &pw_law,
+        mode,
+        2.0 * pw_law.e_star_pa,
+        0.0,
+        Some(8.0 * pw_law.g_star_pa),
+    )?;
+    debug_assert!(
+        (pw.effective_youngs_pa - effective_youngs_pa(&pm, &wm)).abs()
+            <= 1e-9 * pw.effective_youngs_pa
+    );
+    debug_assert!(
+        (pw.effective_shear_pa - effective_shear_pa(&pm, &wm)).abs()
+            <= 1e-9 * pw.effective_shear_pa
+    );
+    let side_factor = (1.0 - radius / (2.0 * cyl_r)).sqrt();
+    let keys = scene_key_uses(scene, export, dt)?;
+    let mass = particles.total_mass_kg();
+    let (gx, gy, gz) = match scene.enclosure.orientation {
+        Orientation::Vertical => (0, 0, -1),
+        Orientation::Horizontal => (0, -1, 0),
+    };
+    let version = env!("CARGO_PKG_VERSION");
+
+    // The packing.
+    let margin = 2.0 * radius;
+    let mut data = String::new();
+    let _ = writeln!(
+        data,
+        "LAMMPS data file: vlab {version} settled packing of the {} damper (seed {}), SI units",
+        scene.name, scene.simulation.seed
+    );
+    let _ = writeln!(data);
+    let _ = writeln!(data, "{} atoms", particles.len());
+    let _ = writeln!(data, "1 atom types");
+    let _ = writeln!(data);
+    let _ = writeln!(
+        data,
+        "{:.9e} {:.9e} xlo xhi",
+        -cyl_r - margin,
+        cyl_r + margin
+    );
+    let _ = writeln!(
+        data,
+        "{:.9e} {:.9e} ylo yhi",
+        -cyl_r - margin,
+        cyl_r + margin
+    );
+    let _ = writeln!(
+        data,
+        "{:.9e} {:.9e} zlo zhi",
+        -amplitude - margin,
+        length + amplitude + margin
+    );
+    let _ = writeln!(data);
+    let _ = writeln!(data, "Atoms # sphere");
+    let _ = writeln!(data);
+    let density = pm.density_kgm3;
+    for i in 0..particles.len() {
+        let p = particles.position[i];
+        let r = particles.radius[i];
+        let _ = writeln!(
+            data,
+            "{} 1 {:?} {:?} {:?} {:?} {:?}",
+            i + 1,
+            2.0 * r,
+            density,
+            p.x,
+            p.y,
+            p.z
+        );
+    }
+    let _ = writeln!(data);
+    let _ = writeln!(data, "Velocities");
+    let _ = writeln!(data);
+    for i in 0..particles.len() {
+        let v = particles.velocity[i];
+        let w = particles.angular_velocity[i];
+        let _ = writeln!(
+            data,
+            "{} {:?} {:?} {:?} {:?} {:?} {:?}",
+            i + 1,
+            v.x,
+            v.y,
+            v.z,
+            w.x,
+            w.y,
+            w.z
+        );
+    }
+
+    // The input.
+    let mut s = String::new();
+    let line = |s: &mut String, text: &str| {
+        s.push_str(text);
+        s.push('\n');
+    };
+    let _ = writeln!(
+        s,
+        "# LAMMPS input written by vlab {version} (vlab export lammps): the {} damper driven at {} Hz, \
+         Gamma {}, {} cycles.",
+        scene.name, export.freq_hz, export.gamma, export.cycles
+    );
+    line(&mut s, "# Run:  lmp -in in.damper          (one core)");
+    line(
+        &mut s,
+        "#       mpirun -np 4 lmp -in in.damper   (a cluster: any number of ranks)",
+    );
+    line(
+        &mut s,
+        "# then: vlab replay record.txt --out replay   (the record through vlab's rig)",
+    );
+    line(
+        &mut s,
+        "# Needs the GRANULAR package (Debian: apt-get install lammps). SI units throughout.",
+    );
+    line(&mut s, "#");
+    line(
+        &mut s,
+        "# Every key of the scene and what this deck does with it:",
+    );
+    for (key, value, use_) in &keys {
+        let _ = writeln!(s, "#   {key} = {value}: {use_}");
+    }
+    line(&mut s, "#");
+    line(
+        &mut s,
+        "# Contact law (vlab: Hertz eq. 5.7, Mindlin eq. 5.24 with Coulomb cap eq. 5.16,",
+    );
+    line(
+        &mut s,
+        "# restitution damping eq. 5.32/5.33, never pulling):",
+    );
+    for (what, t) in [("particle-particle", &pp), ("particle-wall", &pw)] {
+        let _ = writeln!(
+            s,
+            "#   {what}: e = {} ({} mode: beta = {:.6}), tsuji alpha = sqrt(5) beta = {:.6}, given to LAMMPS as e = {}; \
+             mu = {}; x_gamma_t = sqrt(4 G*/E*) = {:.6}",
+            t.restitution,
+            match t.restitution_mode {
+                RestitutionMode::Exact => "exact",
+                RestitutionMode::Thesis => "thesis",
+            },
+            t.damping_factor,
+            t.tsuji_alpha,
+            t.lammps_restitution.map_or_else(
+                || "none (e = 1, no damping)".to_string(),
+                |e| format!("{e:.6}")
+            ),
+            t.friction,
+            t.tangential_damping_ratio
+        );
+    }
+    line(
+        &mut s,
+        "#   The e given to LAMMPS is not the e it realises: LAMMPS' tsuji polynomial alpha(e) does",
+    );
+    line(
+        &mut s,
+        "#   not realise e for a Hertz contact whose force is clamped at zero (limit_damping); the",
+    );
+    line(
+        &mut s,
+        "#   e above makes alpha = sqrt(5) beta, vlab's damping, so LAMMPS realises vlab's e",
+    );
+    line(
+        &mut s,
+        "#   (head-on: 0.86000 vs vlab 0.86006 at 1e-8 s steps, 0.8614 vs 0.8611 at 1e-6 s).",
+    );
+    let _ = writeln!(
+        s,
+        "#   Walls: nu = 0 and E = 2 E*_pw = {:.6e} Pa (LAMMPS 2021 takes a wall's E* as E/(2(1-nu))),",
+        2.0 * pw.effective_youngs_pa
+    );
+    let _ = writeln!(
+        s,
+        "#   Mindlin coefficient 8 G*_pw = {:.6e} Pa given explicitly (its NULL is wrong for walls).",
+        8.0 * pw.effective_shear_pa
+    );
+    let _ = writeln!(
+        s,
+        "#   Side wall: E and k_t scaled by sqrt(1 - R/(2 R_c)) = {side_factor:.6}: LAMMPS takes the inside of a"
+    );
+    line(
+        &mut s,
+        "#   region cylinder as concave (contact radius -2 R_c), vlab every wall as flat (R* = R).",
+    );
+    line(
+        &mut s,
+        "#   Remaining differences: the slip rule (LAMMPS: spring + damping carry mu F_n; vlab:",
+    );
+    line(
+        &mut s,
+        "#   the spring carries mu F_n) and the settled contacts' tangential history (starts at 0).",
+    );
+    line(&mut s, "");
+    line(&mut s, "units           si");
+    line(&mut s, "atom_style      sphere");
+    line(&mut s, "dimension       3");
+    line(&mut s, "boundary        f f f");
+    line(&mut s, "comm_modify     vel yes");
+    let _ = writeln!(s, "read_data       {DATA_FILE}");
+    line(&mut s, "");
+    line(&mut s, "# Contacts between spheres.");
+    line(&mut s, "pair_style      granular");
+    let _ = writeln!(
+        s,
+        "pair_coeff      * * {}",
+        granular_words(&pp, pm.youngs_pa, pm.poisson, None)
+    );
+    let _ = writeln!(s, "neighbor        {:.6e} bin", 0.2 * radius);
+    line(&mut s, "neigh_modify    delay 0 every 1 check yes");
+    let _ = writeln!(s, "timestep        {dt:e}");
+    line(&mut s, "");
+    line(
+        &mut s,
+        "# The drive, from t = 0 at the settled packing (thesis eq. 6.2): u = Gamma g / w^2 sin(w t).",
+    );
+    let _ = writeln!(s, "variable        drive_freq_hz equal {}", export.freq_hz);
+    let _ = writeln!(s, "variable        amplitude_m equal {amplitude:.17e}");
+    line(&mut s, "variable        omega equal 2.0*PI*v_drive_freq_hz");
+    line(&mut s, "variable        time equal time");
+    line(
+        &mut s,
+        "variable        enclosure_displacement equal v_amplitude_m*sin(v_omega*time)",
+    );
+    line(
+        &mut s,
+        "variable        enclosure_velocity equal v_amplitude_m*v_omega*cos(v_omega*time)",
+    );
+    line(
+        &mut s,
+        "variable        enclosure_acceleration equal -v_amplitude_m*v_omega*v_omega*sin(v_omega*time)",
+    );
+    line(&mut s, "");
+    line(
+        &mut s,
+        "# The enclosure: side, floor and lid, moving together along z.",
+    );
+    let _ = writeln!(
+        s,
+        "region          side cylinder z 0 0 {cyl_r:?} {:?} {:?} side in open 1 open 2 move NULL NULL v_enclosure_displacement",
+        -2.0 * radius,
+        length + 2.0 * radius
+    );
+    line(
+        &mut s,
+        "region          floor plane 0 0 0 0 0 1 side in move NULL NULL v_enclosure_displacement",
+    );
+    let _ = writeln!(
+        s,
+        "region          lid plane 0 0 {length:?} 0 0 -1 side in move NULL NULL v_enclosure_displacement"
+    );
+    let wall_e = 2.0 * pw.effective_youngs_pa;
+    let wall_kt = 8.0 * pw.effective_shear_pa;
+    let _ = writeln!(
+        s,
+        "fix             side_wall all wall/gran/region granular {} region side contacts",
+        granular_words(&pw, wall_e * side_factor, 0.0, Some(wall_kt * side_factor))
+    );
+    for name in ["floor", "lid"] {
+        let _ = writeln!(
+            s,
+            "fix             {name}_wall all wall/gran/region granular {} region {name} contacts",
+            granular_words(&pw, wall_e, 0.0, Some(wall_kt))
+        );
+    }
+    line(&mut s, "");
+    line(&mut s, "fix             integrate all nve/sphere");
+    if g > 0.0 {
+        let _ = writeln!(
+            s,
+            "fix             gravity all gravity {g} vector {gx} {gy} {gz}"
+        );
+    }
+    line(&mut s, "");
+    line(
+        &mut s,
+        "# The particles' force on the enclosure along z: minus the walls' forces on the atoms.",
+    );
+    line(
+        &mut s,
+        "compute         side_fz all reduce sum f_side_wall[4]",
+    );
+    line(
+        &mut s,
+        "compute         floor_fz all reduce sum f_floor_wall[4]",
+    );
+    line(
+        &mut s,
+        "compute         lid_fz all reduce sum f_lid_wall[4]",
+    );
+    line(
+        &mut s,
+        "variable        particle_force_axial equal -(c_side_fz+c_floor_fz+c_lid_fz)",
+    );
+    line(&mut s, "");
+    let _ = writeln!(
+        s,
+        "# The record vlab replay reads: each row the mean over {every} steps (one 40 kHz sample),"
+    );
+    line(
+        &mut s,
+        "# time included, which thus gives each window's centre.",
+    );
+    let _ = writeln!(
+        s,
+        "fix             record all ave/time 1 {every} {every} v_time v_enclosure_displacement v_enclosure_velocity v_enclosure_acceleration v_particle_force_axial file {RECORD_FILE} format \" %.17g\" title1 \"\"\"# vlab replay record: {} damper, {} Hz, Gamma {}, from a LAMMPS deck of vlab {version}",
+        scene.name, export.freq_hz, export.gamma
+    );
+    line(&mut s, "# units: si");
+    let _ = writeln!(s, "# drive_freq_hz: {}", export.freq_hz);
+    let _ = writeln!(s, "# gamma: {}", export.gamma);
+    let _ = writeln!(s, "# particle_mass_kg: {mass:?}");
+    let _ = writeln!(s, "# gravity_mps2: {g}");
+    let _ = writeln!(s, "# orientation: {}", scene.enclosure.orientation.as_str());
+    let _ = writeln!(s, "# steady_cycles: {}", export.steady_cycles);
+    let _ = writeln!(s, "# record_every_steps: {every}");
+    line(
+        &mut s,
+        "# particle_force_axial: the particles' force on the enclosure along +z (N); each row a window mean\"\"\"",
+    );
+    line(&mut s, "");
+    line(
+        &mut s,
+        "thermo_style    custom step time atoms ke v_enclosure_displacement v_particle_force_axial",
+    );
+    line(&mut s, "thermo_modify   lost error norm no");
+    let _ = writeln!(s, "thermo          {}", (steps / 20).max(1));
+    let _ = writeln!(s, "run             {steps}");
+
+    let summary = DeckSummary {
+        vlab_version: version,
+        scene: scene.name.clone(),
+        freq_hz: export.freq_hz,
+        gamma: export.gamma,
+        amplitude_m: amplitude,
+        cycles: export.cycles,
+        steady_cycles: export.steady_cycles,
+        dt_s: dt,
+        steps,
+        record_every_steps: every,
+        n_particles: particles.len(),
+        particle_mass_kg: mass,
+        orientation: scene.enclosure.orientation.as_str(),
+        gravity_mps2: g,
+        particle_particle: pp,
+        particle_wall: pw,
+        side_wall_factor: side_factor,
+        scene_keys: keys,
+        files: vec![INPUT_FILE.into(), DATA_FILE.into(), SUMMARY_FILE.into()],
+    };
+    Ok(LammpsDeck {
+        input: s,
+        data,
+        summary,
+    })
+}
+
+impl LammpsDeck {
+    /// Writes `in.damper`, `packing.data` and `export.json` into `dir` (which
+    /// must exist), each atomically.
+    pub fn write(&self, dir: &Path) -> Result<(), SceneError> {
+        let summary = serde_json::to_string_pretty(&self.summary)
+            .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+            + "\n";
+        for (name, text) in [
+            (DATA_FILE, &self.data),
+            (INPUT_FILE, &self.input),
+            (SUMMARY_FILE, &summary),
+        ] {
+            let path = dir.join(name);
+            write_bytes_atomic(&path, text.as_bytes())
+                .map_err(|source| SceneError::Write { path, source })?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::restitution::exact_damping_factor;
+
+    #[test]
+    fn tsuji_inverse_gives_vlabs_damping() {
+        // e = 0.86 in exact mode: beta = 0.04951, alpha = 0.1107, LAMMPS' e 0.8032.
+        let alpha = 5f64.sqrt() * exact_damping_factor(0.86);
+        let e = tsuji_restitution_for(alpha).expect("in range");
+        assert!((e - 0.8032).abs() < 1e-4, "{e}");
+        assert!((tsuji_alpha(e) - alpha).abs() < 1e-12);
+        assert!((tsuji_alpha(0.86) - 0.0762).abs() < 1e-4);
+        assert!(tsuji_restitution_for(2.0).is_none());
+        assert!(tsuji_restitution_for(-0.1).is_none());
+    }
+}
