@@ -124,6 +124,9 @@ pub struct World {
     baseline: LedgerSnapshot,
     /// Largest normal approach speed at contact onset since the last reset (m/s).
     pub impact_speeds: ImpactSpeeds,
+    /// Energy each particle's contacts dissipated since tracking began (J),
+    /// while tracked ([`World::track_particle_dissipation`]).
+    particle_dissipation_j: Option<Vec<f64>>,
 }
 
 /// Largest normal approach speeds at contact onset (m/s), to hold against the
@@ -161,6 +164,7 @@ impl World {
             wall_force: DVec3::ZERO,
             baseline: LedgerSnapshot::default(),
             impact_speeds: ImpactSpeeds::default(),
+            particle_dissipation_j: None,
         };
         world.reset_contacts();
         world.compute_forces(0.0)?;
@@ -273,6 +277,39 @@ impl World {
             .filter(|s| s.delta_prev > 0.0)
             .count();
         (pp, pw)
+    }
+
+    /// Number of contacts (particle-particle and particle-wall) each particle
+    /// is in now, into `counts` (resized to the particle count).
+    pub fn contacts_per_particle(&self, counts: &mut Vec<u32>) {
+        let n = self.particles.len();
+        counts.clear();
+        counts.resize(n, 0);
+        for (&(i, j), st) in self.neighbours.pairs.iter().zip(&self.neighbours.states) {
+            if st.delta_prev > 0.0 {
+                counts[i as usize] += 1;
+                counts[j as usize] += 1;
+            }
+        }
+        let n_walls = self.walls.len().max(1);
+        for (k, st) in self.wall_states.iter().enumerate() {
+            if st.delta_prev > 0.0 {
+                counts[k / n_walls] += 1;
+            }
+        }
+    }
+
+    /// Starts (from zero) or stops booking dissipated energy per particle: a
+    /// pair contact's dissipation is shared half and half, a wall contact's
+    /// goes to its particle. Off by default; it costs one branch per contact.
+    pub fn track_particle_dissipation(&mut self, on: bool) {
+        self.particle_dissipation_j = on.then(|| vec![0.0; self.particles.len()]);
+    }
+
+    /// Energy each particle's contacts dissipated since tracking began (J),
+    /// when tracked.
+    pub fn particle_dissipation_j(&self) -> Option<&[f64]> {
+        self.particle_dissipation_j.as_deref()
     }
 
     /// Mechanical energy stored now.
@@ -425,6 +462,16 @@ impl World {
             *ledger_normal += out.dissipated_normal_j;
             *ledger_tangential += out.dissipated_tangential_j;
             self.ledger.stiffness_work_j += out.stiffness_work_j;
+            if let Some(per) = &mut self.particle_dissipation_j {
+                let e = out.dissipated_normal_j + out.dissipated_tangential_j;
+                match at {
+                    ContactAt::Pair(i, j) => {
+                        per[i] += 0.5 * e;
+                        per[j] += 0.5 * e;
+                    }
+                    ContactAt::Wall(i, _) => per[i] += e,
+                }
+            }
         }
         Ok(())
     }
