@@ -32,9 +32,13 @@ use serde::Serialize;
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::rig::{RigFile, RigSpec, ShakerKind, check_limits};
-use crate::scene::damper::{DriveOutcome, Progress, settle_bed};
+use crate::scene::damper::{
+    DriveOutcome, NoObserver, Progress, SettledBed, StepObserver, settle_bed,
+};
 use crate::scene::file::{Scene, SceneError};
-use crate::scene::measurement::{Measured, ShakeExperiment, ShakeSetup, run_measured_shake};
+use crate::scene::measurement::{
+    Measured, ShakeExperiment, ShakeSetup, run_measured_shake_observed,
+};
 use crate::scene::record::TruthSamples;
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
 use crate::validation::{InvalidParameter, positive};
@@ -250,11 +254,37 @@ pub fn run_shake(
     setup: &ShakeSetup,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
+    run_shake_observed(scene, setup, &mut NoObserver, progress)
+}
+
+/// [`run_shake`] with `observer` called after every DEM step of the drive
+/// (a ParaView dump, the motional-phase indicators).
+pub fn run_shake_observed(
+    scene: &Scene,
+    setup: &ShakeSetup,
+    observer: &mut dyn StepObserver,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<ShakeRun, SceneError> {
+    check_drive(scene, setup.freq_hz)?;
+    let bed = settle_bed(scene, scene.dt_s(), progress)?;
+    run_shake_on_bed(scene, &bed, setup, observer, progress)
+}
+
+/// Drives a copy of an already settled `bed` of `scene` (the same scene and
+/// seed: [`settle_bed`] is deterministic, so this equals [`run_shake`]) through
+/// the rig of `setup` and measures it. A sweep settles each bed once and
+/// drives it at every amplitude this way.
+pub fn run_shake_on_bed(
+    scene: &Scene,
+    bed: &SettledBed,
+    setup: &ShakeSetup,
+    observer: &mut dyn StepObserver,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<ShakeRun, SceneError> {
     check_drive(scene, setup.freq_hz)?;
     let dt = scene.dt_s();
-    let bed = settle_bed(scene, dt, progress)?;
-    let mut world = bed.world;
-    let experiment = run_measured_shake(scene, &mut world, setup, progress)?;
+    let mut world = bed.world.clone();
+    let experiment = run_measured_shake_observed(scene, &mut world, setup, observer, progress)?;
     let outcome = &experiment.outcome;
     let n = world.particles.len();
     let dem = DemTruth::new(outcome, scene);
