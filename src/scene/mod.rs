@@ -9,6 +9,11 @@ pub mod file;
 pub mod fill;
 pub mod impact;
 pub mod measurement;
+pub mod phases;
+pub mod predict;
 pub mod record;
 pub mod shake;
+pub mod sweep;
+#[cfg(feature = "plot")]
+pub mod sweep_plot;
 pub mod validity;
