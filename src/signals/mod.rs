@@ -11,7 +11,7 @@
 //! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
 //! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
 //! - [`trace_file`]: any of these formats, told apart by the file's extension;
-//! - [`plot`]: small SVG plots;
+//! - [`plot`]: small SVG and PNG plots (x-y, log x with error bars, heat maps);
 //! - [`bench`](mod@bench): a timing hook for `vlab bench`.
 //!
 //! SI units throughout. This module imports neither `dem` nor `rig`. Every
@@ -43,7 +43,10 @@ pub use impacts::{
     estimate_cor, restitution_from_impact_times,
 };
 #[cfg(feature = "plot")]
-pub use plot::{Series, SeriesStyle, plot_xy_svg};
+pub use plot::{
+    ErrorSeries, HeatCell, HeatMap, HeatOverlay, LogXPlot, MarkerLine, RgbColor, Series,
+    SeriesStyle, plot_heat_map, plot_log_x, plot_xy_svg,
+};
 pub use power::{
     BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,
     WindowPlan, YangPower, efficiency, max_energy_per_cycle_j, mean_power_time_domain, plan_window,
