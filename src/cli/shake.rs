@@ -194,8 +194,8 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         100.0 * pc.pw_tangential / total
     );
     println!(
-        "    energy ledger residual        {:.1e} of the dissipated energy",
-        d.ledger_residual_rel
+        "    energy ledger                 integration error {:+.1e}, residual {:.0e} of the dissipated energy",
+        d.integrator_rel, d.ledger_residual_rel
     );
     println!(
         "  measured by rig {} ({} shaker), Yang's method over {} periods:",

@@ -283,6 +283,12 @@ pub struct ContactState {
     pub delta_prev: f64,
     /// Tangential stiffness at the previous step (N/m); zero when apart.
     pub kt_prev: f64,
+    /// Elastic (Hertz) part of the normal force at the previous step (N).
+    pub fel_prev: f64,
+    /// Elastic energy of the normal spring as the integrator stored it (J):
+    /// the trapezoidal work `½ (f_el,prev + f_el) (δ - δ_prev)` summed since
+    /// the contact opened, not the exact Hertz potential.
+    pub u_normal_j: f64,
 }
 
 impl ContactState {
@@ -294,13 +300,16 @@ impl ContactState {
         }
     }
 
-    /// Elastic energy stored in the contact now (J): (normal, tangential).
-    pub fn stored_energy_j(&self, law: &ContactLaw, r_star_m: f64) -> (f64, f64) {
+    /// Elastic energy stored in the contact now (J): (normal, tangential). The
+    /// normal part is the trapezoidal work the integrator did on the Hertz
+    /// spring ([`Self::u_normal_j`]); it differs from the exact potential
+    /// `8/15 E* √R* δ^{5/2}` by the integrator's error, O(Δt²).
+    pub fn stored_energy_j(&self) -> (f64, f64) {
         if self.delta_prev <= 0.0 {
             return (0.0, 0.0);
         }
         (
-            law.hertz_energy_j(r_star_m, self.delta_prev),
+            self.u_normal_j,
             0.5 * self.kt_prev * self.xi.length_squared(),
         )
     }
@@ -323,6 +332,13 @@ pub struct ContactOutput {
     /// Energy the change of k_t added to the spring (J); already subtracted from
     /// `dissipated_tangential_j`, reported for transparency.
     pub stiffness_work_j: f64,
+    /// Energy the integrator lost in this contact (J), booked when it opens:
+    /// what the trapezoidal work left in the normal spring when the overlap is
+    /// back to zero (exactly zero for an exact integration).
+    pub integrator_j: f64,
+    /// Change of the energy stored in the contact over the step (J): normal
+    /// (trapezoidal) plus tangential spring.
+    pub stored_change_j: f64,
 }
 
 /// Rotates the spring stretch into the tangent plane of `n`, keeping its length.
@@ -400,12 +416,16 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
     } = *geometry;
     let v_n = v_rel.dot(n);
     let mut out = ContactOutput::default();
+    let (stored_before_n, stored_before_t) = state.stored_energy_j();
+    let stored_before = stored_before_n + stored_before_t;
 
     if delta_m <= 0.0 {
         if state.delta_prev > 0.0 {
             // The contact opened during this step. The integrator applied the last
             // forces over half of the step; their work closes the books.
             out.dissipated_normal_j = 0.5 * state.fd_prev * (delta_m - state.delta_prev);
+            out.integrator_j =
+                state.u_normal_j + 0.5 * state.fel_prev * (delta_m - state.delta_prev);
             if FRICTION {
                 let ds = (v_rel - v_n * n) * dt_s;
                 let stored = 0.5 * state.kt_prev * state.xi.length_squared();
@@ -414,6 +434,7 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
             }
         }
         *state = ContactState::apart(delta_m);
+        out.stored_change_j = -stored_before;
         return out;
     }
 
@@ -433,6 +454,7 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
     };
     let f_d = f_n - f_el;
     out.normal_force_n = f_n;
+    state.u_normal_j += 0.5 * (state.fel_prev + f_el) * (delta_m - state.delta_prev);
     if DAMPED {
         out.dissipated_normal_j = 0.5 * (state.fd_prev + f_d) * (delta_m - state.delta_prev);
     }
@@ -464,10 +486,13 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
 
     state.ft_prev = ft;
     state.fd_prev = f_d;
+    state.fel_prev = f_el;
     state.delta_prev = delta_m;
     state.kt_prev = k_t;
     out.tangential_on_i = ft;
     out.force_on_i = ft - f_n * n;
+    let (stored_n, stored_t) = state.stored_energy_j();
+    out.stored_change_j = stored_n + stored_t - stored_before;
     out
 }
 

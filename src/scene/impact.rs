@@ -16,7 +16,7 @@ use crate::dem::hertz_theory;
 use crate::dem::material::{
     Material, effective_mass_kg, effective_radius_m, effective_youngs_pa, sphere_mass_kg,
 };
-use crate::dem::{ContactLaw, Numerics, Particles, RestitutionMode, Walls, World};
+use crate::dem::{ContactLaw, LedgerBalance, Numerics, Particles, RestitutionMode, Walls, World};
 use crate::scene::file::SceneError;
 use crate::validation::{self, Bound, InvalidParameter, finite, in_range, positive};
 
@@ -71,6 +71,11 @@ pub struct ImpactOutcome {
     /// Kinetic energy lost, before minus after (J); equals `dissipated_j` up to the
     /// integration error.
     pub kinetic_energy_lost_j: f64,
+    /// Energy the time integration lost over the collision (J), the ledger's
+    /// `integrator` channel: O(Δt²).
+    pub integrator_j: f64,
+    /// What the energy books leave unexplained (J): rounding.
+    pub ledger_residual_j: f64,
     pub hertz_duration_s: f64,
     pub hertz_max_overlap_m: f64,
     pub hertz_max_force_n: f64,
@@ -239,6 +244,7 @@ pub fn run_impact(setup: &ImpactSetup) -> Result<ImpactOutcome, SceneError> {
         )));
     };
     let end = world.snapshot();
+    let balance = LedgerBalance::between(&start, &end);
     let v_after = relative_velocity(&world);
     let rebound_normal = -(v_after.z * v_before.z.signum());
     let rebound_tangential = v_after.truncate().length();
@@ -256,6 +262,8 @@ pub fn run_impact(setup: &ImpactSetup) -> Result<ImpactOutcome, SceneError> {
         rebound_spin_rad_s: world.particles.angular_velocity[0].y,
         dissipated_j: end.flows.dissipated.total() - start.flows.dissipated.total(),
         kinetic_energy_lost_j: start.stored.kinetic_j() - end.stored.kinetic_j(),
+        integrator_j: balance.integrator_j,
+        ledger_residual_j: balance.residual_j,
         hertz_duration_s,
         hertz_max_overlap_m: hertz_theory::max_overlap_m(m_star, e_star, r_star, v_n),
         hertz_max_force_n: hertz_theory::max_force_n(m_star, e_star, r_star, v_n),

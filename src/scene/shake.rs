@@ -125,8 +125,12 @@ pub struct DemTruth {
     /// (work in − dissipated) / dissipated over the steady cycles: zero in a
     /// steady state; otherwise the bed stored or gave back energy.
     pub steadiness_rel: f64,
-    /// |ledger residual| / dissipated energy over the whole drive.
+    /// |ledger residual| / dissipated energy over the whole drive: rounding
+    /// once the integration's own error is booked.
     pub ledger_residual_rel: f64,
+    /// Energy the time integration lost / dissipated energy over the whole
+    /// drive (negative: it made energy); O(Δt²).
+    pub integrator_rel: f64,
     /// Energy balance of the whole drive (J).
     pub ledger: LedgerBalance,
     /// Energy balance of the steady cycles (J).
@@ -151,6 +155,7 @@ impl DemTruth {
             work_in_per_cycle_j: out.work_in_per_cycle_j,
             steadiness_rel: out.work_in_per_cycle_j / out.energy_per_cycle_j - 1.0,
             ledger_residual_rel: out.whole.residual_relative(),
+            integrator_rel: out.whole.integrator_j / out.whole.dissipated_j,
             ledger: out.whole,
             steady_ledger: out.steady,
             largest_particle_speed_mps: out.largest_speed_mps,
