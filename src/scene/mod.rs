@@ -5,6 +5,7 @@
 
 pub mod damper;
 pub mod drop;
+pub mod dump;
 pub mod file;
 pub mod fill;
 pub mod impact;
@@ -13,6 +14,7 @@ pub mod phases;
 pub mod predict;
 pub mod record;
 pub mod shake;
+pub mod snapshots;
 pub mod sweep;
 #[cfg(feature = "plot")]
 pub mod sweep_plot;

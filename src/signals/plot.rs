@@ -642,6 +642,127 @@ impl Figure for HeatFigure<'_> {
     }
 }
 
+/// One panel of a [`PanelStrip`]: circles in data units, over a rectangle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CirclePanel {
+    pub title: String,
+    /// Opposite corners of the outline drawn behind the circles (data units).
+    pub outline: [(f64, f64); 2],
+    /// (x, y, radius, value), drawn in order (last on top).
+    pub circles: Vec<(f64, f64, f64, f64)>,
+}
+
+/// Panels side by side sharing axes and a colour scale (e.g. views of a bed
+/// at several phases of a cycle).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PanelStrip {
+    pub title: String,
+    pub panels: Vec<CirclePanel>,
+    /// Data ranges of every panel (equal scales keep circles round).
+    pub x_range: (f64, f64),
+    pub y_range: (f64, f64),
+    pub value_label: String,
+    pub value_range: (f64, f64),
+    pub footnote: String,
+}
+
+/// Writes a [`PanelStrip`] (SVG or PNG by the extension).
+pub fn plot_panel_strip(path: &Path, strip: &PanelStrip) -> Result<()> {
+    let n = strip.panels.len().max(1) as u32;
+    let (xw, yh) = (
+        strip.x_range.1 - strip.x_range.0,
+        strip.y_range.1 - strip.y_range.0,
+    );
+    if !(xw > 0.0 && yh > 0.0) || strip.panels.is_empty() {
+        return Err(SignalsError::Plot {
+            path: path.to_path_buf(),
+            message: "a panel strip needs panels and positive ranges".into(),
+        });
+    }
+    let panel_w = 170u32;
+    let panel_h = ((panel_w - 20) as f64 * yh / xw) as u32 + 50;
+    write_figure(path, (n * panel_w + 110, panel_h + 90), &StripFigure(strip))
+}
+
+struct StripFigure<'a>(&'a PanelStrip);
+
+impl Figure for StripFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let s = self.0;
+        root.fill(&WHITE)?;
+        let (w, h) = root.dim_in_pixel();
+        let titled = root.titled(s.title.as_str(), ("sans-serif", 20))?;
+        let (body, foot) = titled.split_vertically(h as i32 - 70);
+        let (panels_area, bar) = body.split_horizontally(w as i32 - 110);
+        let areas = panels_area.split_evenly((1, s.panels.len()));
+        let (lo, hi) = s.value_range;
+        let scale = |v: f64| (v - lo) / (hi - lo).max(f64::MIN_POSITIVE);
+        for (area, panel) in areas.iter().zip(&s.panels) {
+            let mut chart = ChartBuilder::on(area)
+                .caption(panel.title.as_str(), ("sans-serif", 14))
+                .margin(6)
+                .build_cartesian_2d(s.x_range.0..s.x_range.1, s.y_range.0..s.y_range.1)?;
+            let [a, b] = panel.outline;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [a, b],
+                RGBColor(235, 235, 235).filled(),
+            )))?;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [a, b],
+                BLACK.stroke_width(2),
+            )))?;
+            let (x0, _) = chart.backend_coord(&(s.x_range.0, s.y_range.0));
+            let (x1, _) = chart.backend_coord(&(s.x_range.1, s.y_range.0));
+            let px_per_unit = (x1 - x0) as f64 / (s.x_range.1 - s.x_range.0);
+            chart.draw_series(panel.circles.iter().map(|&(x, y, r, v)| {
+                let px = ((r * px_per_unit).round() as i32).max(1);
+                Circle::new((x, y), px, viridis(scale(v)).filled())
+            }))?;
+            chart.draw_series(panel.circles.iter().map(|&(x, y, r, _)| {
+                let px = ((r * px_per_unit).round() as i32).max(1);
+                Circle::new((x, y), px, RGBColor(40, 40, 40).stroke_width(1))
+            }))?;
+        }
+        // Colour bar.
+        let (_, bh) = bar.dim_in_pixel();
+        let (top, bottom) = (30i32, bh as i32 - 20);
+        let steps = 100;
+        for k in 0..steps {
+            let t0 = k as f64 / steps as f64;
+            let y_a = bottom - ((bottom - top) as f64 * t0) as i32;
+            let y_b = bottom - ((bottom - top) as f64 * (t0 + 1.0 / steps as f64)) as i32;
+            bar.draw(&Rectangle::new([(10, y_b - 1), (35, y_a)], viridis(t0).filled()))?;
+        }
+        bar.draw(&Rectangle::new([(10, top), (35, bottom)], BLACK.stroke_width(1)))?;
+        for k in 0..=4 {
+            let t = k as f64 / 4.0;
+            let y = bottom - ((bottom - top) as f64 * t) as i32;
+            bar.draw(&Text::new(
+                format!("{:.2}", lo + t * (hi - lo)),
+                (40, y),
+                ("sans-serif", 12).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+        }
+        bar.draw(&Text::new(
+            s.value_label.clone(),
+            (5, top - 16),
+            ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+        ))?;
+        for (k, line) in s.footnote.lines().enumerate() {
+            foot.draw(&Text::new(
+                line.to_string(),
+                (12, 14 + 18 * k as i32),
+                ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+        }
+        root.present()?;
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
