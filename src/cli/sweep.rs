@@ -81,6 +81,17 @@ enum SweepAction {
     /// Join the sweep.csv files of all shards of one sweep into one sweep.csv
     /// (as the unsharded sweep writes it) and draw its plots.
     Merge(MergeArgs),
+    /// Name every row's motional phase again from its stored indicators with
+    /// this vlab's heuristic (after it was tuned), rewrite the file and redraw
+    /// its plots.
+    Relabel(RelabelArgs),
+}
+
+#[derive(Debug, Clone, Args)]
+struct RelabelArgs {
+    /// The sweep.csv (or its folder).
+    #[arg(value_name = "FILE")]
+    file: PathBuf,
 }
 
 #[derive(Debug, Clone, Args)]
@@ -99,8 +110,10 @@ fn shard(s: &str) -> Result<Shard, vlab::validation::InvalidParameter> {
 
 /// Runs the command.
 pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
-    if let Some(SweepAction::Merge(m)) = a.action {
-        return merge(m);
+    match a.action {
+        Some(SweepAction::Merge(m)) => return merge(m),
+        Some(SweepAction::Relabel(r)) => return relabel(r),
+        None => {}
     }
     let flags = args::FlagKeys::new()
         .set(a.cycles.is_some(), "drive.cycles", "--cycles")
@@ -272,6 +285,21 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
         println!("  wrote {}", p.display());
     }
     Ok(())
+}
+
+fn relabel(r: RelabelArgs) -> Result<()> {
+    let path = if r.file.is_dir() { r.file.join("sweep.csv") } else { r.file.clone() };
+    let mut file = SweepFile::read(&path)?;
+    let changed = file.relabel(&vlab::scene::phases::PhaseThresholds::default());
+    file.write(&path)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+    let plots = if file.header.shard == Shard::ALL {
+        plot_sweep(&file, &dir).context("drawing the sweep's plots")?
+    } else {
+        Vec::new()
+    };
+    eprintln!("relabelled {changed} of {} rows", file.rows.len());
+    report(&file, &dir, &plots, false)
 }
 
 fn merge(m: MergeArgs) -> Result<()> {

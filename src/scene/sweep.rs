@@ -1166,6 +1166,25 @@ pub fn merge_shards(files: &[SweepFile]) -> Result<SweepFile, SweepError> {
     Ok(merged)
 }
 
+impl SweepFile {
+    /// Names the motional phase of every ok row again from its stored
+    /// indicators with `thresholds` (after the heuristic was tuned); returns
+    /// how many names changed.
+    pub fn relabel(&mut self, thresholds: &PhaseThresholds) -> usize {
+        let mut changed = 0;
+        for r in self.rows.iter_mut() {
+            if let Some(ind) = &r.indicators {
+                let name = classify(ind, thresholds).as_str();
+                if r.phase != name {
+                    r.phase = name.to_string();
+                    changed += 1;
+                }
+            }
+        }
+        changed
+    }
+}
+
 /// Mean, sample standard deviation and count of the ok rows' DEM efficiency
 /// per (fill, orientation, frequency, Γ), in canonical order.
 #[derive(Debug, Clone, PartialEq, Serialize)]
