@@ -20,4 +20,5 @@ pub mod dem;
 pub mod rig;
 pub mod scene;
 pub mod signals;
+pub mod stats;
 pub mod validation;

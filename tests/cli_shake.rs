@@ -58,7 +58,26 @@ fn thesis_scene_ledger_closes_and_record_agrees() {
         "integration error {integrator:.2e} of the dissipated energy"
     );
     assert_eq!(s["n_particles"], 358);
-    assert_eq!(s["steps"], 200_000);
+    // The default drive runs until steady, at the step that resolves every
+    // collision: the steps are the cycles driven at that step (to one step a
+    // cycle), and the window says it is steady.
+    let cycles = dem["cycles"].as_f64().expect("cycles");
+    let dt = s["dt_s"].as_f64().expect("dt");
+    let steps = s["steps"].as_f64().expect("steps");
+    assert!(
+        (steps - cycles / (40.0 * dt)).abs() <= cycles,
+        "{steps} steps for {cycles} cycles at dt {dt:e} s"
+    );
+    assert_eq!(dem["steadiness"]["reached"], true, "{}", dem["steadiness"]);
+    assert!(dem["fewest_steps_per_contact"].as_f64().expect("steps") >= 20.0);
+    // Steady means a standard error below 1 % of the mean (the default rule).
+    for (stderr, mean) in [
+        ("energy_per_cycle_stderr_j", "energy_per_cycle_j"),
+        ("efficiency_stderr", "efficiency"),
+    ] {
+        let rel = dem[stderr].as_f64().expect(stderr) / dem[mean].as_f64().expect(mean);
+        assert!(rel > 0.0 && rel < 0.01, "{stderr} / {mean} = {rel:.2e}");
+    }
 
     // The steady work of the enclosure, from the record: ∫ F_walls→particles · v dt,
     // with F_walls→particles = -F_particles→enclosure.

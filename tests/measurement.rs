@@ -5,18 +5,18 @@
 use std::sync::OnceLock;
 
 use vlab::rig::{ACCEL_CHANNEL, RigFile, RigSpec, ShakerKind};
-use vlab::scene::damper::{SettledBed, settle_bed};
-use vlab::scene::file::Scene;
+use vlab::scene::file::{CyclesSpec, Scene};
 use vlab::scene::measurement::{
     CalibrationSource, ShakeExperiment, ShakeSetup, analyse, run_measured_shake,
 };
+use vlab::scene::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::signals::{PhaseCorrection, read_csv, write_csv};
 
 fn bed() -> &'static (Scene, SettledBed) {
     static BED: OnceLock<(Scene, SettledBed)> = OnceLock::new();
     BED.get_or_init(|| {
         let scene = Scene::thesis();
-        let bed = settle_bed(&scene, scene.dt_s(), &mut |_| {}).expect("bed settles");
+        let bed = settle_bed(&scene, &mut |_| {}).expect("bed settles");
         (scene, bed)
     })
 }
@@ -31,9 +31,10 @@ fn measure(
 ) -> ShakeExperiment {
     let (scene, bed) = bed();
     let mut scene = scene.clone();
-    scene.drive.cycles = cycles;
+    scene.drive.cycles = CyclesSpec::Count(cycles);
     scene.drive.steady_cycles = steady;
-    let mut world = bed.world.clone();
+    let dt = scene.drive_dt_s(freq_hz, gamma);
+    let mut world = prepare_drive(bed, &scene, dt).expect("ready to drive");
     let setup = ShakeSetup {
         rig: RigSpec::builtin(rig).expect("built-in rig"),
         shaker,

@@ -14,8 +14,9 @@ use serde::Serialize;
 use vlab::atomic_write::write_atomic;
 use vlab::dem::World;
 use vlab::rig::SineMotion;
-use vlab::scene::damper::{DrivePlan, NoObserver, run_drive, settle_bed};
+use vlab::scene::damper::{DriveLength, DrivePlan, NoObserver, run_drive};
 use vlab::scene::file::Scene;
+use vlab::scene::settle::{prepare_drive, settle_bed};
 use vlab::signals::bench_yang_power;
 
 use super::progress::ProgressLine;
@@ -65,11 +66,11 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     let one = single_pool(1)?;
     let started = Instant::now();
     let bed = one
-        .install(|| settle_bed(&scene, scene.dt_s(), &mut |p| progress.update(p)))
+        .install(|| settle_bed(&scene, &mut |p| progress.update(p)))
         .context("settling the thesis bed")?;
     let settle_wall = started.elapsed().as_secs_f64();
     let n = bed.world.particles.len();
-    let settle_steps = bed.world.steps;
+    let settle_steps = bed.settle_steps;
     rows.push(BenchRow {
         case: "pour and settle (dense bed)".into(),
         threads: 1,
@@ -86,7 +87,7 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     }
     for (threads, force_parallel) in configs {
         let pool = single_pool(threads)?;
-        let mut world: World = bed.world.clone();
+        let mut world: World = prepare_drive(&bed, &scene, scene.drive_dt_s(40.0, 20.0))?;
         if force_parallel {
             world.numerics.parallel_min_pairs = 0;
         }
@@ -94,8 +95,10 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
             freq_hz: 40.0,
             gamma: 20.0,
             gravity_mps2: scene.simulation.gravity_mps2,
-            cycles: a.cycles.max(1),
-            steady_cycles: 1,
+            length: DriveLength::Fixed {
+                cycles: a.cycles.max(1),
+                steady_cycles: 1,
+            },
         };
         let mut drive = SineMotion::new(plan.freq_hz, plan.gamma, plan.gravity_mps2);
         let out = pool
@@ -151,7 +154,7 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
         println!(
             "thesis scene, {} particles, dt {:.1e} s, {} cores",
             n,
-            scene.dt_s(),
+            scene.drive_dt_s(40.0, 20.0),
             cores
         );
         for r in &report.rows {

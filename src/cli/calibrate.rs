@@ -11,7 +11,6 @@ use clap::Args;
 use serde::Serialize;
 
 use vlab::rig::ShakerKind;
-use vlab::scene::damper::DrivePlan;
 use vlab::scene::file::Scene;
 use vlab::scene::measurement::calibrate_rig;
 use vlab::scene::shake::resolve_rig;
@@ -98,15 +97,18 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("cannot create folder {}", parent.display()))?;
     }
-    let plan = DrivePlan {
-        freq_hz: 0.0,
-        gamma: 0.0,
-        gravity_mps2: g,
-        cycles: a.cycles,
-        steady_cycles: a.record_cycles,
-    };
-    let (table, _points) = calibrate_rig(&rig, kind, &a.freqs_hz, &a.gammas, g, a.dt_s, &plan, 1)
-        .context("running the empty enclosure")?;
+    let (table, _points) = calibrate_rig(
+        &rig,
+        kind,
+        &a.freqs_hz,
+        &a.gammas,
+        g,
+        a.dt_s,
+        a.cycles,
+        a.record_cycles,
+        1,
+    )
+    .context("running the empty enclosure")?;
     table.save_json(&out)?;
     let rows: Vec<Row> = table
         .points

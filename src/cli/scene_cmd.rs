@@ -8,7 +8,7 @@ use clap::Args;
 
 use vlab::dem::restitution::realised_restitution;
 use vlab::scene::damper::contact_laws;
-use vlab::scene::file::{Scene, THESIS_DAMPER_TOML, THESIS_SCENE_FILE};
+use vlab::scene::file::{CyclesSpec, Scene, THESIS_DAMPER_TOML, THESIS_SCENE_FILE, TimeStepSpec};
 
 #[derive(Debug, Clone, Args)]
 pub struct SceneArgs {
@@ -77,9 +77,21 @@ pub fn run(a: SceneArgs) -> Result<()> {
             realised_restitution(law.damping_factor)
         );
     }
+    let dt_rule = match &scene.simulation.dt_s {
+        TimeStepSpec::Seconds(_) => "fixed".to_string(),
+        TimeStepSpec::Rule(r) if r == "rayleigh" => format!(
+            "{} x the Rayleigh step",
+            scene.simulation.rayleigh_safety_factor
+        ),
+        TimeStepSpec::Rule(_) => format!(
+            "{} steps per contact at the fastest expected impact ({:.2} m/s at 40 Hz, Gamma 20)",
+            scene.simulation.steps_per_contact,
+            scene.expected_impact_speed_mps(40.0, 20.0)
+        ),
+    };
     println!(
-        "  time step        {:.3e} s; Rayleigh limit {:.3e} s (eq. 3.31)",
-        scene.dt_s(),
+        "  time step        {:.3e} s at 40 Hz, Gamma 20 ({dt_rule}); Rayleigh limit {:.3e} s (eq. 3.31)",
+        scene.drive_dt_s(40.0, 20.0),
         scene.rayleigh_limit_s()
     );
     if let Some((vpp, vpw)) = scene.yield_velocities_mps() {
@@ -87,11 +99,22 @@ pub fn run(a: SceneArgs) -> Result<()> {
             "  yield velocity   {vpp:.3} m/s particle-particle, {vpw:.3} m/s particle-wall (eq. 5.26)"
         );
     }
+    let d = &scene.drive;
+    let drive = match &d.cycles {
+        CyclesSpec::Count(n) => format!(
+            "{n} cycles with the last {} as steady state",
+            d.steady_cycles
+        ),
+        CyclesSpec::Rule(_) => format!(
+            "until steady (work in and dissipation within {} %, energy per cycle to {} % standard error), {} to {} cycles",
+            100.0 * d.balance_rel,
+            100.0 * d.stderr_rel,
+            d.min_cycles,
+            d.max_cycles
+        ),
+    };
     println!(
-        "  run              settle up to {} s, then {} cycles with the last {} as steady state; seed {}",
-        scene.simulation.settle_s,
-        scene.drive.cycles,
-        scene.drive.steady_cycles,
+        "  run              pour and settle with the settling law (vlab::scene::settle), then drive {drive}; seed {}",
         scene.simulation.seed
     );
     Ok(())

@@ -9,10 +9,11 @@ use clap::Args;
 
 use vlab::atomic_write::OutputDir;
 use vlab::rig::ShakerKind;
+use vlab::scene::damper::{Kinematics, NoObserver, StepObserver};
+use vlab::scene::dump::VtkDump;
 use vlab::scene::file::{Orientation, Scene, SceneOverrides};
 use vlab::scene::measurement::{CalibrationSource, ShakeSetup};
-use vlab::scene::damper::{Kinematics, NoObserver, StepObserver, settle_bed};
-use vlab::scene::dump::VtkDump;
+use vlab::scene::settle::settle_bed;
 use vlab::scene::shake::{
     ShakeSummary, check_drive, default_out_dir, resolve_rig, run_shake, run_shake_on_bed,
 };
@@ -86,10 +87,13 @@ pub struct SceneArgs {
     /// Scene file (TOML) merged over the built-in thesis scene.
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
-    /// Drive cycles in all [scene default: 8].
+    /// Drive cycles in all, fixing the count [scene default: run until steady:
+    /// input work and dissipation within 1 %, standard error of the energy
+    /// per cycle below 1 %, at most 400 cycles].
     #[arg(long)]
     pub cycles: Option<u32>,
-    /// Last cycles kept as the steady state [scene default: 5].
+    /// Last cycles kept as the steady window; alone, the steady rule's
+    /// transient cycles then this many [scene default: 5 of --cycles].
     #[arg(long)]
     pub steady_cycles: Option<u32>,
     /// Gravity relative to the drive axis [scene default: vertical].
@@ -98,7 +102,8 @@ pub struct SceneArgs {
     /// Seed of the random fill [scene default: 1].
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Time step (s) [scene default: 1e-6]; at most the Rayleigh limit.
+    /// Time step (s) [scene default: every collision resolved by 25 steps at
+    /// the largest expected impact speed]; at most the Rayleigh limit.
     #[arg(long = "dt-s", value_name = "S", value_parser = args::seconds)]
     pub dt_s: Option<f64>,
 }
@@ -140,7 +145,7 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     if let Some(d) = a.duration_s {
         scene.set_record_length(d, a.freq_hz);
     }
-    check_drive(&scene, a.freq_hz).map_err(|e| flags.name_flags(e.into()))?;
+    check_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
     if scene.drive.steady_cycles < 2 {
         bail!(
             "--steady-cycles = {}: must be at least 2: the rig's record needs 2 whole periods for Yang's method",
@@ -187,15 +192,13 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         }
         None => None,
     };
-    let mut snaps = a
-        .snapshots
-        .then(|| PhaseSnapshots::new(a.freq_hz, (scene.drive.cycles - 1) as f64 * period));
+    let mut snaps = a.snapshots.then(|| PhaseSnapshots::new(a.freq_hz, 0.0));
     let result = (|| {
         if dump.is_none() && snaps.is_none() {
             return run_shake(&scene, &setup, &mut |p| progress.update(p));
         }
-        check_drive(&scene, a.freq_hz)?;
-        let mut bed = settle_bed(&scene, scene.dt_s(), &mut |p| progress.update(p))?;
+        check_drive(&scene, a.freq_hz, a.gamma)?;
+        let mut bed = settle_bed(&scene, &mut |p| progress.update(p))?;
         if dump.is_some() {
             bed.world.track_particle_dissipation(true);
         }
@@ -209,13 +212,9 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
             Some(s) => s,
             None => &mut none_b,
         };
-        run_shake_on_bed(
-            &scene,
-            &bed,
-            &setup,
-            &mut Both(first, second),
-            &mut |p| progress.update(p),
-        )
+        run_shake_on_bed(&scene, &bed, &setup, &mut Both(first, second), &mut |p| {
+            progress.update(p)
+        })
     })()
     .context("running the damper through the rig");
     progress.finish();
@@ -226,7 +225,10 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         progress.note(&format!(
             "wrote {} ParaView files into {} (open particles.pvd and enclosure.pvd)",
             files.len(),
-            a.dump.as_deref().map(|p| p.display().to_string()).unwrap_or_default()
+            a.dump
+                .as_deref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
         ));
     }
     if let Some(sn) = &snaps {
@@ -276,16 +278,34 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         s.dt_s,
         s.seed
     );
+    let st = &d.steadiness;
     println!(
-        "  DEM truth (last {} of {} cycles):",
-        s.steady_cycles, s.cycles
+        "  DEM truth (cycles {}-{} of {}; {}):",
+        d.steady_first_cycle + 1,
+        d.cycles,
+        d.cycles,
+        if st.reached {
+            "steady"
+        } else if st.capped {
+            "NOT steady: stopped at the cycle cap"
+        } else {
+            "not checked steady: fixed cycle count"
+        }
     );
     println!(
-        "    energy dissipated per cycle   {:.4e} J",
-        d.energy_per_cycle_j
+        "    energy dissipated per cycle   {:.4e} +- {:.1e} J",
+        d.energy_per_cycle_j, d.energy_per_cycle_stderr_j
     );
     println!("    E_max = 4 (Gamma g / w)^2 M   {:.4e} J", d.e_max_j);
-    println!("    damping efficiency            {:.3}", d.efficiency);
+    println!(
+        "    damping efficiency            {:.3} +- {:.3}",
+        d.efficiency, d.efficiency_stderr
+    );
+    println!(
+        "    steadiness                    work in vs dissipated {:+.2} %, standard error {:.2} % of the mean",
+        100.0 * st.balance_rel,
+        100.0 * st.stderr_rel
+    );
     println!(
         "    by source: particle-particle normal {:.1} %, tangential {:.1} %; particle-wall normal {:.1} %, tangential {:.1} %",
         100.0 * pc.pp_normal / total,
@@ -302,11 +322,23 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         s.rig, s.shaker, m.n_periods
     );
     println!(
-        "    energy per cycle              {:.4e} J  ({:+.2} % vs DEM)",
+        "    energy per cycle              {:.4e}{} J  ({:+.2} % vs DEM: {:+.2} % the chain, {:+.2} % the bed's unsteadiness)",
         m.energy_per_cycle_j,
-        100.0 * m.error_vs_dem_rel
+        m.energy_per_cycle_stderr_j
+            .map_or(String::new(), |x| format!(" +- {x:.1e}")),
+        100.0 * m.error_vs_dem_rel,
+        100.0 * m.error_vs_dem_work_rel,
+        100.0 * m.unsteadiness_rel
     );
-    println!("    damping efficiency            {:.3}", m.efficiency);
+    println!(
+        "    damping efficiency            {:.3}{}",
+        m.efficiency,
+        m.efficiency_stderr
+            .map_or(String::new(), |x| format!(" +- {x:.3}"))
+    );
+    println!(
+        "    (+- is the standard error from the cycle-to-cycle spread: statistical; the % vs DEM is the measurement chain)"
+    );
     println!(
         "    phase correction              {:.3} mrad ({})",
         1e3 * m.phase_correction_rad,

@@ -23,7 +23,11 @@ use super::args;
 use super::progress::ProgressLine;
 
 #[derive(Debug, Clone, Args)]
-#[command(allow_negative_numbers = true, args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+#[command(
+    allow_negative_numbers = true,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
 pub struct SweepArgs {
     #[command(subcommand)]
     action: Option<SweepAction>,
@@ -46,13 +50,17 @@ pub struct SweepArgs {
     /// Scene file (TOML) merged over the built-in thesis scene.
     #[arg(long, value_name = "FILE")]
     scene: Option<PathBuf>,
-    /// Drive cycles in all [scene default: 8].
+    /// Drive cycles in all, the same for every condition [scene default:
+    /// each condition runs until steady: input work and dissipation within
+    /// 1 %, standard error of the energy per cycle below 1 %, at most 400
+    /// cycles].
     #[arg(long)]
     cycles: Option<u32>,
-    /// Last cycles kept as the steady state [scene default: 5].
+    /// Last cycles kept as the steady window [scene default: 5 of --cycles].
     #[arg(long)]
     steady_cycles: Option<u32>,
-    /// Time step (s) [scene default: 1e-6].
+    /// Time step (s) [scene default: per condition, every collision resolved
+    /// by 25 steps at the largest expected impact speed].
     #[arg(long = "dt-s", value_name = "S", value_parser = args::seconds)]
     dt_s: Option<f64>,
     /// The rig: a built-in name (thesis-shaker, ideal) or a rig file.
@@ -117,7 +125,11 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
     }
     let flags = args::FlagKeys::new()
         .set(a.cycles.is_some(), "drive.cycles", "--cycles")
-        .set(a.steady_cycles.is_some(), "drive.steady_cycles", "--steady-cycles")
+        .set(
+            a.steady_cycles.is_some(),
+            "drive.steady_cycles",
+            "--steady-cycles",
+        )
         .set(a.dt_s.is_some(), "simulation.dt_s", "--dt-s")
         .set(true, "freq_hz", "--freq")
         .set(true, "gamma", "--gamma")
@@ -147,9 +159,10 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
         .map_err(|e| flags.name_flags(e.into()))
         .with_context(|| format!("--rig {}", a.rig))?;
     let shard = a.shard.unwrap_or(Shard::ALL);
-    let out_dir = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from("signals").join(format!("sweep-{}", plan.scene.name))
-    });
+    let out_dir = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("signals").join(format!("sweep-{}", plan.scene.name)));
     if !a.resume && out_dir.join("sweep.csv").exists() {
         bail!(
             "{} exists: pass --resume to continue that sweep, or choose another --out",
@@ -170,12 +183,16 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
             beds,
         } => note(format!(
             "sweep{}: {total} conditions, {already_done} already in sweep.csv, {beds} bed{} to settle",
-            if shard == Shard::ALL { String::new() } else { format!(" shard {shard}") },
+            if shard == Shard::ALL {
+                String::new()
+            } else {
+                format!(" shard {shard}")
+            },
             if beds == 1 { "" } else { "s" }
         )),
-        SweepEvent::BedSettled { seed, wall_time_s } => {
-            note(format!("sweep: bed of seed {seed} settled ({wall_time_s:.0} s)"))
-        }
+        SweepEvent::BedSettled { seed, wall_time_s } => note(format!(
+            "sweep: bed of seed {seed} settled ({wall_time_s:.0} s)"
+        )),
         SweepEvent::ConditionDone {
             row,
             done,
@@ -185,11 +202,17 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
             let c = &row.condition;
             let what = match row.status {
                 RowStatus::Ok => format!(
-                    "efficiency {:.3} +- {:.3}, measured {:.3}, {} ({:.0} s)",
+                    "efficiency {:.3} +- {:.3}, measured {:.3}, {} ({} cycles{}, {:.0} s)",
                     row.efficiency,
                     row.efficiency_se,
                     row.efficiency_measured,
                     row.phase,
+                    row.cycles,
+                    if row.steady == "capped" {
+                        ", NOT steady at the cap"
+                    } else {
+                        ""
+                    },
                     row.wall_time_s
                 ),
                 RowStatus::Unreachable => "beyond the rig".into(),
@@ -204,8 +227,8 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
             ))
         }
     };
-    let result = run_sweep(&plan, shard, &out_dir, a.resume, &on_event)
-        .context("running the sweep");
+    let result =
+        run_sweep(&plan, shard, &out_dir, a.resume, &on_event).context("running the sweep");
     let file = made.keep_if_ok(result)?;
     let plots = if shard == Shard::ALL {
         plot_sweep(&file, &out_dir).context("drawing the sweep's plots")?
@@ -243,11 +266,14 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
     }
     let h = &file.header;
     println!(
-        "{} damper, rig {}, {} cycles (last {} kept), seeds {:?}{}:",
+        "{} damper, rig {}, {}, seeds {:?}{}:",
         h.scene,
         h.rig,
-        h.cycles,
-        h.steady_cycles,
+        if h.cycles.starts_with("steady") {
+            format!("each condition driven until {}", h.cycles)
+        } else {
+            format!("{} cycles (last {} kept)", h.cycles, h.steady_cycles)
+        },
         h.seeds,
         if h.shard == Shard::ALL {
             String::new()
@@ -288,11 +314,18 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
 }
 
 fn relabel(r: RelabelArgs) -> Result<()> {
-    let path = if r.file.is_dir() { r.file.join("sweep.csv") } else { r.file.clone() };
+    let path = if r.file.is_dir() {
+        r.file.join("sweep.csv")
+    } else {
+        r.file.clone()
+    };
     let mut file = SweepFile::read(&path)?;
     let changed = file.relabel(&vlab::scene::phases::PhaseThresholds::default());
     file.write(&path)?;
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+    let dir = path
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
     let plots = if file.header.shard == Shard::ALL {
         plot_sweep(&file, &dir).context("drawing the sweep's plots")?
     } else {
@@ -305,7 +338,11 @@ fn relabel(r: RelabelArgs) -> Result<()> {
 fn merge(m: MergeArgs) -> Result<()> {
     let mut files = Vec::new();
     for p in &m.shards {
-        let path = if p.is_dir() { p.join("sweep.csv") } else { p.clone() };
+        let path = if p.is_dir() {
+            p.join("sweep.csv")
+        } else {
+            p.clone()
+        };
         files.push(SweepFile::read(&path)?);
     }
     let merged = merge_shards(&files)?;

@@ -1,7 +1,7 @@
 //! One contact: the contact law and its sub-models, as small pure functions,
 //! and the energy each of them stores or dissipates.
 //!
-//! A [`ContactLaw`] is built once per kind of contact from a [`ContactSpec`]
+//! A [`ContactLaw`] is built once per kind of contact from a [`ContactParams`]
 //! (restitution, friction, restitution mode) and composes three sub-models,
 //! the way LAMMPS' granular pair style composes named ones:
 //!
@@ -82,7 +82,7 @@ pub enum Tangential {
 /// What a scene says about one kind of contact: restitution, friction and how
 /// the damping is derived from the restitution.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactSpec {
+pub struct ContactParams {
     /// Normal coefficient of restitution e, in (0, 1].
     pub restitution: f64,
     /// Coefficient of friction μ, ≥ 0.
@@ -92,7 +92,7 @@ pub struct ContactSpec {
 }
 
 /// The contact law of one kind of contact (a pair of materials with its e and
-/// μ), built once from its [`ContactSpec`]: the Hertz normal spring, a damping
+/// μ), built once from its [`ContactParams`]: the Hertz normal spring, a damping
 /// sub-model and a tangential sub-model, each chosen by what the spec needs
 /// (as LAMMPS' granular pair style composes named sub-models). A law with
 /// `e = 1` computes no damping; one with `μ = 0` keeps no tangential history.
@@ -120,7 +120,7 @@ impl ContactLaw {
         Self::from_spec(
             a,
             b,
-            &ContactSpec {
+            &ContactParams {
                 restitution: e,
                 friction: mu,
                 mode,
@@ -129,10 +129,41 @@ impl ContactLaw {
     }
 
     /// Law for bodies of materials `a` and `b` as `spec` describes it.
-    pub fn from_spec(a: &Material, b: &Material, spec: &ContactSpec) -> Self {
-        let e_star = effective_youngs_pa(a, b);
-        let g_star = effective_shear_pa(a, b);
-        let beta = spec.mode.damping_factor(spec.restitution);
+    pub fn from_spec(a: &Material, b: &Material, spec: &ContactParams) -> Self {
+        Self::assemble(
+            effective_youngs_pa(a, b),
+            effective_shear_pa(a, b),
+            spec.mode.damping_factor(spec.restitution),
+            spec.restitution,
+            spec.friction,
+        )
+    }
+
+    /// The same law with both moduli scaled by `factor` (a softer or stiffer
+    /// spring of the same restitution and friction).
+    pub fn with_stiffness_scaled(&self, factor: f64) -> Self {
+        Self::assemble(
+            self.e_star_pa * factor,
+            self.g_star_pa * factor,
+            self.damping_factor,
+            self.restitution,
+            self.friction,
+        )
+    }
+
+    /// The same law without friction.
+    pub fn without_friction(&self) -> Self {
+        Self::assemble(
+            self.e_star_pa,
+            self.g_star_pa,
+            self.damping_factor,
+            self.restitution,
+            0.0,
+        )
+    }
+
+    /// The law of moduli `e_star`, `g_star`, damping factor `beta`.
+    fn assemble(e_star: f64, g_star: f64, beta: f64, restitution: f64, friction: f64) -> Self {
         let damping = if beta > 0.0 {
             NormalDamping::Restitution {
                 // c_n = 2 √(5/6) β √(2 E*) · √(√(R* δ) m*)
@@ -141,11 +172,11 @@ impl ContactLaw {
         } else {
             NormalDamping::Elastic
         };
-        let tangential = if spec.friction > 0.0 {
+        let tangential = if friction > 0.0 {
             Tangential::MindlinCoulomb {
                 shear_coeff: 8.0 * g_star,
                 damping_ratio: (4.0 * g_star / e_star).sqrt(),
-                friction: spec.friction,
+                friction,
             }
         } else {
             Tangential::Frictionless
@@ -153,8 +184,8 @@ impl ContactLaw {
         ContactLaw {
             e_star_pa: e_star,
             g_star_pa: g_star,
-            friction: spec.friction,
-            restitution: spec.restitution,
+            friction,
+            restitution,
             damping_factor: beta,
             hertz_coeff: 4.0 / 3.0 * e_star,
             damping,
@@ -454,7 +485,13 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
     };
     let f_d = f_n - f_el;
     out.normal_force_n = f_n;
-    state.u_normal_j += 0.5 * (state.fel_prev + f_el) * (delta_m - state.delta_prev);
+    if dt_s > 0.0 {
+        state.u_normal_j += 0.5 * (state.fel_prev + f_el) * (delta_m - state.delta_prev);
+    } else {
+        // A pure evaluation (a new world, new laws): the spring holds the exact
+        // Hertz energy of the overlap it starts with.
+        state.u_normal_j = 0.4 * f_el * delta_m;
+    }
     if DAMPED {
         out.dissipated_normal_j = 0.5 * (state.fd_prev + f_d) * (delta_m - state.delta_prev);
     }

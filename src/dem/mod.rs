@@ -17,7 +17,7 @@ pub mod timestep;
 pub mod walls;
 pub mod world;
 
-pub use contact::{ContactLaw, ContactState};
+pub use contact::{ContactLaw, ContactParams, ContactState};
 pub use error::DemError;
 pub use ledger::{Dissipation, EnergyState, Ledger, LedgerBalance, LedgerSnapshot};
 pub use material::Material;

@@ -6,7 +6,9 @@
 //! `S_f` (typically 0.1–0.4; the thesis used 1e-6 s, i.e. S_f ≈ 0.12 for 5 mm
 //! acrylic, whose Δt_R is 8.3e-6 s).
 
-use super::material::Material;
+use super::contact::ContactLaw;
+use super::hertz_theory;
+use super::material::{Material, effective_mass_kg, effective_radius_m, sphere_mass_kg};
 use crate::validation::{Bound, Checked, InvalidParameter, in_range};
 
 /// Rayleigh time step (s) of eq. 3.31 for spheres of radius `radius_min_m`.
@@ -14,6 +16,28 @@ pub fn rayleigh_time_step_s(material: &Material, radius_min_m: f64) -> f64 {
     let g = material.shear_modulus_pa();
     std::f64::consts::PI * radius_min_m * (material.density_kgm3 / g).sqrt()
         / (0.1631 * material.poisson + 0.8766)
+}
+
+/// The shortest Hertz contact (s) of identical spheres of `radius_m` and
+/// density `density_kgm3`, against each other (law `pp`) and against a flat
+/// wall (law `pw`), at relative impact speed `speed_mps`: twice eq. 5.10 with
+/// each law's equivalent modulus.
+pub fn shortest_contact_s(
+    pp: &ContactLaw,
+    pw: &ContactLaw,
+    radius_m: f64,
+    density_kgm3: f64,
+    speed_mps: f64,
+) -> f64 {
+    let m = sphere_mass_kg(radius_m, density_kgm3);
+    let pair = hertz_theory::contact_duration_s(
+        effective_mass_kg(m, m),
+        pp.e_star_pa,
+        effective_radius_m(radius_m, radius_m),
+        speed_mps,
+    );
+    let wall = hertz_theory::contact_duration_s(m, pw.e_star_pa, radius_m, speed_mps);
+    pair.min(wall)
 }
 
 /// Default safety factor on the Rayleigh step when a scene does not fix Δt.

@@ -132,6 +132,10 @@ pub struct World {
     /// Energy each particle's contacts dissipated since tracking began (J),
     /// while tracked ([`World::track_particle_dissipation`]).
     particle_dissipation_j: Option<Vec<f64>>,
+    /// Fewest time steps a collision that opened since the last reset is
+    /// resolved with (the Hertz duration at its approach speed, eq. 5.10, over
+    /// the step); infinite when none opened.
+    pub fewest_steps_per_contact: f64,
 }
 
 /// Largest normal approach speeds at contact onset (m/s), to hold against the
@@ -171,6 +175,7 @@ impl World {
             baseline: LedgerSnapshot::default(),
             impact_speeds: ImpactSpeeds::default(),
             particle_dissipation_j: None,
+            fewest_steps_per_contact: f64::INFINITY,
         };
         world.reset_contacts();
         world.compute_forces(0.0)?;
@@ -230,6 +235,38 @@ impl World {
         }
     }
 
+    /// Replaces the contact laws (the settling law by the scene's, say): every
+    /// tangential history is dropped and the forces are evaluated anew with the
+    /// new laws; the energy check restarts from here.
+    pub fn set_contact_laws(
+        &mut self,
+        pp_law: ContactLaw,
+        pw_law: ContactLaw,
+    ) -> Result<(), DemError> {
+        self.pp_law = pp_law;
+        self.pw_law = pw_law;
+        self.reset_contacts();
+        self.compute_forces(0.0)?;
+        self.rebaseline();
+        Ok(())
+    }
+
+    /// Changes the time step. The state carries over unchanged: velocity
+    /// Verlet's forces depend on positions only.
+    pub fn set_dt_s(&mut self, dt_s: f64) {
+        self.numerics.dt_s = dt_s;
+        self.rebaseline();
+    }
+
+    /// Starts the energy ledger and the record of impact speeds from zero:
+    /// what follows is the experiment.
+    pub fn start_ledger(&mut self) {
+        self.ledger = Ledger::default();
+        self.impact_speeds = ImpactSpeeds::default();
+        self.fewest_steps_per_contact = f64::INFINITY;
+        self.rebaseline();
+    }
+
     /// Changes the Verlet skin (a fraction of the largest radius) and rebuilds the
     /// pair list, keeping every contact's history.
     pub fn set_skin_ratio(&mut self, skin_ratio: f64) {
@@ -270,6 +307,25 @@ impl World {
     /// How often the neighbour list was rebuilt.
     pub fn neighbour_rebuilds(&self) -> u64 {
         self.neighbours.rebuilds()
+    }
+
+    /// The deepest overlap now, as a fraction of the smaller radius of the pair
+    /// (of the particle's radius against a wall).
+    pub fn max_overlap_ratio(&self) -> f64 {
+        let p = &self.particles;
+        let pairs = self
+            .neighbours
+            .pairs
+            .iter()
+            .zip(&self.neighbours.states)
+            .map(|(&(i, j), st)| st.delta_prev / p.radius[i as usize].min(p.radius[j as usize]));
+        let n_walls = self.walls.len().max(1);
+        let walls = self
+            .wall_states
+            .iter()
+            .enumerate()
+            .map(|(k, st)| st.delta_prev / p.radius[k / n_walls]);
+        pairs.chain(walls).fold(0.0, f64::max)
     }
 
     /// Number of particle-particle and particle-wall contacts now.
@@ -490,6 +546,7 @@ impl World {
             }
         };
         *fastest = fastest.max(out.onset_speed_mps);
+        self.fewest_steps_per_contact = self.fewest_steps_per_contact.min(out.steps_per_collision);
         if dt > 0.0 {
             *ledger_normal += out.dissipated_normal_j;
             *ledger_tangential += out.dissipated_tangential_j;

@@ -1,14 +1,20 @@
-//! The damper experiment: fill the enclosure, let the bed settle, drive it.
+//! The damper experiment: drive a settled bed (see [`crate::scene::settle`]).
 //!
-//! Filling follows the lab: the spheres are poured into a taller column of the
-//! enclosure's diameter (random sequential insertion at a fill of 0.30, see
-//! `fill`), settle with the axis vertical, the lid is closed at the design length,
-//! the damper is turned to its test orientation and the bed settles again (thesis:
-//! 0.2 s, ended early once the bed is at rest). Then the enclosure is driven along
-//! its axis, by a prescribed sine `u = Γ g / ω² sin ωt` ([`SineMotion`], thesis
-//! eq. 6.2) or by any other [`EnclosureMotion`] (the rig's shaker), for whole
-//! cycles, and the energy
+//! The enclosure is driven along its axis, by a prescribed sine
+//! `u = Γ g / ω² sin ωt` ([`SineMotion`], thesis eq. 6.2) or by any other
+//! [`EnclosureMotion`] (the rig's shaker), for whole cycles, and the energy
 //! ledger is read at every cycle boundary.
+//!
+//! **How long.** The thesis drove 8 cycles and kept the last 5 as steady
+//! state. That is steady at 40 Hz, Γ 20, but not at low Γ or high frequency,
+//! where the bed gives back start-up energy for tens of cycles (160 Hz, Γ 3:
+//! ~80). The default drive therefore runs until steady
+//! ([`DriveLength::UntilSteady`]): after each cycle from the 8th, the last
+//! 5/8 of the cycles are the window, and the drive stops when over that window
+//! the enclosure's work and the bed's dissipation agree within 1 % and the
+//! energy per cycle has a standard error below 1 % ([`SteadyCriteria`]), or at
+//! a cap (400 cycles), which it then says. A fixed count is
+//! [`DriveLength::Fixed`].
 //!
 //! Efficiency (thesis eq. 6.8–6.10, erratum for 6.9: the numerator is
 //! `E(t_final) - E(t_initial)`): the energy dissipated per cycle, averaged over
@@ -19,28 +25,25 @@ use std::time::Instant;
 
 use glam::DVec3;
 
-use crate::dem::{
-    ContactLaw, Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, Numerics, Particles,
-    Walls, World,
-};
+use crate::dem::{ContactLaw, Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, World};
 pub use crate::rig::{EnclosureMotion, Kinematics, SineMotion};
 use crate::scene::file::{Orientation, Scene, SceneError};
-use crate::scene::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
-
-/// A bed is at rest when no particle is faster than this (m/s).
-pub const REST_SPEED_MPS: f64 = 0.005;
-/// Longest the poured column may take to come to rest (s).
-pub const MAX_POUR_S: f64 = 1.5;
+use crate::stats::{MeanStderr, mean_stderr};
 
 /// Progress of a long run, for display.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Progress {
     pub phase: &'static str,
-    /// Fraction of the phase done, 0..1.
+    /// Fraction of the phase done, 0..1 (of the most cycles, for a drive that
+    /// runs until steady).
     pub fraction: f64,
     pub sim_time_s: f64,
     pub particle_steps: u64,
     pub wall_time_s: f64,
+    /// Drive cycles done.
+    pub cycle: u32,
+    /// How steady the drive is so far, once it can tell.
+    pub steadiness: Option<Steadiness>,
 }
 
 /// Something that wants to see every step of the drive (a recorder, a rig).
@@ -77,121 +80,68 @@ pub fn gravity_vector(orientation: Orientation, g_mps2: f64) -> DVec3 {
     }
 }
 
-/// A settled bed in the closed enclosure, ready to drive.
-#[derive(Debug, Clone)]
-pub struct SettledBed {
-    pub world: World,
-    /// Simulated time spent pouring and settling (s).
-    pub settle_time_s: f64,
-    /// Wall-clock time spent (s).
-    pub wall_time_s: f64,
+/// How long the drive runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DriveLength {
+    /// Exactly `cycles` cycles; the last `steady_cycles` are the steady window
+    /// (the thesis: 8 and 5).
+    Fixed { cycles: u32, steady_cycles: u32 },
+    /// Until steady (see [`SteadyCriteria`]), at least `min_cycles`, at most
+    /// `max_cycles`; the first 3/8 of the cycles are the transient.
+    UntilSteady {
+        min_cycles: u32,
+        max_cycles: u32,
+        criteria: SteadyCriteria,
+    },
 }
 
-/// Pours, settles and closes the damper of `scene` with its seed; see the module
-/// documentation. `dt_s` overrides the scene's time step.
-pub fn settle_bed(
-    scene: &Scene,
-    dt_s: f64,
-    progress: &mut dyn FnMut(Progress),
-) -> Result<SettledBed, SceneError> {
-    let started = Instant::now();
-    let radius = scene.radius_m();
-    let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
-    let length = scene.enclosure.inner_length_m;
-    let n = scene.particles.count;
-    let column =
-        (n as f64 * scene.particle_volume_m3() / (COLUMN_FILL * PI * cyl_r * cyl_r)).max(length);
-    let mut rng = SceneRng::new(scene.simulation.seed);
-    let positions = insert_in_cylinder(n, radius, cyl_r, column, 1e-3 * radius, &mut rng)?;
-    let density = scene.particle_material().density_kgm3;
-    let mut particles = Particles::default();
-    for p in positions {
-        particles.push(p, DVec3::ZERO, DVec3::ZERO, radius, density);
-    }
-    let (pp, pw) = contact_laws(scene);
-    let g = scene.simulation.gravity_mps2;
-    let mut numerics = Numerics::with_dt(dt_s);
-    numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
-    let mut world = World::new(
-        particles,
-        Walls::closed_cylinder(cyl_r, column),
-        pp,
-        pw,
-        gravity_vector(Orientation::Vertical, g),
-        numerics,
-    )?;
-
-    // Pour: axis vertical, until the bed is at rest (at least the fall time).
-    let fall_s = if g > 0.0 {
-        (2.0 * column / g).sqrt()
-    } else {
-        0.0
-    };
-    run_until_rest(&mut world, fall_s, MAX_POUR_S, "pouring", started, progress)?;
-
-    // Close the lid at the design length.
-    let top = (0..world.particles.len())
-        .map(|i| world.particles.position[i].z + world.particles.radius[i])
-        .fold(0.0, f64::max);
-    if top > length {
-        return Err(SceneError::BedTooTall {
-            height_mm: top * 1e3,
-            length_m: length,
-        });
-    }
-    world.walls.move_plane(2, DVec3::new(0.0, 0.0, length));
-    world.refresh_wall_gaps();
-
-    // Turn to the test orientation and settle again.
-    world.gravity = gravity_vector(scene.enclosure.orientation, g);
-    world.rebaseline();
-    run_until_rest(
-        &mut world,
-        0.0,
-        scene.simulation.settle_s,
-        "settling",
-        started,
-        progress,
-    )?;
-    Ok(SettledBed {
-        settle_time_s: world.time_s,
-        world,
-        wall_time_s: started.elapsed().as_secs_f64(),
-    })
-}
-
-/// Steps a still enclosure for at least `min_s` and at most `max_s` of simulated
-/// time, stopping once the bed is at rest.
-fn run_until_rest(
-    world: &mut World,
-    min_s: f64,
-    max_s: f64,
-    phase: &'static str,
-    started: Instant,
-    progress: &mut dyn FnMut(Progress),
-) -> Result<(), SceneError> {
-    let dt = world.dt_s();
-    let max_steps = (max_s / dt).round() as u64;
-    let min_steps = (min_s / dt).round() as u64;
-    let check_every = ((1e-3 / dt).round() as u64).max(1);
-    let displacement = world.walls.displacement_m;
-    let n = world.particles.len() as u64;
-    for k in 1..=max_steps {
-        world.step(displacement)?;
-        if k % check_every == 0 {
-            progress(Progress {
-                phase,
-                fraction: k as f64 / max_steps as f64,
-                sim_time_s: world.time_s,
-                particle_steps: world.steps * n,
-                wall_time_s: started.elapsed().as_secs_f64(),
-            });
-            if k >= min_steps && world.particles.max_speed_mps() < REST_SPEED_MPS {
-                break;
-            }
+impl DriveLength {
+    /// Most cycles the drive can take.
+    pub fn max_cycles(&self) -> u32 {
+        match *self {
+            DriveLength::Fixed { cycles, .. } => cycles,
+            DriveLength::UntilSteady { max_cycles, .. } => max_cycles,
         }
     }
-    Ok(())
+
+    /// Fewest cycles before the steady window starts: the window never begins
+    /// earlier than this.
+    pub fn min_transient_cycles(&self) -> u32 {
+        match *self {
+            DriveLength::Fixed {
+                cycles,
+                steady_cycles,
+            } => cycles - steady_cycles,
+            DriveLength::UntilSteady { min_cycles, .. } => transient_cycles(min_cycles),
+        }
+    }
+}
+
+/// The transient part of `cycles` cycles run until steady: the first 3/8 (the
+/// thesis' 3 of 8), at least one.
+pub fn transient_cycles(cycles: u32) -> u32 {
+    (3 * cycles / 8).max(1)
+}
+
+/// When a drive is steady: over the steady window the work the enclosure put
+/// in and the energy the bed dissipated agree within `balance_rel` (of the
+/// dissipation, or of `E_max` per cycle for a bed that dissipates next to
+/// nothing), and the energy per cycle has a standard error below
+/// `stderr_rel` of its mean (from the cycle-to-cycle spread, see
+/// [`crate::stats`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SteadyCriteria {
+    pub balance_rel: f64,
+    pub stderr_rel: f64,
+}
+
+impl Default for SteadyCriteria {
+    fn default() -> Self {
+        SteadyCriteria {
+            balance_rel: 0.01,
+            stderr_rel: 0.01,
+        }
+    }
 }
 
 /// How the drive is run.
@@ -200,8 +150,7 @@ pub struct DrivePlan {
     pub freq_hz: f64,
     pub gamma: f64,
     pub gravity_mps2: f64,
-    pub cycles: u32,
-    pub steady_cycles: u32,
+    pub length: DriveLength,
 }
 
 impl DrivePlan {
@@ -212,17 +161,37 @@ impl DrivePlan {
     }
 }
 
+/// Whether, and how well, the steady window is steady.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct Steadiness {
+    /// (work in − dissipated) / dissipated over the window (the denominator is
+    /// at least 1 % of `E_max` per cycle).
+    pub balance_rel: f64,
+    /// Standard error of the energy per cycle / its mean.
+    pub stderr_rel: f64,
+    /// Both within the criteria (always false for a fixed count that is not).
+    pub reached: bool,
+    /// The drive stopped at its most cycles without being steady.
+    pub capped: bool,
+}
+
 /// DEM truth of a drive.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DriveOutcome {
     /// Ledger at the drive start and at the end of every cycle.
     pub cycle_snapshots: Vec<LedgerSnapshot>,
+    /// Cycles driven.
+    pub cycles: u32,
+    /// First cycle of the steady window (0-based; the window runs to the end).
+    pub steady_first_cycle: u32,
     /// Balance of the whole drive (transient and steady cycles).
     pub whole: LedgerBalance,
     /// Balance of the steady cycles.
     pub steady: LedgerBalance,
     /// Dissipated energy per cycle in the steady window (J), thesis eq. 6.9.
     pub energy_per_cycle_j: f64,
+    /// The same as the mean of the window's cycles, with its standard error.
+    pub energy_per_cycle: MeanStderr,
     /// Per-cycle dissipation by source in the steady window (J).
     pub dissipated_per_cycle: Dissipation,
     /// Work the walls did per cycle in the steady window (J): what a
@@ -233,6 +202,9 @@ pub struct DriveOutcome {
     pub steady_window_s: f64,
     pub e_max_j: f64,
     pub efficiency: f64,
+    /// Standard error of the efficiency (from the cycle-to-cycle spread).
+    pub efficiency_stderr: f64,
+    pub steadiness: Steadiness,
     pub steps: u64,
     pub wall_time_s: f64,
     /// Start of the steady window, from the drive start (s).
@@ -240,9 +212,46 @@ pub struct DriveOutcome {
     pub largest_speed_mps: f64,
     /// Largest normal approach speeds at contact onset during the drive (m/s).
     pub impact_speeds: ImpactSpeeds,
+    /// Fewest time steps any collision of the drive was resolved with.
+    pub fewest_steps_per_contact: f64,
 }
 
-/// Drives a settled world with `motion` for `plan.cycles` cycles.
+/// Energy each cycle of `snapshots[first..]` dissipated (J).
+fn cycle_energies(snapshots: &[LedgerSnapshot], first: usize) -> Vec<f64> {
+    snapshots[first..]
+        .windows(2)
+        .map(|w| w[1].flows.dissipated.total() - w[0].flows.dissipated.total())
+        .collect()
+}
+
+/// How steady the window from cycle `first` to the last snapshot is.
+fn steadiness(
+    snapshots: &[LedgerSnapshot],
+    first: usize,
+    e_max_j: f64,
+    criteria: &SteadyCriteria,
+) -> Steadiness {
+    let last = snapshots.len() - 1;
+    let b = LedgerBalance::between(&snapshots[first], &snapshots[last]);
+    let cycles = (last - first) as f64;
+    let scale = b.dissipated_j.max(0.01 * e_max_j * cycles);
+    let balance_rel = (b.work_in_j - b.dissipated_j) / scale;
+    let e = mean_stderr(&cycle_energies(snapshots, first));
+    let stderr_rel = if e.mean.abs() > 0.01 * e_max_j {
+        e.relative()
+    } else {
+        e.stderr / (0.01 * e_max_j)
+    };
+    Steadiness {
+        balance_rel,
+        stderr_rel,
+        reached: balance_rel.abs() <= criteria.balance_rel && stderr_rel <= criteria.stderr_rel,
+        capped: false,
+    }
+}
+
+/// Drives a settled world with `motion` as `plan` says, calling `observer`
+/// after every step.
 pub fn run_drive(
     world: &mut World,
     plan: &DrivePlan,
@@ -256,14 +265,17 @@ pub fn run_drive(
     let t0 = world.time_s;
     let n = world.particles.len() as u64;
     let first_step = world.steps;
+    let e_max_j = plan.e_max_j(world.particles.total_mass_kg());
     world.impact_speeds = ImpactSpeeds::default();
+    world.fewest_steps_per_contact = f64::INFINITY;
     let mut snapshots = vec![world.snapshot()];
     let mut largest_speed: f64 = 0.0;
     let report_every = ((2e-3 / dt).round() as u64).max(1);
-    let total_steps = (plan.cycles as f64 * period / dt).round() as u64;
-    let mut next_boundary = 1u32;
+    let max_cycles = plan.length.max_cycles();
     let mut k = 0u64;
-    while next_boundary <= plan.cycles {
+    let mut verdict = None;
+    let mut latest: Option<Steadiness> = None;
+    while verdict.is_none() {
         k += 1;
         let t = k as f64 * dt;
         let axial = -world.wall_force().dot(world.walls.axis);
@@ -271,43 +283,83 @@ pub fn run_drive(
         world.step(kin.displacement_m)?;
         observer.observe(t, world, &kin);
         // A cycle ends at the step nearest to its boundary time.
-        if (t / period - next_boundary as f64) * period > -0.5 * dt {
+        let next_boundary = snapshots.len() as f64;
+        if (t / period - next_boundary) * period > -0.5 * dt {
             snapshots.push(world.snapshot());
             largest_speed = largest_speed.max(world.particles.max_speed_mps());
-            next_boundary += 1;
+            let done = (snapshots.len() - 1) as u32;
+            verdict = match plan.length {
+                DriveLength::Fixed {
+                    cycles,
+                    steady_cycles,
+                } => (done >= cycles).then(|| {
+                    let first = (cycles - steady_cycles) as usize;
+                    let criteria = SteadyCriteria::default();
+                    (first, steadiness(&snapshots, first, e_max_j, &criteria))
+                }),
+                DriveLength::UntilSteady {
+                    min_cycles,
+                    max_cycles,
+                    criteria,
+                } => {
+                    if done >= min_cycles {
+                        let first = transient_cycles(done) as usize;
+                        let s = steadiness(&snapshots, first, e_max_j, &criteria);
+                        latest = Some(s);
+                        if s.reached {
+                            Some((first, s))
+                        } else if done >= max_cycles {
+                            Some((first, Steadiness { capped: true, ..s }))
+                        } else {
+                            None
+                        }
+                    } else {
+                        None
+                    }
+                }
+            };
         }
         if k % report_every == 0 {
+            let done = (snapshots.len() - 1) as u32;
             progress(Progress {
                 phase: "driving",
-                fraction: k as f64 / total_steps as f64,
+                fraction: f64::from(done) / f64::from(max_cycles),
                 sim_time_s: world.time_s - t0,
                 particle_steps: k * n,
                 wall_time_s: started.elapsed().as_secs_f64(),
+                cycle: done,
+                steadiness: latest,
             });
         }
     }
+    let (steady_first, steadiness) = verdict.unwrap_or_default();
     let last = snapshots.len() - 1;
-    let steady_first = last - plan.steady_cycles as usize;
     let whole = LedgerBalance::between(&snapshots[0], &snapshots[last]);
     let steady = LedgerBalance::between(&snapshots[steady_first], &snapshots[last]);
     let window_s = snapshots[last].time_s - snapshots[steady_first].time_s;
     let per_cycle = period / window_s;
     let energy_per_cycle_j = steady.dissipated_j * per_cycle;
-    let e_max_j = plan.e_max_j(world.particles.total_mass_kg());
+    let energy_per_cycle = mean_stderr(&cycle_energies(&snapshots, steady_first));
     Ok(DriveOutcome {
+        cycles: last as u32,
+        steady_first_cycle: steady_first as u32,
         whole,
         steady,
         energy_per_cycle_j,
+        energy_per_cycle,
         dissipated_per_cycle: steady.dissipated.scaled(per_cycle),
         work_in_per_cycle_j: steady.work_in_j * per_cycle,
         steady_window_s: window_s,
         e_max_j,
         efficiency: energy_per_cycle_j / e_max_j,
+        efficiency_stderr: energy_per_cycle.stderr / e_max_j,
+        steadiness,
         steps: world.steps - first_step,
         wall_time_s: started.elapsed().as_secs_f64(),
         steady_start_s: snapshots[steady_first].time_s - t0,
         cycle_snapshots: snapshots,
         largest_speed_mps: largest_speed,
         impact_speeds: world.impact_speeds,
+        fewest_steps_per_contact: world.fewest_steps_per_contact,
     })
 }

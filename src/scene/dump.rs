@@ -122,10 +122,9 @@ impl VtkDump {
                 .collect(),
             _ => vec![0.0; n],
         };
-        self.last = world
-            .particle_dissipation_j()
-            .map(|d| (t_s, d.to_vec()));
-        let flat = |v: &[glam::DVec3]| -> Vec<f64> { v.iter().flat_map(|x| x.to_array()).collect() };
+        self.last = world.particle_dissipation_j().map(|d| (t_s, d.to_vec()));
+        let flat =
+            |v: &[glam::DVec3]| -> Vec<f64> { v.iter().flat_map(|x| x.to_array()).collect() };
         let piece = PolyDataPiece {
             points: flat(&p.position).into(),
             verts: Some(VertexNumbers::XML {

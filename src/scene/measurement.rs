@@ -27,8 +27,9 @@ use crate::scene::file::{Orientation, Scene, SceneError};
 use crate::scene::record::{TruthRecorder, TruthSamples};
 use crate::signals::{
     PhaseCalibration, PhaseCorrection, PhaseErrorPoint, PowerOptions, PowerResult, Trace,
-    TraceMetadata, efficiency, estimate_phase_error, yang_power_of_trace,
+    TraceMetadata, estimate_phase_error, max_energy_per_cycle_j, yang_power, yang_power_of_trace,
 };
+use crate::stats::{MeanStderr, mean_stderr};
 
 /// Feeds the rig's DAQ and the truth recorder from every DEM step, and the
 /// caller's own observer (a dump, the motional-phase indicators).
@@ -81,6 +82,13 @@ pub struct Measured {
     pub power_w: f64,
     pub energy_per_cycle_j: f64,
     pub efficiency: f64,
+    /// Standard error of `power_w` (W), from Yang's method on successive
+    /// blocks of two periods of the record: the statistical part of the
+    /// uncertainty, the bed's cycle-to-cycle spread as the record shows it.
+    /// `None` with fewer than two blocks.
+    pub power_stderr_w: Option<f64>,
+    pub energy_per_cycle_stderr_j: Option<f64>,
+    pub efficiency_stderr: Option<f64>,
     /// Phase error subtracted at the drive frequency (rad).
     pub phase_correction_rad: f64,
     /// (measured − DEM dissipated per cycle) / DEM dissipated per cycle.
@@ -89,6 +97,9 @@ pub struct Measured {
     /// the measurement chain alone, without the change of stored energy over
     /// the record.
     pub error_vs_dem_work_rel: f64,
+    /// (DEM work in − DEM dissipated) / dissipated over the record: the part of
+    /// `error_vs_dem_rel` that is the bed not being steady, not the chain.
+    pub unsteadiness_rel: f64,
     /// Energy per cycle without the phase correction (J).
     pub uncorrected_energy_per_cycle_j: f64,
     pub uncorrected_error_vs_dem_rel: f64,
@@ -160,8 +171,7 @@ pub fn run_measured_shake_observed(
         freq_hz: setup.freq_hz,
         gamma: setup.gamma,
         gravity_mps2: g,
-        cycles: scene.drive.cycles,
-        steady_cycles: scene.drive.steady_cycles,
+        length: scene.drive_length(),
     };
     let particle_mass = world.particles.total_mass_kg();
     let mut shaker = Shaker::new(
@@ -173,11 +183,13 @@ pub fn run_measured_shake_observed(
         rig.enclosure.mass_kg,
         particle_mass,
     )?;
+    // The DAQ records from the earliest cycle the steady window can start at;
+    // the record is cut to the window the drive finds steady.
     let period = 1.0 / setup.freq_hz;
-    let record_start = (plan.cycles - plan.steady_cycles) as f64 * period;
+    let record_start = f64::from(plan.length.min_transient_cycles()) * period;
     let dt = world.dt_s();
     let mut daq = Daq::new(rig, dt, record_start, scene.simulation.seed)?;
-    daq.reserve(plan.steady_cycles as f64 * period + 0.01);
+    daq.reserve(f64::from(plan.length.max_cycles().min(64)) * period + 0.01);
     let mut instruments = Instruments {
         truth: TruthRecorder::new(rig.daq.sample_rate_hz, 0.0),
         daq,
@@ -187,7 +199,13 @@ pub fn run_measured_shake_observed(
     };
     let outcome = run_drive(world, &plan, &mut shaker, &mut instruments, progress)?;
     let metadata = trace_metadata(scene, setup, particle_mass, g);
-    let (trace, daq_report) = instruments.daq.finish(metadata)?;
+    let (record, daq_report) = instruments.daq.finish(metadata)?;
+    // The window's nominal start, a whole number of periods: the DEM's
+    // boundary step lies within half a step of it, and cutting at the step's
+    // time would drop the boundary sample and with it a whole period.
+    let steady_start_s = f64::from(outcome.steady_first_cycle) * period;
+    let trace = record.from_time(steady_start_s - record_start);
+    let steady_cycles = outcome.cycles - outcome.steady_first_cycle;
 
     let calibration = match &setup.calibration {
         CalibrationSource::Given(table, _) => table.clone(),
@@ -200,7 +218,8 @@ pub fn run_measured_shake_observed(
                 &gammas,
                 g,
                 dt,
-                &plan,
+                outcome.cycles,
+                steady_cycles,
                 scene.simulation.seed,
             )?
             .0
@@ -224,16 +243,16 @@ pub fn run_measured_shake_observed(
     let v = setup.gamma * g / omega;
     let phi = rig.expected_phase_error_rad(setup.freq_hz);
     let shaker_report = shaker.report();
+    let e_max = max_energy_per_cycle_j(particle_mass, setup.gamma, setup.freq_hz, g)?;
+    let blocks = block_power(&trace, setup.freq_hz, &calibration)?;
     let measured = Measured {
         power_w: corrected.power_w,
         energy_per_cycle_j: corrected.energy_per_cycle_j,
-        efficiency: efficiency(
-            corrected.energy_per_cycle_j,
-            particle_mass,
-            setup.gamma,
-            setup.freq_hz,
-            g,
-        )?,
+        efficiency: corrected.energy_per_cycle_j / e_max,
+        power_stderr_w: blocks.map(|b| b.stderr),
+        energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / setup.freq_hz),
+        efficiency_stderr: blocks.map(|b| b.stderr / setup.freq_hz / e_max),
+        unsteadiness_rel: work_truth / truth - 1.0,
         phase_correction_rad: corrected.phase_correction_rad,
         error_vs_dem_rel: corrected.energy_per_cycle_j / truth - 1.0,
         error_vs_dem_work_rel: corrected.energy_per_cycle_j / work_truth - 1.0,
@@ -258,6 +277,41 @@ pub fn run_measured_shake_observed(
         measured,
         calibration,
     })
+}
+
+/// Yang's power of successive blocks of two periods of `trace`, corrected with
+/// `calibration`, as a mean with its standard error; `None` below two blocks.
+fn block_power(
+    trace: &Trace,
+    freq_hz: f64,
+    calibration: &PhaseCalibration,
+) -> Result<Option<MeanStderr>, SceneError> {
+    let block = (2.0 * trace.sample_rate_hz / freq_hz).round() as usize;
+    let n_blocks = trace.len() / block.max(1);
+    if n_blocks < 2 {
+        return Ok(None);
+    }
+    let force = &trace.channel(crate::rig::FORCE_CHANNEL)?.samples;
+    let accel = &trace.channel(crate::rig::ACCEL_CHANNEL)?.samples;
+    let options = PowerOptions {
+        phase_correction: PhaseCorrection::Table(calibration),
+        ..PowerOptions::default()
+    };
+    let mut powers = Vec::with_capacity(n_blocks);
+    for b in 0..n_blocks {
+        let r = b * block..(b + 1) * block;
+        powers.push(
+            yang_power(
+                &force[r.clone()],
+                &accel[r],
+                trace.sample_rate_hz,
+                freq_hz,
+                &options,
+            )?
+            .power_w,
+        );
+    }
+    Ok(Some(mean_stderr(&powers)))
 }
 
 /// Yang's power of a rig trace over all its whole drive periods.
@@ -312,8 +366,8 @@ fn trace_metadata(
     }
 }
 
-/// Runs the empty enclosure of `rig` at every frequency and amplitude, with the
-/// cycle plan of a damper run, and estimates the phase error of each record
+/// Runs the empty enclosure of `rig` at every frequency and amplitude for
+/// `cycles` cycles, recording the last `record_cycles` as a damper run does, and estimates the phase error of each record
 /// (true force/velocity phase exactly 90°). Returns the amplitude-averaged table
 /// and the individual points.
 #[allow(clippy::too_many_arguments)]
@@ -324,7 +378,8 @@ pub fn calibrate_rig(
     gammas: &[f64],
     g_mps2: f64,
     dt_s: f64,
-    plan: &DrivePlan,
+    cycles: u32,
+    record_cycles: u32,
     seed: u64,
 ) -> Result<(PhaseCalibration, Vec<PhaseErrorPoint>), SceneError> {
     let mut points = Vec::new();
@@ -332,10 +387,10 @@ pub fn calibrate_rig(
         for &gamma in gammas {
             let mut shaker = Shaker::new(rig, kind, f, gamma, g_mps2, rig.enclosure.mass_kg, 0.0)?;
             let period = 1.0 / f;
-            let record_start = (plan.cycles - plan.steady_cycles) as f64 * period;
+            let record_start = f64::from(cycles - record_cycles) * period;
             let mut daq = Daq::new(rig, dt_s, record_start, seed)?;
-            daq.reserve(plan.steady_cycles as f64 * period + 0.01);
-            let steps = (plan.cycles as f64 * period / dt_s).round() as u64;
+            daq.reserve(f64::from(record_cycles) * period + 0.01);
+            let steps = (f64::from(cycles) * period / dt_s).round() as u64;
             // The empty enclosure carries only itself; the rig model sees no
             // particle force (a vertical rig's static weight is DC, outside the method).
             let weight = rig.enclosure.mass_kg * g_mps2;

@@ -13,6 +13,7 @@ pub mod measurement;
 pub mod phases;
 pub mod predict;
 pub mod record;
+pub mod settle;
 pub mod shake;
 pub mod snapshots;
 pub mod sweep;

@@ -331,11 +331,39 @@ fn phase_from_speed_peak_deg(rec: &TruthSamples, t: f64, period: f64) -> f64 {
     }
 }
 
-/// Samples the DEM state in the steady cycles of a drive for the state
-/// indicators; a [`StepObserver`] to pass to the drive.
+/// Sums of one cycle's samples of the DEM state.
+#[derive(Debug, Clone, Copy)]
+struct CycleSums {
+    samples: u64,
+    contact: f64,
+    com: f64,
+    temperature: f64,
+    min_contact: f64,
+    com_lo: f64,
+    com_hi: f64,
+}
+
+impl Default for CycleSums {
+    fn default() -> Self {
+        CycleSums {
+            samples: 0,
+            contact: 0.0,
+            com: 0.0,
+            temperature: 0.0,
+            min_contact: f64::INFINITY,
+            com_lo: f64::INFINITY,
+            com_hi: f64::NEG_INFINITY,
+        }
+    }
+}
+
+/// Samples the DEM state of a drive for the state indicators, cycle by cycle,
+/// so that the indicators can be taken over whichever steady window the drive
+/// ends with (a drive run until steady knows its window only at the end); a
+/// [`StepObserver`] to pass to the drive.
 #[derive(Debug, Clone)]
 pub struct PhaseObserver {
-    steady_start_s: f64,
+    sample_from_s: f64,
     period_s: f64,
     sample_every: u64,
     clearance_m: f64,
@@ -343,35 +371,26 @@ pub struct PhaseObserver {
     steps: u64,
     rest_com_m: Option<f64>,
     counts: Vec<u32>,
-    // Running sums over samples.
-    samples: u64,
-    contact_sum: f64,
-    com_sum: f64,
-    temperature_sum: f64,
-    // Per cycle extremes.
-    cycle: i64,
-    cycle_min_contact: f64,
-    cycle_com: (f64, f64),
-    cycles_done: u64,
-    min_contact_sum: f64,
-    com_range_sum: f64,
+    /// Indexed by the cycle of the drive (0-based).
+    cycles: Vec<CycleSums>,
 }
 
 impl PhaseObserver {
-    /// Samples from `steady_start_s` (from the drive start) on, `SAMPLES_PER_CYCLE`
-    /// times a cycle of `freq_hz`, for a drive of amplitude `gamma` with
-    /// time step `dt_s`; `clearance_m` scales the centre-of-mass indicators.
+    /// Samples from `sample_from_s` (from the drive start; the earliest the
+    /// steady window can begin) on, `SAMPLES_PER_CYCLE` times a cycle of
+    /// `freq_hz`, for a drive of amplitude `gamma` with time step `dt_s`;
+    /// `clearance_m` scales the centre-of-mass indicators.
     pub fn new(
         freq_hz: f64,
         gamma: f64,
         g_mps2: f64,
         dt_s: f64,
-        steady_start_s: f64,
+        sample_from_s: f64,
         clearance_m: f64,
     ) -> Self {
         let period = 1.0 / freq_hz;
         PhaseObserver {
-            steady_start_s,
+            sample_from_s,
             period_s: period,
             sample_every: ((period / dt_s / SAMPLES_PER_CYCLE as f64).round() as u64).max(1),
             clearance_m,
@@ -379,34 +398,29 @@ impl PhaseObserver {
             steps: 0,
             rest_com_m: None,
             counts: Vec::new(),
-            samples: 0,
-            contact_sum: 0.0,
-            com_sum: 0.0,
-            temperature_sum: 0.0,
-            cycle: -1,
-            cycle_min_contact: f64::INFINITY,
-            cycle_com: (f64::INFINITY, f64::NEG_INFINITY),
-            cycles_done: 0,
-            min_contact_sum: 0.0,
-            com_range_sum: 0.0,
+            cycles: Vec::new(),
         }
     }
 
-    fn close_cycle(&mut self) {
-        if self.cycle >= 0 && self.cycle_min_contact.is_finite() {
-            self.cycles_done += 1;
-            self.min_contact_sum += self.cycle_min_contact;
-            self.com_range_sum += self.cycle_com.1 - self.cycle_com.0;
+    /// The indicators over the cycles from `steady_start_s` (from the drive
+    /// start) on, with the impacts found in the force record over the same
+    /// window.
+    pub fn indicators(&self, impacts: &ImpactStats, steady_start_s: f64) -> PhaseIndicators {
+        let first = (steady_start_s / self.period_s).round().max(0.0) as usize;
+        let window = self.cycles.iter().skip(first).filter(|c| c.samples > 0);
+        let (mut samples, mut contact, mut com, mut temperature) = (0u64, 0.0, 0.0, 0.0);
+        let (mut cycles, mut min_contact, mut com_range) = (0u64, 0.0, 0.0);
+        for c in window {
+            samples += c.samples;
+            contact += c.contact;
+            com += c.com;
+            temperature += c.temperature;
+            cycles += 1;
+            min_contact += c.min_contact;
+            com_range += c.com_hi - c.com_lo;
         }
-        self.cycle_min_contact = f64::INFINITY;
-        self.cycle_com = (f64::INFINITY, f64::NEG_INFINITY);
-    }
-
-    /// The indicators, with the impacts found in the force record `rec`.
-    pub fn indicators(mut self, impacts: &ImpactStats) -> PhaseIndicators {
-        self.close_cycle();
-        let n = self.samples.max(1) as f64;
-        let c = self.cycles_done.max(1) as f64;
+        let n = samples.max(1) as f64;
+        let c = cycles.max(1) as f64;
         let h = self.clearance_m.max(f64::MIN_POSITIVE);
         let per_cycle = |k: usize| {
             if impacts.cycles > 0.0 {
@@ -421,11 +435,11 @@ impl PhaseObserver {
             lid_impacts_per_cycle: per_cycle(impacts.lid),
             impact_phase_deg: impacts.phase_deg,
             impact_impulse_rel: impacts.impulse_rel,
-            contact_fraction: self.contact_sum / n,
-            contact_fraction_min: self.min_contact_sum / c,
-            com_offset_rel: (self.com_sum / n - self.rest_com_m.unwrap_or(0.0)) / h,
-            com_range_rel: self.com_range_sum / c / h,
-            granular_temperature_rel: self.temperature_sum
+            contact_fraction: contact / n,
+            contact_fraction_min: min_contact / c,
+            com_offset_rel: (com / n - self.rest_com_m.unwrap_or(0.0)) / h,
+            com_range_rel: com_range / c / h,
+            granular_temperature_rel: temperature
                 / n
                 / (self.speed_scale_mps * self.speed_scale_mps),
         }
@@ -462,24 +476,26 @@ impl StepObserver for PhaseObserver {
         if self.rest_com_m.is_none() {
             self.rest_com_m = Some(bed_state(world).0);
         }
-        if t_s < self.steady_start_s - 1e-12 || self.steps % self.sample_every != 0 {
+        if t_s < self.sample_from_s - 1e-12 || self.steps % self.sample_every != 0 {
             return;
         }
-        let cycle = ((t_s - self.steady_start_s) / self.period_s).floor() as i64;
-        if cycle != self.cycle {
-            self.close_cycle();
-            self.cycle = cycle;
+        // A sample within a rounding error of a cycle's end belongs to the next.
+        let cycle = (t_s / self.period_s + 1e-9).floor().max(0.0) as usize;
+        if self.cycles.len() <= cycle {
+            self.cycles.resize(cycle + 1, CycleSums::default());
         }
         world.contacts_per_particle(&mut self.counts);
         let n = self.counts.len().max(1) as f64;
         let touching = self.counts.iter().filter(|&&c| c > 0).count() as f64 / n;
         let (com, temperature) = bed_state(world);
-        self.samples += 1;
-        self.contact_sum += touching;
-        self.com_sum += com;
-        self.temperature_sum += temperature;
-        self.cycle_min_contact = self.cycle_min_contact.min(touching);
-        self.cycle_com = (self.cycle_com.0.min(com), self.cycle_com.1.max(com));
+        let c = &mut self.cycles[cycle];
+        c.samples += 1;
+        c.contact += touching;
+        c.com += com;
+        c.temperature += temperature;
+        c.min_contact = c.min_contact.min(touching);
+        c.com_lo = c.com_lo.min(com);
+        c.com_hi = c.com_hi.max(com);
     }
 }
 
@@ -514,6 +530,8 @@ mod tests {
         let solid = PhaseIndicators {
             impacts_per_cycle: 0.0,
             bottom_impacts_per_cycle: 0.0,
+            contact_fraction: 0.9,
+            contact_fraction_min: 0.85,
             com_range_rel: 0.001,
             granular_temperature_rel: 1e-4,
             ..base()

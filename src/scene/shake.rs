@@ -32,14 +32,13 @@ use serde::Serialize;
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::rig::{RigFile, RigSpec, ShakerKind, check_limits};
-use crate::scene::damper::{
-    DriveOutcome, NoObserver, Progress, SettledBed, StepObserver, settle_bed,
-};
+use crate::scene::damper::{DriveOutcome, NoObserver, Progress, Steadiness, StepObserver};
 use crate::scene::file::{Scene, SceneError};
 use crate::scene::measurement::{
     Measured, ShakeExperiment, ShakeSetup, run_measured_shake_observed,
 };
 use crate::scene::record::TruthSamples;
+use crate::scene::settle::{SettledBed, prepare_drive, settle_bed};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
 use crate::validation::{InvalidParameter, positive};
 
@@ -74,11 +73,13 @@ pub fn resolve_rig(
     Ok((rig, kind))
 }
 
-/// Checks that a drive at `freq_hz` can be resolved by the scene's time step
-/// (200 steps a cycle at least) and by the 40 kHz truth record.
-pub fn check_drive(scene: &Scene, freq_hz: f64) -> Result<(), SceneError> {
+/// Checks that a drive at `freq_hz` and `gamma` can be resolved by the
+/// scene's time step (200 steps a cycle at least) and by the 40 kHz truth
+/// record.
+pub fn check_drive(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<(), SceneError> {
     positive("freq_hz", freq_hz, "Hz")?;
-    let dt = scene.dt_s();
+    positive("gamma", gamma, "")?;
+    let dt = scene.drive_dt_s(freq_hz, gamma);
     let by_step = 1.0 / (200.0 * dt);
     let by_record = TRUTH_SAMPLE_RATE_HZ / 4.0;
     if freq_hz > by_step.min(by_record) {
@@ -106,15 +107,31 @@ pub struct YieldVelocities {
     pub particle_wall_mps: f64,
 }
 
+/// Fraction of the scene's steps per contact below which a run warns.
+pub const STEPS_PER_CONTACT_SLACK: f64 = 0.8;
+
 /// What the DEM knows: thesis eq. 6.3–6.10.
 #[derive(Debug, Clone, Serialize)]
 pub struct DemTruth {
     /// Dissipated energy per cycle, averaged over the steady cycles (J), eq. 6.9.
     pub energy_per_cycle_j: f64,
+    /// Its standard error from the cycle-to-cycle spread (J).
+    pub energy_per_cycle_stderr_j: f64,
     /// Maximum dissipated energy per cycle 4 (Γ g / ω)² M (J), eq. 6.10.
     pub e_max_j: f64,
     /// `energy_per_cycle_j / e_max_j`, eq. 6.8.
     pub efficiency: f64,
+    /// Its standard error from the cycle-to-cycle spread.
+    pub efficiency_stderr: f64,
+    /// How steady the window is, and whether the drive reached steady state
+    /// or stopped at its cap.
+    pub steadiness: Steadiness,
+    /// Cycles driven, and the first cycle of the steady window.
+    pub cycles: u32,
+    pub steady_first_cycle: u32,
+    /// Fewest time steps any collision of the drive took (Hertz duration at its
+    /// approach speed over the step); the scene asks for `steps_per_contact`.
+    pub fewest_steps_per_contact: f64,
     /// Energy dissipated over the steady cycles, by source (J).
     pub dissipated_j: Dissipation,
     /// The same per cycle (J); sums to `energy_per_cycle_j`.
@@ -148,8 +165,14 @@ impl DemTruth {
     pub fn new(out: &DriveOutcome, scene: &Scene) -> Self {
         DemTruth {
             energy_per_cycle_j: out.energy_per_cycle_j,
+            energy_per_cycle_stderr_j: out.energy_per_cycle.stderr,
             e_max_j: out.e_max_j,
             efficiency: out.efficiency,
+            efficiency_stderr: out.efficiency_stderr,
+            steadiness: out.steadiness,
+            cycles: out.cycles,
+            steady_first_cycle: out.steady_first_cycle,
+            fewest_steps_per_contact: out.fewest_steps_per_contact,
             dissipated_j: out.steady.dissipated,
             dissipated_per_cycle_j: out.dissipated_per_cycle,
             work_in_per_cycle_j: out.work_in_per_cycle_j,
@@ -173,8 +196,8 @@ impl DemTruth {
     }
 
     /// Warnings a user must see: impacts beyond yield, a record that is not
-    /// steady.
-    pub fn warnings(&self, freq_hz: f64) -> Vec<String> {
+    /// steady, collisions resolved with too few steps.
+    pub fn warnings(&self, freq_hz: f64, steps_per_contact: f64) -> Vec<String> {
         let mut w = Vec::new();
         if let Some(y) = &self.yield_velocity_mps {
             let v = &self.largest_impact_speed_mps;
@@ -193,9 +216,18 @@ impl DemTruth {
                 }
             }
         }
-        if self.steadiness_rel.abs() > 0.02 {
+        let s = &self.steadiness;
+        if s.capped {
             w.push(format!(
-                "the bed is not in a steady state over the record: the enclosure put in {:+.1} % of the energy the DEM dissipated (the bed {} the difference), so any input-power measurement differs from the DEM's dissipation by that much; lengthen the transient (drive.cycles; at {freq_hz} Hz try {} cycles)",
+                "the drive stopped at its cap of {} cycles without reaching a steady state: over the last {} cycles the enclosure's work and the dissipation differ by {:+.2} % and the energy per cycle has a standard error of {:.2} % (both should be within drive.balance_rel and drive.stderr_rel); the figures are those of an unsteady bed",
+                self.cycles,
+                self.cycles - self.steady_first_cycle,
+                100.0 * s.balance_rel,
+                100.0 * s.stderr_rel
+            ));
+        } else if !s.reached && self.steadiness_rel.abs() > 0.01 {
+            w.push(format!(
+                "the bed is not in a steady state over the record: the enclosure put in {:+.1} % of the energy the DEM dissipated (the bed {} the difference), so any input-power measurement differs from the DEM's dissipation by that much; let the drive run until steady (drive.cycles = \"steady\") or lengthen it (at {freq_hz} Hz try {} cycles)",
                 100.0 * self.steadiness_rel,
                 if self.steadiness_rel < 0.0 {
                     "gave back"
@@ -203,6 +235,16 @@ impl DemTruth {
                     "stored"
                 },
                 (freq_hz * 0.5).ceil().max(16.0)
+            ));
+        }
+        // The rule's impact speed is an estimate; a few collisions of a chaotic
+        // bed beat it by a little (the thesis bed: 24 of 25 steps). Warn when
+        // a collision lost a fifth of its steps.
+        if self.fewest_steps_per_contact < STEPS_PER_CONTACT_SLACK * steps_per_contact {
+            w.push(format!(
+                "a collision was resolved with only {:.1} time steps (the scene asks for {steps_per_contact}, warned below {:.0}): impacts were faster than the time step was chosen for; the contact forces and the restitution are less accurate (give simulation.dt_s a smaller step)",
+                self.fewest_steps_per_contact,
+                STEPS_PER_CONTACT_SLACK * steps_per_contact
             ));
         }
         w
@@ -270,15 +312,16 @@ pub fn run_shake_observed(
     observer: &mut dyn StepObserver,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
-    check_drive(scene, setup.freq_hz)?;
-    let bed = settle_bed(scene, scene.dt_s(), progress)?;
+    check_drive(scene, setup.freq_hz, setup.gamma)?;
+    let bed = settle_bed(scene, progress)?;
     run_shake_on_bed(scene, &bed, setup, observer, progress)
 }
 
-/// Drives a copy of an already settled `bed` of `scene` (the same scene and
-/// seed: [`settle_bed`] is deterministic, so this equals [`run_shake`]) through
-/// the rig of `setup` and measures it. A sweep settles each bed once and
-/// drives it at every amplitude this way.
+/// Drives an already settled `bed` of `scene` (the same scene and seed:
+/// [`settle_bed`] is deterministic, so this equals [`run_shake`]) through the
+/// rig of `setup` and measures it; the bed itself is not changed. A sweep
+/// settles each bed once and drives it at every frequency and amplitude this
+/// way.
 pub fn run_shake_on_bed(
     scene: &Scene,
     bed: &SettledBed,
@@ -286,15 +329,15 @@ pub fn run_shake_on_bed(
     observer: &mut dyn StepObserver,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
-    check_drive(scene, setup.freq_hz)?;
-    let dt = scene.dt_s();
-    let mut world = bed.world.clone();
+    check_drive(scene, setup.freq_hz, setup.gamma)?;
+    let dt = scene.drive_dt_s(setup.freq_hz, setup.gamma);
+    let mut world = prepare_drive(bed, scene, dt)?;
     let experiment = run_measured_shake_observed(scene, &mut world, setup, observer, progress)?;
     let outcome = &experiment.outcome;
     let n = world.particles.len();
     let dem = DemTruth::new(outcome, scene);
     let mut warnings = experiment.measured.clipping.clone();
-    warnings.extend(dem.warnings(setup.freq_hz));
+    warnings.extend(dem.warnings(setup.freq_hz, scene.simulation.steps_per_contact));
     let summary = ShakeSummary {
         vlab_version: env!("CARGO_PKG_VERSION"),
         scene: scene.name.clone(),
@@ -306,8 +349,8 @@ pub fn run_shake_on_bed(
         fill_ratio: scene.fill_ratio(),
         seed: scene.simulation.seed,
         dt_s: dt,
-        cycles: scene.drive.cycles,
-        steady_cycles: scene.drive.steady_cycles,
+        cycles: outcome.cycles,
+        steady_cycles: outcome.cycles - outcome.steady_first_cycle,
         steps: outcome.steps,
         settle_time_s: bed.settle_time_s,
         steady_start_s: outcome.steady_start_s,

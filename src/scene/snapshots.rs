@@ -3,8 +3,10 @@
 //! 6.14, 6.19–6.21).
 //!
 //! [`PhaseSnapshots`] is a [`StepObserver`] that keeps the particles at the
-//! steps nearest to `t0 + k T / 8`, k = 0..7, of the last drive cycle (phase 0:
-//! the enclosure at mid-stroke moving in +z, at its peak speed). The view is
+//! steps nearest to `(n + k / 8) T`, k = 0..7, of the last whole drive cycle n
+//! (phase 0: the enclosure at mid-stroke moving in +z, at its peak speed). It
+//! captures every cycle and keeps the last whole one, so it works for a drive
+//! whose length is known only at its end (run until steady). The view is
 //! the x–z plane (enclosure axis up) for a vertical damper and the z–y plane
 //! (axis across, gravity down) for a horizontal one; nearer particles are
 //! drawn over farther ones.
@@ -37,22 +39,28 @@ pub struct Snapshot {
     pub radius_m: Vec<f64>,
 }
 
-/// Captures [`PHASES`] snapshots of the cycle starting at `cycle_start_s`.
+/// Captures [`PHASES`] snapshots of the last whole cycle of a drive.
 #[derive(Debug, Clone)]
 pub struct PhaseSnapshots {
-    targets: Vec<f64>,
+    period_s: f64,
+    /// Index of the next phase to capture, counted from the drive start
+    /// (cycle `next / PHASES`, phase `next % PHASES`).
+    next: u64,
+    current: Vec<Snapshot>,
+    /// The last whole cycle captured (empty until one is).
     pub snapshots: Vec<Snapshot>,
 }
 
 impl PhaseSnapshots {
-    /// Snapshots of the cycle of `freq_hz` that starts at `cycle_start_s`
-    /// (from the drive start).
-    pub fn new(freq_hz: f64, cycle_start_s: f64) -> Self {
+    /// Snapshots of the last whole cycle of `freq_hz` that starts at or after
+    /// `from_s` (from the drive start; earlier cycles are not captured).
+    pub fn new(freq_hz: f64, from_s: f64) -> Self {
         let period = 1.0 / freq_hz;
+        let first_cycle = (from_s / period - 1e-9).ceil().max(0.0) as u64;
         PhaseSnapshots {
-            targets: (0..PHASES)
-                .map(|k| cycle_start_s + k as f64 * period / PHASES as f64)
-                .collect(),
+            period_s: period,
+            next: first_cycle * PHASES as u64,
+            current: Vec::with_capacity(PHASES),
             snapshots: Vec::new(),
         }
     }
@@ -85,10 +93,16 @@ impl PhaseSnapshots {
         let (x_range, y_range) = match orientation {
             Orientation::Vertical => (
                 (-radius_m * mm * 1.05, radius_m * mm * 1.05),
-                ((-amp - 0.05 * length_m) * mm, (length_m + amp + 0.05 * length_m) * mm),
+                (
+                    (-amp - 0.05 * length_m) * mm,
+                    (length_m + amp + 0.05 * length_m) * mm,
+                ),
             ),
             Orientation::Horizontal => (
-                ((-amp - 0.05 * length_m) * mm, (length_m + amp + 0.05 * length_m) * mm),
+                (
+                    (-amp - 0.05 * length_m) * mm,
+                    (length_m + amp + 0.05 * length_m) * mm,
+                ),
                 (-radius_m * mm * 1.05, radius_m * mm * 1.05),
             ),
         };
@@ -148,16 +162,18 @@ impl PhaseSnapshots {
 
 impl StepObserver for PhaseSnapshots {
     fn observe(&mut self, t_s: f64, world: &World, enclosure: &Kinematics) {
-        let k = self.snapshots.len();
-        let Some(&target) = self.targets.get(k) else {
-            return;
-        };
+        let target = self.next as f64 * self.period_s / PHASES as f64;
         let dt = world.dt_s();
         if t_s + 0.5 * dt < target {
             return;
         }
+        let k = (self.next % PHASES as u64) as usize;
+        self.next += 1;
+        if k == 0 {
+            self.current.clear();
+        }
         let p = &world.particles;
-        self.snapshots.push(Snapshot {
+        self.current.push(Snapshot {
             phase_deg: 360.0 * k as f64 / PHASES as f64,
             time_s: t_s,
             enclosure_displacement_m: enclosure.displacement_m,
@@ -166,5 +182,8 @@ impl StepObserver for PhaseSnapshots {
             speed_mps: p.velocity.iter().map(|v| v.length()).collect(),
             radius_m: p.radius.clone(),
         });
+        if k == PHASES - 1 && self.current.len() == PHASES {
+            std::mem::swap(&mut self.snapshots, &mut self.current);
+        }
     }
 }

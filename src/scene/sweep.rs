@@ -38,13 +38,13 @@ use serde::Serialize;
 
 use crate::atomic_write::write_atomic;
 use crate::rig::{RigFile, RigSpec, ShakerKind};
-use crate::scene::damper::{DriveOutcome, SettledBed, settle_bed};
-use crate::scene::file::{Orientation, Scene, SceneError};
+use crate::scene::file::{CyclesSpec, Orientation, Scene, SceneError};
 use crate::scene::measurement::{CalibrationSource, ShakeSetup, shaker_name};
 use crate::scene::phases::{
     PhaseIndicators, PhaseObserver, PhaseThresholds, classify, collective_impacts,
 };
 use crate::scene::predict::{CLOSE_PACKING, effective_clearance_m};
+use crate::scene::settle::{SettledBed, settle_bed};
 use crate::scene::shake::{check_drive, resolve_rig, run_shake_on_bed};
 use crate::validation::InvalidParameter;
 
@@ -241,7 +241,12 @@ impl SweepPlan {
     pub fn validate(&self) -> Result<(), SweepError> {
         let nonempty = |key: &str, n: usize| {
             if n == 0 {
-                Err(InvalidParameter::new(key, "[]", "", "a list of at least one value"))
+                Err(InvalidParameter::new(
+                    key,
+                    "[]",
+                    "",
+                    "a list of at least one value",
+                ))
             } else {
                 Ok(())
             }
@@ -261,7 +266,10 @@ impl SweepPlan {
                 crate::validation::Bound::Open(CLOSE_PACKING),
             )?;
         }
-        if self.scene.drive.steady_cycles < 2 {
+        // A drive run until steady keeps at least 5/8 of 4 cycles.
+        if matches!(self.scene.drive.cycles, CyclesSpec::Count(_))
+            && self.scene.drive.steady_cycles < 2
+        {
             return Err(InvalidParameter::new(
                 "drive.steady_cycles",
                 self.scene.drive.steady_cycles,
@@ -271,7 +279,9 @@ impl SweepPlan {
             .into());
         }
         for &f in &self.freqs_hz {
-            check_drive(&self.scene, f)?;
+            for &g in &self.gammas {
+                check_drive(&self.scene, f, g)?;
+            }
         }
         // The rig must load (its limits are checked per condition).
         RigSpec::from_name_or_path(&self.rig).map_err(SceneError::from)?;
@@ -301,14 +311,27 @@ impl SweepPlan {
     }
 
     fn lists_text(&self) -> String {
-        let join = |v: &[f64]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(",");
+        let join = |v: &[f64]| {
+            v.iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        };
         format!(
             "# freq_hz: {}\n# gamma: {}\n# seeds: {}\n# fill_ratio: {}\n# orientation: {}\n",
             join(&self.freqs_hz),
             join(&self.gammas),
-            self.seeds.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(","),
+            self.seeds
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
             join(&self.fills()),
-            self.orients().iter().map(|o| o.as_str()).collect::<Vec<_>>().join(","),
+            self.orients()
+                .iter()
+                .map(|o| o.as_str())
+                .collect::<Vec<_>>()
+                .join(","),
         )
     }
 
@@ -320,7 +343,7 @@ impl SweepPlan {
             scene: self.scene.name.clone(),
             rig: self.rig.clone(),
             shaker: self.shaker.map(shaker_name).unwrap_or("rig default").into(),
-            cycles: self.scene.drive.cycles,
+            cycles: cycles_text(&self.scene),
             steady_cycles: self.scene.drive.steady_cycles,
             freqs_hz: self.freqs_hz.clone(),
             gammas: self.gammas.clone(),
@@ -332,6 +355,19 @@ impl SweepPlan {
             scene_fill_ratio: self.scene.fill_ratio(),
             gravity_mps2: self.scene.simulation.gravity_mps2,
         }
+    }
+}
+
+/// The drive length as the header states it: a number of cycles, or
+/// `steady (min-max cycles, balance b, stderr s)`.
+fn cycles_text(scene: &Scene) -> String {
+    let d = &scene.drive;
+    match &d.cycles {
+        CyclesSpec::Count(n) => n.to_string(),
+        CyclesSpec::Rule(_) => format!(
+            "steady ({}-{} cycles, balance {}, stderr {})",
+            d.min_cycles, d.max_cycles, d.balance_rel, d.stderr_rel
+        ),
     }
 }
 
@@ -388,14 +424,20 @@ pub struct SweepRow {
     pub efficiency: f64,
     /// Its standard error from the cycle-to-cycle spread.
     pub efficiency_se: f64,
-    /// Efficiency the rig measured (Yang's method, phase-corrected).
+    /// Efficiency the rig measured (Yang's method, phase-corrected) and its
+    /// standard error over blocks of two periods (NaN below two blocks).
     pub efficiency_measured: f64,
+    pub efficiency_measured_se: f64,
     /// DEM energy dissipated per steady cycle (J) and its standard error.
     pub energy_per_cycle_j: f64,
     pub energy_per_cycle_se_j: f64,
     pub e_max_j: f64,
     /// (work in − dissipated) / dissipated over the steady cycles.
     pub steadiness_rel: f64,
+    /// `yes` when the window met the scene's steady criteria, `capped` when a
+    /// drive run until steady stopped at its most cycles, else `no` (a fixed
+    /// number of cycles that did not); empty unless ok.
+    pub steady: String,
     /// Dissipation shares: particle-particle and particle-wall, normal and tangential.
     pub share_pp_normal: f64,
     pub share_pp_tangential: f64,
@@ -421,10 +463,12 @@ impl SweepRow {
             efficiency: f64::NAN,
             efficiency_se: f64::NAN,
             efficiency_measured: f64::NAN,
+            efficiency_measured_se: f64::NAN,
             energy_per_cycle_j: f64::NAN,
             energy_per_cycle_se_j: f64::NAN,
             e_max_j: f64::NAN,
             steadiness_rel: f64::NAN,
+            steady: String::new(),
             share_pp_normal: f64::NAN,
             share_pp_tangential: f64::NAN,
             share_pw_normal: f64::NAN,
@@ -437,26 +481,6 @@ impl SweepRow {
             wall_time_s: 0.0,
         }
     }
-}
-
-/// Mean energy dissipated per steady cycle and its standard error (J), from
-/// the ledger at the cycle boundaries: the mean is the drive's own
-/// `energy_per_cycle_j` (so it agrees with `shake`), the standard error is the
-/// sample standard deviation of the per-cycle energies over √n.
-pub fn energy_per_cycle_with_se(out: &DriveOutcome, steady_cycles: u32) -> (f64, f64) {
-    let s = &out.cycle_snapshots;
-    let n = (steady_cycles as usize).min(s.len().saturating_sub(1));
-    let per: Vec<f64> = (s.len() - n..s.len())
-        .map(|k| s[k].flows.dissipated.total() - s[k - 1].flows.dissipated.total())
-        .collect();
-    let se = if per.len() > 1 {
-        let m = per.iter().sum::<f64>() / per.len() as f64;
-        let var = per.iter().map(|e| (e - m).powi(2)).sum::<f64>() / (per.len() - 1) as f64;
-        (var / per.len() as f64).sqrt()
-    } else {
-        f64::NAN
-    };
-    (out.energy_per_cycle_j, se)
 }
 
 /// Whether the rig can drive condition `c`; the rig's refusal otherwise.
@@ -478,7 +502,11 @@ pub fn run_condition(plan: &SweepPlan, bed: &SettledBed, c: &Condition) -> Sweep
     }
 }
 
-fn try_condition(plan: &SweepPlan, bed: &SettledBed, c: &Condition) -> Result<SweepRow, SceneError> {
+fn try_condition(
+    plan: &SweepPlan,
+    bed: &SettledBed,
+    c: &Condition,
+) -> Result<SweepRow, SceneError> {
     let started = Instant::now();
     let scene = plan.scene_for(c)?;
     let g = scene.simulation.gravity_mps2;
@@ -490,19 +518,17 @@ fn try_condition(plan: &SweepPlan, bed: &SettledBed, c: &Condition) -> Result<Sw
         gamma: c.gamma,
         calibration: CalibrationSource::OnTheFly,
     };
-    let d = &scene.drive;
-    let steady_start = (d.cycles - d.steady_cycles) as f64 / c.freq_hz;
+    // Sample the bed from the earliest cycle the steady window can begin at.
+    let sample_from = f64::from(scene.drive_length().min_transient_cycles()) / c.freq_hz;
     let clearance = effective_clearance_m(
         scene.fill_ratio(),
         CLOSE_PACKING,
         scene.enclosure.inner_length_m,
     );
-    let mut observer =
-        PhaseObserver::new(c.freq_hz, c.gamma, g, scene.dt_s(), steady_start, clearance);
+    let dt = scene.drive_dt_s(c.freq_hz, c.gamma);
+    let mut observer = PhaseObserver::new(c.freq_hz, c.gamma, g, dt, sample_from, clearance);
     let run = run_shake_on_bed(&scene, bed, &setup, &mut observer, &mut |_| {})?;
     let s = &run.summary;
-    let outcome = &run.experiment.outcome;
-    let (energy, energy_se) = energy_per_cycle_with_se(outcome, d.steady_cycles);
     let impacts = collective_impacts(
         &run.experiment.truth,
         s.steady_start_s,
@@ -511,7 +537,8 @@ fn try_condition(plan: &SweepPlan, bed: &SettledBed, c: &Condition) -> Result<Sw
         s.particle_mass_kg,
         g,
     );
-    let ind = observer.indicators(&impacts);
+    let ind = observer.indicators(&impacts, s.steady_start_s);
+    let st = &s.dem.steadiness;
     let pc = &s.dem.dissipated_per_cycle_j;
     let total = pc.total();
     Ok(SweepRow {
@@ -519,12 +546,21 @@ fn try_condition(plan: &SweepPlan, bed: &SettledBed, c: &Condition) -> Result<Sw
         status: RowStatus::Ok,
         note: String::new(),
         efficiency: s.dem.efficiency,
-        efficiency_se: energy_se / s.dem.e_max_j,
+        efficiency_se: s.dem.efficiency_stderr,
         efficiency_measured: s.measured.efficiency,
-        energy_per_cycle_j: energy,
-        energy_per_cycle_se_j: energy_se,
+        efficiency_measured_se: s.measured.efficiency_stderr.unwrap_or(f64::NAN),
+        energy_per_cycle_j: s.dem.energy_per_cycle_j,
+        energy_per_cycle_se_j: s.dem.energy_per_cycle_stderr_j,
         e_max_j: s.dem.e_max_j,
         steadiness_rel: s.dem.steadiness_rel,
+        steady: if st.capped {
+            "capped"
+        } else if st.reached {
+            "yes"
+        } else {
+            "no"
+        }
+        .into(),
         share_pp_normal: pc.pp_normal / total,
         share_pp_tangential: pc.pp_tangential / total,
         share_pw_normal: pc.pw_normal / total,
@@ -569,7 +605,8 @@ pub struct SweepHeader {
     pub scene: String,
     pub rig: String,
     pub shaker: String,
-    pub cycles: u32,
+    /// A number of cycles, or `steady (...)`: the drive runs until steady.
+    pub cycles: String,
     pub steady_cycles: u32,
     pub freqs_hz: Vec<f64>,
     pub gammas: Vec<f64>,
@@ -614,9 +651,17 @@ impl SweepHeader {
     }
 
     fn text(&self) -> String {
-        let join = |v: &[f64]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(",");
+        let join = |v: &[f64]| {
+            v.iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        };
         let mut t = String::new();
-        let _ = writeln!(t, "{SWEEP_MAGIC} (one row per condition and seed; numbers NaN unless status = ok)");
+        let _ = writeln!(
+            t,
+            "{SWEEP_MAGIC} (one row per condition and seed; numbers NaN unless status = ok)"
+        );
         let _ = writeln!(t, "# vlab_version: {}", env!("CARGO_PKG_VERSION"));
         let _ = writeln!(t, "# sweep_id: {}", self.sweep_id);
         let _ = writeln!(t, "# protocol_id: {}", self.protocol_id);
@@ -631,13 +676,21 @@ impl SweepHeader {
         let _ = writeln!(
             t,
             "# seeds: {}",
-            self.seeds.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(",")
+            self.seeds
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
         );
         let _ = writeln!(t, "# fill_ratio: {}", join(&self.fill_ratios));
         let _ = writeln!(
             t,
             "# orientation: {}",
-            self.orientations.iter().map(|o| o.as_str()).collect::<Vec<_>>().join(",")
+            self.orientations
+                .iter()
+                .map(|o| o.as_str())
+                .collect::<Vec<_>>()
+                .join(",")
         );
         let _ = writeln!(t, "# particle_count: {}", self.particle_count);
         let _ = writeln!(t, "# inner_length_m: {}", self.inner_length_m);
@@ -660,14 +713,24 @@ impl SweepHeader {
         let floats = |k: &str| -> Result<Vec<f64>, SweepError> {
             get(k)?
                 .split(',')
-                .map(|s| s.trim().parse::<f64>().map_err(|_| bad(format!("'# {k}:' has '{s}'"))))
+                .map(|s| {
+                    s.trim()
+                        .parse::<f64>()
+                        .map_err(|_| bad(format!("'# {k}:' has '{s}'")))
+                })
                 .collect()
         };
         let num = |k: &str| -> Result<f64, SweepError> {
-            get(k)?.trim().parse().map_err(|_| bad(format!("'# {k}:' is not a number")))
+            get(k)?
+                .trim()
+                .parse()
+                .map_err(|_| bad(format!("'# {k}:' is not a number")))
         };
         let whole = |k: &str| -> Result<u64, SweepError> {
-            get(k)?.trim().parse().map_err(|_| bad(format!("'# {k}:' is not a whole number")))
+            get(k)?
+                .trim()
+                .parse()
+                .map_err(|_| bad(format!("'# {k}:' is not a whole number")))
         };
         Ok(SweepHeader {
             sweep_id: get("sweep_id")?,
@@ -676,18 +739,24 @@ impl SweepHeader {
             scene: get("scene")?,
             rig: get("rig")?,
             shaker: get("shaker")?,
-            cycles: whole("cycles")? as u32,
+            cycles: get("cycles")?,
             steady_cycles: whole("steady_cycles")? as u32,
             freqs_hz: floats("freq_hz")?,
             gammas: floats("gamma")?,
             seeds: get("seeds")?
                 .split(',')
-                .map(|s| s.trim().parse::<u64>().map_err(|_| bad(format!("'# seeds:' has '{s}'"))))
+                .map(|s| {
+                    s.trim()
+                        .parse::<u64>()
+                        .map_err(|_| bad(format!("'# seeds:' has '{s}'")))
+                })
                 .collect::<Result<_, _>>()?,
             fill_ratios: floats("fill_ratio")?,
             orientations: get("orientation")?
                 .split(',')
-                .map(|s| parse_orientation(s.trim()).ok_or_else(|| bad(format!("orientation '{s}'"))))
+                .map(|s| {
+                    parse_orientation(s.trim()).ok_or_else(|| bad(format!("orientation '{s}'")))
+                })
                 .collect::<Result<_, _>>()?,
             particle_count: whole("particle_count")? as usize,
             inner_length_m: num("inner_length_m")?,
@@ -705,8 +774,12 @@ fn parse_orientation(s: &str) -> Option<Orientation> {
     }
 }
 
+/// Columns a sweep file written before they existed may lack; they read as
+/// NaN or empty.
+const LATER_COLUMNS: [&str; 2] = ["efficiency_measured_se", "steady"];
+
 /// Column names of `sweep.csv`, units in the names.
-pub const COLUMNS: [&str; 33] = [
+pub const COLUMNS: [&str; 35] = [
     "fill_ratio",
     "orientation",
     "freq_hz",
@@ -716,10 +789,12 @@ pub const COLUMNS: [&str; 33] = [
     "efficiency",
     "efficiency_se",
     "efficiency_measured",
+    "efficiency_measured_se",
     "energy_per_cycle_j",
     "energy_per_cycle_se_j",
     "e_max_j",
     "steadiness_rel",
+    "steady",
     "share_pp_normal",
     "share_pp_tangential",
     "share_pw_normal",
@@ -757,10 +832,12 @@ fn row_record(r: &SweepRow) -> Vec<String> {
         f(r.efficiency),
         f(r.efficiency_se),
         f(r.efficiency_measured),
+        f(r.efficiency_measured_se),
         f(r.energy_per_cycle_j),
         f(r.energy_per_cycle_se_j),
         f(r.e_max_j),
         f(r.steadiness_rel),
+        r.steady.clone(),
         f(r.share_pp_normal),
         f(r.share_pp_tangential),
         f(r.share_pw_normal),
@@ -784,64 +861,102 @@ fn row_record(r: &SweepRow) -> Vec<String> {
     ]
 }
 
-fn parse_row(rec: &csv::StringRecord, line: u64, path: &Path) -> Result<SweepRow, SweepError> {
+/// Where each of [`COLUMNS`] is in a file's header row (`None`: a column of
+/// [`LATER_COLUMNS`] the file lacks).
+type ColumnIndex = [Option<usize>; COLUMNS.len()];
+
+fn column_index(names: &csv::StringRecord) -> Result<ColumnIndex, String> {
+    let mut index = [None; COLUMNS.len()];
+    for (slot, name) in index.iter_mut().zip(COLUMNS) {
+        *slot = names.iter().position(|n| n == name);
+        if slot.is_none() && !LATER_COLUMNS.contains(&name) {
+            return Err(format!("it has no column '{name}'"));
+        }
+    }
+    Ok(index)
+}
+
+fn parse_row(
+    rec: &csv::StringRecord,
+    index: &ColumnIndex,
+    line: u64,
+    path: &Path,
+) -> Result<SweepRow, SweepError> {
     let bad = |what: String| SweepError::NotASweep {
         path: path.to_path_buf(),
         reason: format!("line {line}: {what}"),
     };
-    if rec.len() != COLUMNS.len() {
-        return Err(bad(format!("{} cells, {} expected", rec.len(), COLUMNS.len())));
-    }
-    let f = |k: usize| -> Result<f64, SweepError> {
-        rec[k].parse::<f64>().map_err(|_| bad(format!("{} = '{}' is not a number", COLUMNS[k], &rec[k])))
+    // The cell of column `name`; empty for a later column the file lacks.
+    let cell = |name: &str| -> &str {
+        COLUMNS
+            .iter()
+            .position(|c| *c == name)
+            .and_then(|k| index[k])
+            .and_then(|k| rec.get(k))
+            .unwrap_or("")
     };
-    let u = |k: usize| -> Result<u64, SweepError> {
-        rec[k].parse::<u64>().map_err(|_| bad(format!("{} = '{}' is not a whole number", COLUMNS[k], &rec[k])))
+    let f = |name: &str| -> Result<f64, SweepError> {
+        let v = cell(name);
+        if v.is_empty() && LATER_COLUMNS.contains(&name) {
+            return Ok(f64::NAN);
+        }
+        v.parse::<f64>()
+            .map_err(|_| bad(format!("{name} = '{v}' is not a number")))
     };
-    let status = RowStatus::parse(&rec[5]).ok_or_else(|| bad(format!("status '{}'", &rec[5])))?;
+    let u = |name: &str| -> Result<u64, SweepError> {
+        let v = cell(name);
+        v.parse::<u64>()
+            .map_err(|_| bad(format!("{name} = '{v}' is not a whole number")))
+    };
+    let status = RowStatus::parse(cell("status"))
+        .ok_or_else(|| bad(format!("status '{}'", cell("status"))))?;
     let indicators = if status == RowStatus::Ok {
         Some(PhaseIndicators {
-            impacts_per_cycle: f(17)?,
-            bottom_impacts_per_cycle: f(18)?,
-            lid_impacts_per_cycle: f(19)?,
-            impact_phase_deg: f(20)?,
-            impact_impulse_rel: f(21)?,
-            contact_fraction: f(22)?,
-            contact_fraction_min: f(23)?,
-            com_offset_rel: f(24)?,
-            com_range_rel: f(25)?,
-            granular_temperature_rel: f(26)?,
+            impacts_per_cycle: f("impacts_per_cycle")?,
+            bottom_impacts_per_cycle: f("bottom_impacts_per_cycle")?,
+            lid_impacts_per_cycle: f("lid_impacts_per_cycle")?,
+            impact_phase_deg: f("impact_phase_deg")?,
+            impact_impulse_rel: f("impact_impulse_rel")?,
+            contact_fraction: f("contact_fraction")?,
+            contact_fraction_min: f("contact_fraction_min")?,
+            com_offset_rel: f("com_offset_rel")?,
+            com_range_rel: f("com_range_rel")?,
+            granular_temperature_rel: f("granular_temperature_rel")?,
         })
     } else {
         None
     };
+    let orientation = cell("orientation");
     Ok(SweepRow {
         condition: Condition {
-            fill_ratio: f(0)?,
-            orientation: parse_orientation(&rec[1]).ok_or_else(|| bad(format!("orientation '{}'", &rec[1])))?,
-            freq_hz: f(2)?,
-            gamma: f(3)?,
-            seed: u(4)?,
+            fill_ratio: f("fill_ratio")?,
+            orientation: parse_orientation(orientation)
+                .ok_or_else(|| bad(format!("orientation '{orientation}'")))?,
+            freq_hz: f("freq_hz")?,
+            gamma: f("gamma")?,
+            seed: u("seed")?,
         },
         status,
-        efficiency: f(6)?,
-        efficiency_se: f(7)?,
-        efficiency_measured: f(8)?,
-        energy_per_cycle_j: f(9)?,
-        energy_per_cycle_se_j: f(10)?,
-        e_max_j: f(11)?,
-        steadiness_rel: f(12)?,
-        share_pp_normal: f(13)?,
-        share_pp_tangential: f(14)?,
-        share_pw_normal: f(15)?,
-        share_pw_tangential: f(16)?,
+        efficiency: f("efficiency")?,
+        efficiency_se: f("efficiency_se")?,
+        efficiency_measured: f("efficiency_measured")?,
+        efficiency_measured_se: f("efficiency_measured_se")?,
+        energy_per_cycle_j: f("energy_per_cycle_j")?,
+        energy_per_cycle_se_j: f("energy_per_cycle_se_j")?,
+        e_max_j: f("e_max_j")?,
+        steadiness_rel: f("steadiness_rel")?,
+        steady: cell("steady").to_string(),
+        share_pp_normal: f("share_pp_normal")?,
+        share_pp_tangential: f("share_pp_tangential")?,
+        share_pw_normal: f("share_pw_normal")?,
+        share_pw_tangential: f("share_pw_tangential")?,
         indicators,
-        phase: rec[27].to_string(),
-        cycles: u(28)? as u32,
-        steady_cycles: u(29)? as u32,
-        steps: u(30)?,
-        wall_time_s: f(31)?,
-        note: rec[32].to_string(),
+        phase: cell("phase").to_string(),
+        cycles: u("cycles")? as u32,
+        steady_cycles: u("steady_cycles")? as u32,
+        steps: u("steps")?,
+        wall_time_s: f("wall_time_s")?,
+        note: cell("note").to_string(),
     })
 }
 
@@ -883,12 +998,10 @@ impl SweepFile {
             path: path.to_path_buf(),
             reason: e.to_string(),
         })?;
-        if names.iter().ne(COLUMNS.iter().copied()) {
-            return Err(SweepError::NotASweep {
-                path: path.to_path_buf(),
-                reason: "its columns are not those of this vlab's sweep.csv".into(),
-            });
-        }
+        let index = column_index(names).map_err(|reason| SweepError::NotASweep {
+            path: path.to_path_buf(),
+            reason,
+        })?;
         let mut rows = Vec::new();
         for rec in reader.records() {
             let rec = rec.map_err(|e| SweepError::NotASweep {
@@ -896,7 +1009,7 @@ impl SweepFile {
                 reason: e.to_string(),
             })?;
             let line = rec.position().map_or(0, |p| p.line());
-            rows.push(parse_row(&rec, line, path)?);
+            rows.push(parse_row(&rec, &index, line, path)?);
         }
         Ok(SweepFile { header, rows })
     }
@@ -969,8 +1082,14 @@ pub fn run_sweep(
         }
         let old = SweepFile::read(&path)?;
         for (what, same) in [
-            ("the scene, rig or protocol", old.header.protocol_id == header.protocol_id),
-            ("the lists of conditions", old.header.sweep_id == header.sweep_id),
+            (
+                "the scene, rig or protocol",
+                old.header.protocol_id == header.protocol_id,
+            ),
+            (
+                "the lists of conditions",
+                old.header.sweep_id == header.sweep_id,
+            ),
             ("the shards", old.header.shard == header.shard),
         ] {
             if !same {
@@ -998,11 +1117,13 @@ pub fn run_sweep(
     let already_done = conditions.len() - pending.len();
 
     // Unreachable conditions need no bed: book them at once.
-    let (reachable, unreachable): (Vec<_>, Vec<_>) =
-        pending.drain(..).partition(|c| reachability(plan, c).is_ok());
+    let (reachable, unreachable): (Vec<_>, Vec<_>) = pending
+        .drain(..)
+        .partition(|c| reachability(plan, c).is_ok());
     for c in &unreachable {
         let why = reachability(plan, c).err().unwrap_or_default();
-        file.rows.push(SweepRow::empty(*c, RowStatus::Unreachable, why));
+        file.rows
+            .push(SweepRow::empty(*c, RowStatus::Unreachable, why));
     }
     let mut bed_keys: Vec<Condition> = Vec::new();
     for c in &reachable {
@@ -1024,7 +1145,7 @@ pub fn run_sweep(
         .with_max_len(1)
         .map(|c| {
             let scene = plan.scene_for(c)?;
-            let bed = settle_bed(&scene, scene.dt_s(), &mut |_| {})?;
+            let bed = settle_bed(&scene, &mut |_| {})?;
             on_event(SweepEvent::BedSettled {
                 seed: c.seed,
                 wall_time_s: bed.wall_time_s,
@@ -1093,10 +1214,9 @@ pub fn run_sweep(
 impl SweepError {
     fn into_exists(self) -> SweepError {
         match self {
-            SweepError::OtherSweep { path, hint, .. } => SweepError::Merge(format!(
-                "{} exists: {hint}",
-                path.display()
-            )),
+            SweepError::OtherSweep { path, hint, .. } => {
+                SweepError::Merge(format!("{} exists: {hint}", path.display()))
+            }
             e => e,
         }
     }
@@ -1137,7 +1257,11 @@ pub fn merge_shards(files: &[SweepFile]) -> Result<SweepFile, SweepError> {
         .map(|(i, _)| format!("{}/{n}", i + 1))
         .collect();
     if !missing.is_empty() {
-        return Err(SweepError::Merge(format!("shard{} {} missing", if missing.len() > 1 { "s" } else { "" }, missing.join(", "))));
+        return Err(SweepError::Merge(format!(
+            "shard{} {} missing",
+            if missing.len() > 1 { "s" } else { "" },
+            missing.join(", ")
+        )));
     }
     let all = first.header.conditions();
     let mut header = first.header.clone();
@@ -1228,7 +1352,8 @@ pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
                     if rows.is_empty() {
                         continue;
                     }
-                    let ok: Vec<&&SweepRow> = rows.iter().filter(|r| r.status == RowStatus::Ok).collect();
+                    let ok: Vec<&&SweepRow> =
+                        rows.iter().filter(|r| r.status == RowStatus::Ok).collect();
                     let n = ok.len();
                     let mean = |g: fn(&SweepRow) -> f64| {
                         if n == 0 {
@@ -1323,7 +1448,7 @@ mod tests {
         assert_eq!(p.protocol_id(), q.protocol_id());
         assert_ne!(p.sweep_id(), q.sweep_id());
         let mut r = plan();
-        r.scene.drive.cycles = 9;
+        r.scene.drive.cycles = CyclesSpec::Count(9);
         assert_ne!(p.protocol_id(), r.protocol_id());
     }
 

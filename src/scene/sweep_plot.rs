@@ -137,7 +137,9 @@ fn efficiency_map(
     let mut cells = Vec::new();
     let mut hi: f64 = 0.0;
     for r in rows {
-        let col = freqs.iter().position(|f| f.to_bits() == r.freq_hz.to_bits());
+        let col = freqs
+            .iter()
+            .position(|f| f.to_bits() == r.freq_hz.to_bits());
         let row = gammas.iter().position(|g| g.to_bits() == r.gamma.to_bits());
         let (Some(col), Some(row)) = (col, row) else {
             continue;

@@ -44,8 +44,8 @@ pub use impacts::{
 };
 #[cfg(feature = "plot")]
 pub use plot::{
-    CirclePanel, ErrorSeries, HeatCell, HeatMap, HeatOverlay, LogXPlot, MarkerLine, PanelStrip, RgbColor,
-    Series, SeriesStyle, plot_heat_map, plot_log_x, plot_panel_strip, plot_xy_svg,
+    CirclePanel, ErrorSeries, HeatCell, HeatMap, HeatOverlay, LogXPlot, MarkerLine, PanelStrip,
+    RgbColor, Series, SeriesStyle, plot_heat_map, plot_log_x, plot_panel_strip, plot_xy_svg,
 };
 pub use power::{
     BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,

@@ -400,7 +400,10 @@ impl Figure for LogXFigure<'_> {
                 }
             });
             if s.line {
-                chart.draw_series(ok.iter().map(|q| Circle::new((q.0, q.1), 3, color.filled())))?;
+                chart.draw_series(
+                    ok.iter()
+                        .map(|q| Circle::new((q.0, q.1), 3, color.filled())),
+                )?;
             }
             chart.draw_series(ok.iter().filter(|q| q.2.is_finite() && q.2 > 0.0).map(|q| {
                 ErrorBar::new_vertical(q.0, q.1 - q.2, q.1, q.1 + q.2, color.stroke_width(1), 8)
@@ -485,7 +488,11 @@ fn viridis(t: f64) -> RGBColor {
         (122.0, 209.0, 81.0),
         (253.0, 231.0, 37.0),
     ];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let x = t * (STOPS.len() - 1) as f64;
     let i = (x.floor() as usize).min(STOPS.len() - 2);
     let f = x - i as f64;
@@ -530,7 +537,11 @@ impl Figure for HeatFigure<'_> {
             Rectangle::new([(x, y), (x + 1.0, y + 1.0)], fill)
         }))?;
         // Hatch the cells without a value.
-        for c in m.cells.iter().filter(|c| !c.value.is_some_and(f64::is_finite)) {
+        for c in m
+            .cells
+            .iter()
+            .filter(|c| !c.value.is_some_and(f64::is_finite))
+        {
             let (x, y) = (c.col as f64, c.row as f64);
             for k in 1..4 {
                 let f = k as f64 / 4.0;
@@ -594,7 +605,9 @@ impl Figure for HeatFigure<'_> {
             root.draw(&Text::new(
                 name.clone(),
                 (px, py + 6),
-                tick.clone().color(&BLACK).pos(Pos::new(HPos::Center, VPos::Top)),
+                tick.clone()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Center, VPos::Top)),
             ))?;
         }
         for (j, name) in m.rows.iter().enumerate() {
@@ -602,14 +615,19 @@ impl Figure for HeatFigure<'_> {
             root.draw(&Text::new(
                 name.clone(),
                 (px - 6, py),
-                tick.clone().color(&BLACK).pos(Pos::new(HPos::Right, VPos::Center)),
+                tick.clone()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Right, VPos::Center)),
             ))?;
         }
         if !m.footnote.is_empty() {
             root.draw(&Text::new(
                 m.footnote.clone(),
                 (12, h as i32 - 20),
-                ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+                ("sans-serif", 13)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
             ))?;
         }
         // Colour bar.
@@ -620,22 +638,34 @@ impl Figure for HeatFigure<'_> {
             let t0 = k as f64 / steps as f64;
             let y_a = bottom - ((bottom - top) as f64 * t0) as i32;
             let y_b = bottom - ((bottom - top) as f64 * (t0 + 1.0 / steps as f64)) as i32;
-            bar.draw(&Rectangle::new([(10, y_b - 1), (40, y_a)], viridis(t0).filled()))?;
+            bar.draw(&Rectangle::new(
+                [(10, y_b - 1), (40, y_a)],
+                viridis(t0).filled(),
+            ))?;
         }
-        bar.draw(&Rectangle::new([(10, top), (40, bottom)], BLACK.stroke_width(1)))?;
+        bar.draw(&Rectangle::new(
+            [(10, top), (40, bottom)],
+            BLACK.stroke_width(1),
+        ))?;
         for k in 0..=4 {
             let t = k as f64 / 4.0;
             let y = bottom - ((bottom - top) as f64 * t) as i32;
             bar.draw(&Text::new(
                 format!("{:.2}", lo + t * (hi - lo)),
                 (46, y),
-                ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+                ("sans-serif", 13)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
             ))?;
         }
         bar.draw(&Text::new(
             m.value_label.clone(),
             (10, top - 24),
-            ("sans-serif", 14).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+            ("sans-serif", 14)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Left, VPos::Center)),
         ))?;
         root.present()?;
         Ok(())
@@ -734,28 +764,43 @@ impl Figure for StripFigure<'_> {
             let t0 = k as f64 / steps as f64;
             let y_a = bottom - ((bottom - top) as f64 * t0) as i32;
             let y_b = bottom - ((bottom - top) as f64 * (t0 + 1.0 / steps as f64)) as i32;
-            bar.draw(&Rectangle::new([(10, y_b - 1), (35, y_a)], viridis(t0).filled()))?;
+            bar.draw(&Rectangle::new(
+                [(10, y_b - 1), (35, y_a)],
+                viridis(t0).filled(),
+            ))?;
         }
-        bar.draw(&Rectangle::new([(10, top), (35, bottom)], BLACK.stroke_width(1)))?;
+        bar.draw(&Rectangle::new(
+            [(10, top), (35, bottom)],
+            BLACK.stroke_width(1),
+        ))?;
         for k in 0..=4 {
             let t = k as f64 / 4.0;
             let y = bottom - ((bottom - top) as f64 * t) as i32;
             bar.draw(&Text::new(
                 format!("{:.2}", lo + t * (hi - lo)),
                 (40, y),
-                ("sans-serif", 12).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+                ("sans-serif", 12)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
             ))?;
         }
         bar.draw(&Text::new(
             s.value_label.clone(),
             (5, top - 16),
-            ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+            ("sans-serif", 13)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Left, VPos::Center)),
         ))?;
         for (k, line) in s.footnote.lines().enumerate() {
             foot.draw(&Text::new(
                 line.to_string(),
                 (12, 14 + 18 * k as i32),
-                ("sans-serif", 13).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center)),
+                ("sans-serif", 13)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
             ))?;
         }
         root.present()?;
@@ -834,8 +879,18 @@ mod tests {
             columns: vec!["20".into(), "40".into()],
             rows: vec!["1".into(), "3".into()],
             cells: vec![
-                HeatCell { col: 0, row: 0, value: Some(0.1), text: "S\n0.10".into() },
-                HeatCell { col: 1, row: 1, value: None, text: "rig".into() },
+                HeatCell {
+                    col: 0,
+                    row: 0,
+                    value: Some(0.1),
+                    text: "S\n0.10".into(),
+                },
+                HeatCell {
+                    col: 1,
+                    row: 1,
+                    value: None,
+                    text: "rig".into(),
+                },
             ],
             value_label: "eta".into(),
             value_range: (0.0, 1.0),

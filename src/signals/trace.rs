@@ -175,6 +175,33 @@ impl Trace {
         self.start_time_s + i as f64 / self.sample_rate_hz
     }
 
+    /// The record from its first sample at or after `t_s` (on its own time
+    /// axis) to the end, with the time axis moved so that `t_s` becomes 0.
+    pub fn from_time(&self, t_s: f64) -> Trace {
+        let fs = self.sample_rate_hz;
+        // Within a millionth of a sample of t_s counts as at it.
+        let skip = ((t_s - self.start_time_s) * fs - 1e-6).ceil().max(0.0) as usize;
+        let skip = skip.min(self.len());
+        let mut start = self.start_time_s + skip as f64 / fs - t_s;
+        if (start * fs).abs() < 1e-6 {
+            start = 0.0;
+        }
+        Trace {
+            sample_rate_hz: fs,
+            start_time_s: start,
+            channels: self
+                .channels
+                .iter()
+                .map(|c| Channel {
+                    name: c.name.clone(),
+                    unit: c.unit.clone(),
+                    samples: c.samples[skip..].to_vec(),
+                })
+                .collect(),
+            metadata: self.metadata.clone(),
+        }
+    }
+
     /// Re-checks the invariants: rate positive and finite, start time finite,
     /// names unique and non-empty, lengths equal, every sample finite.
     pub fn validate(&self) -> Result<()> {

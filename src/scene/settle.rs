@@ -1,0 +1,580 @@
+//! Filling the damper: pour, settle, close the lid, turn to the test
+//! orientation, with one fixed settling law, so that the bed a test starts
+//! from does not depend on the contacts under test.
+//!
+//! The thesis settled its beds under gravity with the test contacts for
+//! 0.2 s (Section 6.2.2). That couples the packing to e and μ: an elastic,
+//! frictionless bed never comes to rest, a rough dead one stays loose and too
+//! tall for its lid. vlab instead fills every damper the same way:
+//!
+//! 1. **Pour.** Random sequential insertion into a taller column of the
+//!    enclosure's diameter (see [`crate::scene::fill`]; the column is made
+//!    taller until every sphere fits), then the spheres fall under the *soft*
+//!    settling law, frictionless for two fall times of the column so that they
+//!    slide into a dense bed, then with the settling friction until at rest.
+//! 2. **Close.** The lid comes down to the design length. Spheres that stand
+//!    above it are pushed down by the lid moving as a piston, slowly, with the
+//!    friction off so the bed can rearrange. If the lid then squeezes the bed
+//!    harder than the bed's own weight did ([`CLOSED_SQUEEZE_FACTOR`]), the
+//!    particles do not fit, and the refusal gives the packing they would need
+//!    and the one the bed reached.
+//! 3. **Turn** gravity to the test orientation and settle again.
+//! 4. **Stiffen** in [`RELAX_STAGES`] geometric stages to the particles' own
+//!    stiffness, settling to rest at each, so that the overlaps shrink to those
+//!    the test contacts hold the bed with without springing the bed apart.
+//!
+//! Then [`prepare_drive`] switches to the scene's contact laws (same Hertz
+//! stiffness: no force jump), drops every tangential history, sets the test
+//! time step and starts the energy ledger.
+//!
+//! # The settling law
+//!
+//! Hertz contacts of the particles' own materials, with Young's moduli scaled
+//! by [`SETTLE_STIFFNESS_FACTOR`] while pouring (a contact lasts
+//! `0.01^{-2/5}` = 6.3 times longer, so the step can be 6.3 times longer),
+//! restitution [`SETTLE_RESTITUTION`] in `exact` mode and friction
+//! [`SETTLE_FRICTION`], for particle-particle and particle-wall contacts
+//! alike; each step resolves the fastest fall the pour column allows with
+//! [`SETTLE_STEPS_PER_CONTACT`] steps. In the thesis cylinder (D/d = 8) this
+//! pours to a packing fraction of 0.59 in the bulk, whatever the test
+//! contacts, and fills up to about 0.57 close under the lid (0.59 and 0.6 are
+//! refused: the pour and the lid do not pack that densely). A bed is at rest
+//! when its kinetic energy is below [`REST_KINETIC_FRACTION`] of `M g d`
+//! ([`at_rest`]); one that does not come to rest in [`MAX_POUR_S`] of
+//! simulated time is an error of its own.
+//!
+//! # Packing and bed height
+//!
+//! The packing fraction is measured in the bulk of the poured bed: the share
+//! of a slab of the enclosure, from one diameter above the floor to one
+//! diameter below the bed's surface, that the spheres fill (sphere caps cut
+//! exactly). The bed height is the height that the particles' volume fills at
+//! that packing, `h = V_p / (φ A)`, not the top of the highest sphere.
+
+use std::f64::consts::PI;
+use std::time::Instant;
+
+use glam::DVec3;
+
+use crate::dem::material::Material;
+use crate::dem::timestep::{rayleigh_time_step_s, shortest_contact_s};
+use crate::dem::{
+    ContactLaw, ContactParams, DemError, Numerics, Particles, RestitutionMode, Walls, World,
+};
+use crate::scene::damper::{Progress, contact_laws, gravity_vector};
+use crate::scene::file::{Orientation, Scene, SceneError};
+use crate::scene::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
+
+/// Young's moduli of the settling law while pouring, as a fraction of the
+/// materials' own.
+pub const SETTLE_STIFFNESS_FACTOR: f64 = 0.01;
+/// Normal restitution of the settling law (exact mode).
+pub const SETTLE_RESTITUTION: f64 = 0.1;
+/// The pour is frictionless for this many fall times of the column, so that
+/// the landing spheres slide into a dense bed; the settling friction then
+/// brings it to rest.
+pub const POUR_SLIDING_FALLS: f64 = 2.0;
+/// Friction of the settling law.
+pub const SETTLE_FRICTION: f64 = 0.1;
+/// A bed is at rest when its kinetic energy is below this fraction of `M g d`
+/// ([`at_rest`]).
+pub const REST_KINETIC_FRACTION: f64 = 1e-4;
+/// Longest the poured column may take to come to rest (s).
+pub const MAX_POUR_S: f64 = 2.0;
+/// Stages of the stiffening from the pouring law to the particles' own
+/// stiffness, each a factor `0.01^{-1/RELAX_STAGES}` stiffer.
+pub const RELAX_STAGES: u32 = 4;
+/// Longest one stage of the stiffening may take (s).
+pub const MAX_RELAX_S: f64 = 0.2;
+/// Steps a contact of the settling law is resolved with, at the fastest
+/// impact the pour can bring.
+pub const SETTLE_STEPS_PER_CONTACT: f64 = 25.0;
+/// Speed at which the lid comes down on a bed that stands above it (m/s).
+pub const PISTON_SPEED_MPS: f64 = 0.05;
+/// A closed bed may hold its deepest overlap at most this many times deeper
+/// than the poured bed held it under its own weight.
+pub const CLOSED_SQUEEZE_FACTOR: f64 = 3.0;
+/// Version of the settling procedure and law: part of the key of cached beds.
+pub const SETTLING_VERSION: u32 = 1;
+
+/// A settled bed in the closed enclosure, turned to the test orientation, still
+/// under the (stiff) settling law; [`prepare_drive`] makes it ready to drive.
+#[derive(Debug, Clone)]
+pub struct SettledBed {
+    pub world: World,
+    /// Simulated time spent pouring, closing and settling (s).
+    pub settle_time_s: f64,
+    /// Steps spent on it.
+    pub settle_steps: u64,
+    /// Wall-clock time spent (s); zero for a bed read from the cache.
+    pub wall_time_s: f64,
+    /// Packing fraction in the bulk of the poured bed (-).
+    pub packing_fraction: f64,
+    /// Height the bed fills at that packing, `V_p / (φ A)` (m), poured along the
+    /// axis.
+    pub bed_height_m: f64,
+    /// True when the bed came from the cache.
+    pub from_cache: bool,
+}
+
+/// The settling law between two materials, at `stiffness_factor` of their
+/// Young's moduli.
+pub fn settling_law(a: &Material, b: &Material, stiffness_factor: f64) -> ContactLaw {
+    let soften = |m: &Material| Material {
+        youngs_pa: m.youngs_pa * stiffness_factor,
+        ..*m
+    };
+    ContactLaw::from_spec(
+        &soften(a),
+        &soften(b),
+        &ContactParams {
+            restitution: SETTLE_RESTITUTION,
+            friction: SETTLE_FRICTION,
+            mode: RestitutionMode::Exact,
+        },
+    )
+}
+
+/// The settling laws of `scene` (particle-particle, particle-wall).
+fn settling_laws(scene: &Scene, stiffness_factor: f64) -> (ContactLaw, ContactLaw) {
+    let pm = scene.particle_material();
+    let wm = scene.wall_material();
+    (
+        settling_law(&pm, &pm, stiffness_factor),
+        settling_law(&pm, &wm, stiffness_factor),
+    )
+}
+
+/// Time step (s) that resolves every contact of the laws at `speed_mps` with
+/// `steps` steps, and stays below a quarter of the Rayleigh step of the
+/// particles' material at the laws' stiffness (thesis eq. 3.31).
+fn resolving_step_s(
+    pp: &ContactLaw,
+    pw: &ContactLaw,
+    scene: &Scene,
+    stiffness_factor: f64,
+    speed_mps: f64,
+    steps: f64,
+) -> f64 {
+    let pm = scene.particle_material();
+    let soft = Material {
+        youngs_pa: pm.youngs_pa * stiffness_factor,
+        ..pm
+    };
+    let rayleigh = rayleigh_time_step_s(&soft, scene.radius_m());
+    let contact = shortest_contact_s(pp, pw, scene.radius_m(), pm.density_kgm3, speed_mps);
+    (contact / steps).min(0.25 * rayleigh)
+}
+
+/// Pours, closes, turns and settles the damper of `scene` with its seed and
+/// the settling law (see the module documentation).
+pub fn settle_bed(
+    scene: &Scene,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<SettledBed, SceneError> {
+    let started = Instant::now();
+    let radius = scene.radius_m();
+    let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
+    let g = scene.simulation.gravity_mps2;
+    let mut rng = SceneRng::new(scene.simulation.seed);
+    let (positions, column) = pour_column(scene, &mut rng)?;
+    let density = scene.particle_material().density_kgm3;
+    let mut particles = Particles::default();
+    for p in positions {
+        particles.push(p, DVec3::ZERO, DVec3::ZERO, radius, density);
+    }
+
+    // 1. Pour under the soft law, resolving the fastest fall the column allows.
+    let (pp, pw) = settling_laws(scene, SETTLE_STIFFNESS_FACTOR);
+    let fall_mps = (2.0 * g * column).sqrt().max(0.1);
+    let dt_soft = resolving_step_s(
+        &pp,
+        &pw,
+        scene,
+        SETTLE_STIFFNESS_FACTOR,
+        fall_mps,
+        SETTLE_STEPS_PER_CONTACT,
+    );
+    let mut numerics = Numerics::with_dt(dt_soft);
+    numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
+    let mut world = World::new(
+        particles,
+        Walls::closed_cylinder(cyl_r, column),
+        pp,
+        pw,
+        gravity_vector(Orientation::Vertical, g),
+        numerics,
+    )?;
+    let fall_s = if g > 0.0 {
+        (2.0 * column / g).sqrt()
+    } else {
+        0.0
+    };
+    // Frictionless while the spheres land and slide into place (a dense bed),
+    // then with the settling friction, which stops the sliding.
+    let (pp_rough, pw_rough) = (world.pp_law, world.pw_law);
+    world.set_contact_laws(pp_rough.without_friction(), pw_rough.without_friction())?;
+    run_steps(
+        &mut world,
+        POUR_SLIDING_FALLS * fall_s,
+        "pouring",
+        started,
+        progress,
+    )?;
+    world.set_contact_laws(pp_rough, pw_rough)?;
+    run_until_rest(&mut world, 0.0, MAX_POUR_S, "pouring", started, progress)?;
+    let (packing_fraction, bed_height_m) = packing(&world, scene);
+
+    // 2. Close the lid, as a piston where spheres stand above it.
+    close_lid(&mut world, scene, started, progress)?;
+
+    // 3. Turn to the test orientation and settle again.
+    world.gravity = gravity_vector(scene.enclosure.orientation, g);
+    world.rebaseline();
+    if scene.enclosure.orientation != Orientation::Vertical {
+        run_until_rest(
+            &mut world,
+            0.0,
+            scene.simulation.settle_s.max(MAX_POUR_S),
+            "turning",
+            started,
+            progress,
+        )?;
+    }
+
+    // 4. Stiffen to the particles' own stiffness in geometric stages, so that
+    //    the overlaps shrink a little at a time instead of springing apart.
+    let (pp_full, pw_full) = settling_laws(scene, 1.0);
+    let stages = RELAX_STAGES;
+    for k in 1..=stages {
+        let factor = SETTLE_STIFFNESS_FACTOR.powf(1.0 - k as f64 / stages as f64);
+        let (pp, pw) = (
+            pp_full.with_stiffness_scaled(factor),
+            pw_full.with_stiffness_scaled(factor),
+        );
+        let dt = resolving_step_s(&pp, &pw, scene, factor, 0.1, SETTLE_STEPS_PER_CONTACT);
+        world.set_contact_laws(pp, pw)?;
+        world.set_dt_s(dt);
+        run_until_rest(
+            &mut world,
+            0.0,
+            scene.simulation.settle_s.max(MAX_RELAX_S),
+            "settling",
+            started,
+            progress,
+        )?;
+    }
+    Ok(SettledBed {
+        settle_time_s: world.time_s,
+        settle_steps: world.steps,
+        world,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        packing_fraction,
+        bed_height_m,
+        from_cache: false,
+    })
+}
+
+/// Random positions in a pouring column of the enclosure's diameter, and the
+/// column's height (m): at [`COLUMN_FILL`], or taller until every sphere fits
+/// (narrow cylinders jam sooner).
+fn pour_column(scene: &Scene, rng: &mut SceneRng) -> Result<(Vec<DVec3>, f64), SceneError> {
+    let radius = scene.radius_m();
+    let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
+    let length = scene.enclosure.inner_length_m;
+    let n = scene.particles.count;
+    let mut fill = COLUMN_FILL;
+    loop {
+        let column = (n as f64 * scene.particle_volume_m3() / (fill * PI * cyl_r * cyl_r))
+            .max(length)
+            .max(4.0 * radius);
+        match insert_in_cylinder(n, radius, cyl_r, column, 1e-3 * radius, rng) {
+            Ok(p) => return Ok((p, column)),
+            Err(SceneError::Insertion { .. }) if fill > 0.02 => fill *= 0.7,
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// Lowers the lid of the pouring column to the enclosure's length: at once when
+/// no sphere reaches above it, else as a piston at [`PISTON_SPEED_MPS`] while
+/// the bed rearranges under the settling law.
+fn close_lid(
+    world: &mut World,
+    scene: &Scene,
+    started: Instant,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(), SceneError> {
+    const LID: usize = 2;
+    let length = scene.enclosure.inner_length_m;
+    let top = top_of_bed(world);
+    if top <= length {
+        world.walls.move_plane(LID, DVec3::new(0.0, 0.0, length));
+        world.refresh_wall_gaps();
+        world.rebaseline();
+        return Ok(());
+    }
+    // Frictionless while the lid pushes: spheres slide into the gaps below
+    // them, as a tapped or vibrated fill does.
+    let rest_overlap = world.max_overlap_ratio();
+    let (pp, pw) = (world.pp_law, world.pw_law);
+    world.set_contact_laws(pp.without_friction(), pw.without_friction())?;
+    let dt = world.dt_s();
+    let mut z = top + 1e-3 * scene.radius_m();
+    let drop = PISTON_SPEED_MPS * dt;
+    let n = world.particles.len() as u64;
+    let steps = ((z - length) / drop).ceil() as u64;
+    // The lid is moved by hand, not as the enclosure's displacement, so its
+    // work is in no ledger: the energy check waits until it has stopped.
+    let check = world.numerics.energy_check_steps;
+    world.numerics.energy_check_steps = u64::MAX;
+    for k in 1..=steps {
+        z = (z - drop).max(length);
+        world.walls.move_plane(LID, DVec3::new(0.0, 0.0, z));
+        world.refresh_wall_gaps();
+        world.step(0.0).map_err(|e| crushed(e, world, scene))?;
+        if k % 1000 == 0 {
+            progress(Progress {
+                phase: "closing",
+                fraction: k as f64 / steps as f64,
+                sim_time_s: world.time_s,
+                particle_steps: world.steps * n,
+                wall_time_s: started.elapsed().as_secs_f64(),
+                ..Progress::default()
+            });
+        }
+    }
+    world.numerics.energy_check_steps = check;
+    world.set_contact_laws(pp, pw)?;
+    run_until_rest(world, 0.0, MAX_POUR_S, "closing", started, progress).map_err(|e| match e {
+        SceneError::Dem(d) => crushed(d, world, scene),
+        other => other,
+    })?;
+    // A bed the lid holds down harder than its own weight did is crushed, not
+    // closed: its overlaps would become forces a hundred times larger at the
+    // particles' own stiffness.
+    let squeeze = world.max_overlap_ratio();
+    let limit = CLOSED_SQUEEZE_FACTOR * rest_overlap;
+    if squeeze > limit {
+        return Err(crushed(
+            DemError::ExcessiveOverlap {
+                time_s: world.time_s,
+                step: world.steps,
+                contact: "closed bed".into(),
+                overlap_percent: 100.0 * squeeze,
+                limit_percent: 100.0 * limit,
+                speed_mps: 0.0,
+                dt_s: world.dt_s(),
+            },
+            world,
+            scene,
+        ));
+    }
+    Ok(())
+}
+
+/// The refusal of a bed the lid cannot close on.
+fn crushed(e: DemError, world: &World, scene: &Scene) -> SceneError {
+    match e {
+        DemError::ExcessiveOverlap { .. } | DemError::Escaped { .. } => {
+            let area = PI * (0.5 * scene.enclosure.inner_diameter_m).powi(2);
+            let v_p = scene.particles.count as f64 * scene.particle_volume_m3();
+            let cause = match &e {
+                DemError::ExcessiveOverlap {
+                    overlap_percent,
+                    limit_percent,
+                    ..
+                } => format!(
+                    "the lid squeezes a contact by {overlap_percent:.2} % of a radius, more than {limit_percent:.2} %"
+                ),
+                other => other.to_string(),
+            };
+            SceneError::DoesNotFit {
+                fill: scene.fill_ratio(),
+                reached: v_p / (area * top_of_bed(world).max(f64::MIN_POSITIVE)),
+                cause,
+            }
+        }
+        other => SceneError::Dem(other),
+    }
+}
+
+/// Height of the top of the highest sphere above the floor (m), along the axis.
+fn top_of_bed(world: &World) -> f64 {
+    let p = &world.particles;
+    (0..p.len())
+        .map(|i| p.position[i].z + p.radius[i])
+        .fold(0.0, f64::max)
+}
+
+/// Packing fraction of the bulk of a bed poured along the axis (z), and the
+/// height its particles' volume fills at that packing (m).
+pub fn packing(world: &World, scene: &Scene) -> (f64, f64) {
+    let p = &world.particles;
+    let area = PI * (0.5 * scene.enclosure.inner_diameter_m).powi(2);
+    let v_p: f64 = (0..p.len())
+        .map(|i| 4.0 / 3.0 * PI * p.radius[i].powi(3))
+        .sum();
+    let d = 2.0 * scene.radius_m();
+    let top = top_of_bed(world);
+    let (lo, hi) = (d, top - d);
+    if hi - lo < d {
+        // Too shallow for a bulk: the whole bed up to its top.
+        let phi = v_p / (area * top.max(f64::MIN_POSITIVE));
+        return (phi, top);
+    }
+    let inside: f64 = (0..p.len())
+        .map(|i| sphere_volume_between(p.position[i].z, p.radius[i], lo, hi))
+        .sum();
+    let phi = inside / (area * (hi - lo));
+    (phi, v_p / (area * phi))
+}
+
+/// Volume of a sphere of radius `r` centred at height `z` between the planes
+/// `lo` and `hi` (m³): the difference of two caps.
+fn sphere_volume_between(z: f64, r: f64, lo: f64, hi: f64) -> f64 {
+    // Volume of the sphere below height `h`.
+    let below = |h: f64| {
+        let x = (h - (z - r)).clamp(0.0, 2.0 * r);
+        PI * x * x * (3.0 * r - x) / 3.0
+    };
+    below(hi) - below(lo)
+}
+
+/// Steps a still enclosure for at least `min_s` and at most `max_s` of
+/// simulated time, stopping once the bed is at rest; not coming to rest is an
+/// error.
+fn run_until_rest(
+    world: &mut World,
+    min_s: f64,
+    max_s: f64,
+    phase: &'static str,
+    started: Instant,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(), SceneError> {
+    let dt = world.dt_s();
+    let max_steps = (max_s / dt).round() as u64;
+    let min_steps = (min_s / dt).round() as u64;
+    let check_every = ((1e-3 / dt).round() as u64).max(1);
+    let displacement = world.walls.displacement_m;
+    let n = world.particles.len() as u64;
+    if n == 0 {
+        return Ok(());
+    }
+    for k in 1..=max_steps {
+        world.step(displacement)?;
+        if k % check_every == 0 {
+            progress(Progress {
+                phase,
+                fraction: k as f64 / max_steps as f64,
+                sim_time_s: world.time_s,
+                particle_steps: world.steps * n,
+                wall_time_s: started.elapsed().as_secs_f64(),
+                ..Progress::default()
+            });
+            if k >= min_steps && at_rest(world) {
+                return Ok(());
+            }
+        }
+    }
+    let p = &world.particles;
+    let (kt, kr) = p.kinetic_energy_j();
+    Err(SceneError::NotAtRest {
+        phase,
+        time_s: max_s,
+        rms_speed_mps: (2.0 * (kt + kr) / p.total_mass_kg()).sqrt(),
+        rest_mps: (REST_KINETIC_FRACTION
+            * 2.0
+            * world.gravity.length().max(1.0)
+            * 2.0
+            * p.max_radius_m())
+        .sqrt(),
+    })
+}
+
+/// True when the bed's kinetic energy (translational and rotational) is below
+/// [`REST_KINETIC_FRACTION`] of what lifting it by one diameter would take,
+/// `M g d`: an RMS speed of about 3 mm/s for any size of sphere in earth's
+/// gravity. A few spheres still finding their place do not hold up the run.
+pub fn at_rest(world: &World) -> bool {
+    let p = &world.particles;
+    let (kt, kr) = p.kinetic_energy_j();
+    let g = world.gravity.length().max(1.0);
+    let scale = p.total_mass_kg() * g * 2.0 * p.max_radius_m();
+    kt + kr < REST_KINETIC_FRACTION * scale
+}
+
+/// Steps a still enclosure for `duration_s`.
+fn run_steps(
+    world: &mut World,
+    duration_s: f64,
+    phase: &'static str,
+    started: Instant,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(), SceneError> {
+    let dt = world.dt_s();
+    let steps = (duration_s / dt).round() as u64;
+    let displacement = world.walls.displacement_m;
+    let n = world.particles.len() as u64;
+    let report_every = ((1e-3 / dt).round() as u64).max(1);
+    for k in 1..=steps {
+        world.step(displacement)?;
+        if k % report_every == 0 {
+            progress(Progress {
+                phase,
+                fraction: k as f64 / steps as f64,
+                sim_time_s: world.time_s,
+                particle_steps: world.steps * n,
+                wall_time_s: started.elapsed().as_secs_f64(),
+                ..Progress::default()
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Makes a settled bed ready to drive: the scene's contact laws (every
+/// tangential history dropped), the test time step `dt_s`, the energy ledger
+/// started.
+pub fn prepare_drive(bed: &SettledBed, scene: &Scene, dt_s: f64) -> Result<World, SceneError> {
+    let mut world = bed.world.clone();
+    let (pp, pw) = contact_laws(scene);
+    world.set_contact_laws(pp, pw)?;
+    world.set_dt_s(dt_s);
+    world.numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
+    world.start_ledger();
+    Ok(world)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cap_volumes_add_up() {
+        let r: f64 = 0.002;
+        let whole = 4.0 / 3.0 * PI * r.powi(3);
+        assert!((sphere_volume_between(0.0, r, -1.0, 1.0) - whole).abs() < 1e-18);
+        assert!((sphere_volume_between(0.0, r, 0.0, 1.0) - 0.5 * whole).abs() < 1e-18);
+        assert_eq!(sphere_volume_between(0.0, r, 0.01, 0.02), 0.0);
+        let a = sphere_volume_between(0.0, r, -1.0, 0.0007);
+        let b = sphere_volume_between(0.0, r, 0.0007, 1.0);
+        assert!((a + b - whole).abs() < 1e-18);
+    }
+
+    #[test]
+    fn the_settling_law_is_soft_dissipative_and_slightly_rough() {
+        let m = Material::ACRYLIC;
+        let soft = settling_law(&m, &m, SETTLE_STIFFNESS_FACTOR);
+        let stiff = settling_law(&m, &m, 1.0);
+        assert!((soft.e_star_pa / stiff.e_star_pa - 0.01).abs() < 1e-12);
+        assert!(soft.has_friction());
+        assert!(!soft.without_friction().has_friction());
+        assert_eq!(soft.restitution, SETTLE_RESTITUTION);
+        // A soft contact lasts 0.01^(-2/5) = 6.3 times longer.
+        let (r, rho) = (0.0025, m.density_kgm3);
+        let ratio = shortest_contact_s(&soft, &soft, r, rho, 1.0)
+            / shortest_contact_s(&stiff, &stiff, r, rho, 1.0);
+        assert!((ratio - 0.01f64.powf(-0.4)).abs() < 1e-9, "{ratio}");
+    }
+}
