@@ -30,7 +30,14 @@ steady_cycles = 2
 "#;
 
 const SWEEP: [&str; 8] = [
-    "--freq", "20,40", "--gamma", "1,3,15", "--seeds", "1,2", "--scene", "tiny.toml",
+    "--freq",
+    "20,40",
+    "--gamma",
+    "1,3,15",
+    "--seeds",
+    "1,2",
+    "--scene",
+    "tiny.toml",
 ];
 
 /// The data rows of a sweep file with the wall-time column blanked (the
@@ -80,9 +87,15 @@ fn sweep_marks_resumes_shards_and_merges() {
     let rows = rows_without_wall_time(&all);
     assert_eq!(rows.len(), 12, "{rows:#?}");
     // 20 Hz, Gamma 15 is beyond the thesis rig's stroke: marked, not dropped.
-    let unreachable: Vec<&String> = rows.iter().filter(|r| r.contains(",unreachable,")).collect();
+    let unreachable: Vec<&String> = rows
+        .iter()
+        .filter(|r| r.contains(",unreachable,"))
+        .collect();
     assert_eq!(unreachable.len(), 2, "{rows:#?}");
-    assert!(unreachable.iter().all(|r| r.contains(",20,15,")), "{unreachable:#?}");
+    assert!(
+        unreachable.iter().all(|r| r.contains(",20,15,")),
+        "{unreachable:#?}"
+    );
     assert!(unreachable[0].contains("stroke"), "{}", unreachable[0]);
     assert_eq!(rows.iter().filter(|r| r.contains(",ok,")).count(), 10);
     for plot in ["efficiency.svg", "efficiency.png", "map.svg", "map.png"] {
@@ -97,12 +110,24 @@ fn sweep_marks_resumes_shards_and_merges() {
     let other = vlab(
         &dir.0,
         &[
-            "sweep", "--freq", "40", "--gamma", "1,3", "--scene", "tiny.toml", "--out", "all",
+            "sweep",
+            "--freq",
+            "40",
+            "--gamma",
+            "1,3",
+            "--scene",
+            "tiny.toml",
+            "--out",
+            "all",
             "--resume",
         ],
     );
     assert!(!other.status.success());
-    assert!(stderr(&other).contains("another sweep"), "{}", stderr(&other));
+    assert!(
+        stderr(&other).contains("another sweep"),
+        "{}",
+        stderr(&other)
+    );
 
     // Killed halfway, then resumed: only the missing conditions run, and the
     // result is the uninterrupted sweep's.
@@ -133,7 +158,11 @@ fn sweep_marks_resumes_shards_and_merges() {
     child.kill().expect("kill the sweep");
     let _ = child.wait();
     let before = rows_without_wall_time(&partial);
-    assert!(before.len() < 12, "the kill came too late: {} rows", before.len());
+    assert!(
+        before.len() < 12,
+        "the kill came too late: {} rows",
+        before.len()
+    );
     let resumed = run(&dir.0, &["--out", "killed", "--resume"]);
     assert!(resumed.status.success(), "{}", stderr(&resumed));
     let log = stderr(&resumed);
@@ -142,7 +171,10 @@ fn sweep_marks_resumes_shards_and_merges() {
     let computed = log.lines().filter(|l| l.contains("Hz Gamma")).count();
     assert_eq!(computed + before.len(), 12, "{log}");
     for r in &before {
-        assert!(rows.contains(r), "a row computed before the kill differs: {r}");
+        assert!(
+            rows.contains(r),
+            "a row computed before the kill differs: {r}"
+        );
     }
     assert_eq!(rows_without_wall_time(&partial), rows);
 
@@ -155,7 +187,9 @@ fn sweep_marks_resumes_shards_and_merges() {
     }
     let merged = vlab(
         &dir.0,
-        &["sweep", "merge", "shard1", "shard2", "shard3", "--out", "merged"],
+        &[
+            "sweep", "merge", "shard1", "shard2", "shard3", "--out", "merged",
+        ],
     );
     assert!(merged.status.success(), "{}", stderr(&merged));
     let m = dir.path("merged/sweep.csv");
@@ -163,23 +197,51 @@ fn sweep_marks_resumes_shards_and_merges() {
     assert_eq!(header_lines(&m), header_lines(&all));
 
     // Merge refuses a missing shard and a shard of another sweep.
-    let missing = vlab(&dir.0, &["sweep", "merge", "shard1", "shard3", "--out", "m2"]);
+    let missing = vlab(
+        &dir.0,
+        &["sweep", "merge", "shard1", "shard3", "--out", "m2"],
+    );
     assert!(!missing.status.success());
-    assert!(stderr(&missing).contains("shard 2/3 missing"), "{}", stderr(&missing));
+    assert!(
+        stderr(&missing).contains("shard 2/3 missing"),
+        "{}",
+        stderr(&missing)
+    );
     let o = vlab(
         &dir.0,
         &[
-            "sweep", "--freq", "40", "--gamma", "1", "--scene", "tiny.toml", "--shard", "2/3",
-            "--out", "othershard",
+            "sweep",
+            "--freq",
+            "40",
+            "--gamma",
+            "1",
+            "--scene",
+            "tiny.toml",
+            "--shard",
+            "2/3",
+            "--out",
+            "othershard",
         ],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let mixed = vlab(
         &dir.0,
-        &["sweep", "merge", "shard1", "othershard", "shard3", "--out", "m3"],
+        &[
+            "sweep",
+            "merge",
+            "shard1",
+            "othershard",
+            "shard3",
+            "--out",
+            "m3",
+        ],
     );
     assert!(!mixed.status.success());
-    assert!(stderr(&mixed).contains("different sweeps"), "{}", stderr(&mixed));
+    assert!(
+        stderr(&mixed).contains("different sweeps"),
+        "{}",
+        stderr(&mixed)
+    );
     assert!(!dir.path("m2").exists() && !dir.path("m3").exists());
 
     // `vlab plot` redraws the plots from the CSV alone, identically.
@@ -256,7 +318,11 @@ fn shake_dump_is_readable_vtk_and_snapshots_are_drawn() {
         "contact_count",
         "dissipation_rate_w",
     ] {
-        assert!(vtk.1.iter().any(|n| n == name), "{name} missing: {:?}", vtk.1);
+        assert!(
+            vtk.1.iter().any(|n| n == name),
+            "{name} missing: {:?}",
+            vtk.1
+        );
     }
     assert!(vtk.2 > 0.0, "no dissipation booked between frames");
     let enc = vlab_vtk(&dir.path("vtk/enclosure-00000.vtp"));
