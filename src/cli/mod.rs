@@ -11,6 +11,8 @@ mod cor;
 mod drop;
 mod export;
 mod impact;
+mod plot;
+mod predict;
 mod progress;
 mod replay;
 mod rig_cmd;
@@ -54,8 +56,13 @@ enum Command {
     Scene(scene_cmd::SceneArgs),
     /// List the built-in rigs, or show one (--print: its TOML file).
     Rig(rig_cmd::RigArgs),
-    /// Efficiency over a list of amplitudes and seeds at one frequency.
+    /// Efficiency and motional phase over frequencies x amplitudes (x seeds,
+    /// fill ratios, orientations); resumable, shardable (`sweep merge`).
     Sweep(sweep::SweepArgs),
+    /// The bouncing-bed onset amplitude predicted by thesis eq. 6.11-6.13.
+    Predict(predict::PredictArgs),
+    /// Redraw the plots of a sweep.csv, or plot a CSV record.
+    Plot(plot::PlotArgs),
     /// Measure speed: particle-steps per second on the thesis scene.
     Bench(bench::BenchArgs),
     /// Drop test: bounce a sphere on the drop rig, record the force, estimate the restitution.
@@ -126,6 +133,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Scene(a) => scene_cmd::run(a),
         Command::Rig(a) => rig_cmd::run(a),
         Command::Sweep(a) => sweep::run(a, quiet),
+        Command::Predict(a) => predict::run(a),
+        Command::Plot(a) => plot::run(a),
         Command::Bench(a) => bench::run(a, quiet),
         Command::Drop(a) => drop::run(a),
         Command::Cor(a) => cor::run(a),

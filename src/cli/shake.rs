@@ -9,9 +9,15 @@ use clap::Args;
 
 use vlab::atomic_write::OutputDir;
 use vlab::rig::ShakerKind;
+use vlab::scene::damper::{Kinematics, NoObserver, StepObserver};
+use vlab::scene::dump::VtkDump;
 use vlab::scene::file::{Orientation, Scene, SceneOverrides};
 use vlab::scene::measurement::{CalibrationSource, ShakeSetup};
-use vlab::scene::shake::{ShakeSummary, check_drive, default_out_dir, resolve_rig, run_shake};
+use vlab::scene::settle::settle_bed;
+use vlab::scene::shake::{
+    ShakeSummary, check_drive, default_out_dir, resolve_rig, run_shake, run_shake_on_bed,
+};
+use vlab::scene::snapshots::PhaseSnapshots;
 use vlab::signals::PhaseCalibration;
 
 use super::args;
@@ -49,6 +55,30 @@ pub struct ShakeArgs {
     /// Print the summary as JSON on standard output.
     #[arg(long)]
     pub json: bool,
+    /// Write the particles and the enclosure for ParaView (VTK .vtp frames and
+    /// .pvd time series) into this folder.
+    #[arg(long, value_name = "DIR")]
+    pub dump: Option<PathBuf>,
+    /// Drive time between dump frames (s) [default: an eighth of a cycle].
+    #[arg(long = "dump-every-s", value_name = "S", value_parser = args::seconds, requires = "dump")]
+    pub dump_every_s: Option<f64>,
+    /// Drive time of the first dump frame (s) [default: 0, the drive start].
+    #[arg(long = "dump-from-s", value_name = "S", value_parser = args::non_negative_seconds, requires = "dump")]
+    pub dump_from_s: Option<f64>,
+    /// Also draw snapshots.svg/.png: side views of the bed at 8 phases of the
+    /// last cycle, coloured by speed.
+    #[arg(long)]
+    pub snapshots: bool,
+}
+
+/// Two observers of one drive.
+struct Both<'a>(&'a mut dyn StepObserver, &'a mut dyn StepObserver);
+
+impl StepObserver for Both<'_> {
+    fn observe(&mut self, t_s: f64, world: &vlab::dem::World, enclosure: &Kinematics) {
+        self.0.observe(t_s, world, enclosure);
+        self.1.observe(t_s, world, enclosure);
+    }
 }
 
 /// Scene options shared by the commands that run the damper.
@@ -147,11 +177,79 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         gamma: a.gamma,
         calibration,
     };
-    let result = run_shake(&scene, &setup, &mut |p| progress.update(p))
-        .context("running the damper through the rig");
+    let period = 1.0 / a.freq_hz;
+    let mut dump = match &a.dump {
+        Some(dir) => {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create --dump folder {}", dir.display()))?;
+            Some(VtkDump::new(
+                dir,
+                a.dump_every_s.unwrap_or(period / 8.0),
+                a.dump_from_s.unwrap_or(0.0),
+                0.5 * scene.enclosure.inner_diameter_m,
+                scene.enclosure.inner_length_m,
+            ))
+        }
+        None => None,
+    };
+    let mut snaps = a.snapshots.then(|| PhaseSnapshots::new(a.freq_hz, 0.0));
+    let result = (|| {
+        if dump.is_none() && snaps.is_none() {
+            return run_shake(&scene, &setup, &mut |p| progress.update(p));
+        }
+        check_drive(&scene, a.freq_hz, a.gamma)?;
+        let mut bed = settle_bed(&scene, &mut |p| progress.update(p))?;
+        if dump.is_some() {
+            bed.world.track_particle_dissipation(true);
+        }
+        let mut none_a = NoObserver;
+        let mut none_b = NoObserver;
+        let first: &mut dyn StepObserver = match dump.as_mut() {
+            Some(d) => d,
+            None => &mut none_a,
+        };
+        let second: &mut dyn StepObserver = match snaps.as_mut() {
+            Some(s) => s,
+            None => &mut none_b,
+        };
+        run_shake_on_bed(&scene, &bed, &setup, &mut Both(first, second), &mut |p| {
+            progress.update(p)
+        })
+    })()
+    .context("running the damper through the rig");
     progress.finish();
     let mut shake = made.keep_if_ok(result)?;
     shake.write(&out_dir, &scene, &setup)?;
+    if let Some(d) = dump {
+        let files = d.finish()?;
+        progress.note(&format!(
+            "wrote {} ParaView files into {} (open particles.pvd and enclosure.pvd)",
+            files.len(),
+            a.dump
+                .as_deref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
+        ));
+    }
+    if let Some(sn) = &snaps {
+        let v = a.gamma * scene.simulation.gravity_mps2 / (2.0 * std::f64::consts::PI * a.freq_hz);
+        for ext in ["svg", "png"] {
+            sn.plot(
+                &out_dir.join(format!("snapshots.{ext}")),
+                &format!(
+                    "{} damper, {} Hz, Gamma {}, {}: one steady cycle",
+                    scene.name,
+                    a.freq_hz,
+                    a.gamma,
+                    scene.enclosure.orientation.as_str()
+                ),
+                scene.enclosure.orientation,
+                0.5 * scene.enclosure.inner_diameter_m,
+                scene.enclosure.inner_length_m,
+                v,
+            )?;
+        }
+    }
     for w in &shake.summary.warnings {
         progress.note(&format!("warning: {w}"));
     }

@@ -1,265 +1,355 @@
-//! `vlab sweep`: damping efficiency against amplitude at one frequency, over
-//! several seeds (a granular run is chaotic: the spread matters). Each seed's bed
-//! is settled once and driven at every amplitude; independent runs go to
-//! separate threads, so the results do not depend on the thread count.
+//! `vlab sweep`: damping efficiency and motional phase over frequency ×
+//! amplitude (× seed, fill ratio, orientation), every condition the shake
+//! `vlab shake` runs, in parallel across conditions; `sweep.csv` is kept up to
+//! date after every condition, `--resume` finishes an interrupted sweep,
+//! `--shard I/N` runs a deterministic slice and `vlab sweep merge` joins the
+//! slices. The work is [`vlab::scene::sweep`]'s; this is its command line.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use anyhow::{Context, Result, bail};
-use clap::Args;
-use rayon::prelude::*;
-use serde::Serialize;
+use clap::{Args, Subcommand};
 
-use vlab::atomic_write::{OutputDir, write_atomic};
-use vlab::rig::SineMotion;
-use vlab::scene::damper::{DrivePlan, NoObserver, run_drive};
-use vlab::scene::file::Scene;
-use vlab::scene::settle::{SettledBed, prepare_drive, settle_bed};
-use vlab::scene::shake::check_drive;
-use vlab::signals::{Series, SeriesStyle, plot_xy_svg};
+use vlab::atomic_write::OutputDir;
+use vlab::rig::ShakerKind;
+use vlab::scene::file::{Orientation, Scene, SceneOverrides};
+use vlab::scene::sweep::{
+    RowStatus, Shard, SweepEvent, SweepFile, SweepPlan, merge_shards, run_sweep, summarise,
+};
+use vlab::scene::sweep_plot::plot_sweep;
 
 use super::args;
 use super::progress::ProgressLine;
-use super::shake::SceneArgs;
 
 #[derive(Debug, Clone, Args)]
-#[command(allow_negative_numbers = true)]
+#[command(
+    allow_negative_numbers = true,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
 pub struct SweepArgs {
-    /// Drive frequency (Hz).
-    #[arg(long = "freq", value_name = "HZ", value_parser = args::freq_hz)]
-    freq_hz: f64,
-    /// Amplitudes Γ, comma-separated (dimensionless).
-    #[arg(long, value_name = "LIST", required = true, value_delimiter = ',', value_parser = args::gamma)]
+    #[command(subcommand)]
+    action: Option<SweepAction>,
+    /// Drive frequencies (Hz), comma-separated.
+    #[arg(long = "freq", value_name = "LIST", required = true, value_delimiter = ',', value_parser = args::freq_hz)]
+    freqs_hz: Vec<f64>,
+    /// Amplitudes Γ (peak acceleration / g), comma-separated.
+    #[arg(long = "gamma", alias = "gammas", value_name = "LIST", required = true, value_delimiter = ',', value_parser = args::gamma)]
     gammas: Vec<f64>,
     /// Seeds of the random fill, comma-separated.
-    #[arg(
-        long,
-        value_name = "LIST",
-        default_value = "1,2,3",
-        value_delimiter = ','
-    )]
+    #[arg(long, value_name = "LIST", default_value = "1", value_delimiter = ',')]
     seeds: Vec<u64>,
-    #[command(flatten)]
-    scene: SceneArgs,
-    /// Output folder [default: signals/sweep-<scene>-<freq>Hz].
+    /// Volume fill ratios, comma-separated, each reached by the enclosure
+    /// length with the scene's particles [default: the scene's].
+    #[arg(long = "fill-ratio", value_name = "LIST", value_delimiter = ',', value_parser = args::gamma)]
+    fill_ratios: Vec<f64>,
+    /// Orientations, comma-separated [default: the scene's].
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_enum)]
+    orientation: Vec<Orientation>,
+    /// Scene file (TOML) merged over the built-in thesis scene.
+    #[arg(long, value_name = "FILE")]
+    scene: Option<PathBuf>,
+    /// Drive cycles in all, the same for every condition [scene default:
+    /// each condition runs until steady: input work and dissipation within
+    /// 1 %, standard error of the energy per cycle below 1 %, at most 400
+    /// cycles].
+    #[arg(long)]
+    cycles: Option<u32>,
+    /// Last cycles kept as the steady window [scene default: 5 of --cycles].
+    #[arg(long)]
+    steady_cycles: Option<u32>,
+    /// Time step (s) [scene default: per condition, every collision resolved
+    /// by 25 steps at the largest expected impact speed].
+    #[arg(long = "dt-s", value_name = "S", value_parser = args::seconds)]
+    dt_s: Option<f64>,
+    /// The rig: a built-in name (thesis-shaker, ideal) or a rig file.
+    #[arg(long, value_name = "NAME|FILE", default_value = vlab::rig::DEFAULT_RIG)]
+    rig: String,
+    /// How the enclosure is moved [default: the rig's own].
+    #[arg(long, value_enum)]
+    shaker: Option<ShakerKind>,
+    /// Output folder [default: signals/sweep-<scene>].
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Print the results as JSON.
+    /// Continue the sweep in --out: run only the conditions its sweep.csv lacks.
+    #[arg(long)]
+    resume: bool,
+    /// Run only slice I of N (1 <= I <= N) of the conditions; join the slices
+    /// with `vlab sweep merge`.
+    #[arg(long, value_name = "I/N", value_parser = shard)]
+    shard: Option<Shard>,
+    /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
 }
 
-#[derive(Debug, Clone, Serialize)]
-struct SweepRow {
-    freq_hz: f64,
-    gamma: f64,
-    seed: u64,
-    efficiency: f64,
-    energy_per_cycle_j: f64,
-    e_max_j: f64,
-    friction_share: f64,
-    particle_particle_share: f64,
-    ledger_residual_rel: f64,
+#[derive(Debug, Clone, Subcommand)]
+enum SweepAction {
+    /// Join the sweep.csv files of all shards of one sweep into one sweep.csv
+    /// (as the unsharded sweep writes it) and draw its plots.
+    Merge(MergeArgs),
+    /// Name every row's motional phase again from its stored indicators with
+    /// this vlab's heuristic (after it was tuned), rewrite the file and redraw
+    /// its plots.
+    Relabel(RelabelArgs),
 }
 
-#[derive(Debug, Clone, Serialize)]
-struct GammaStats {
-    gamma: f64,
-    efficiency_mean: f64,
-    efficiency_std: f64,
-    efficiency_min: f64,
-    efficiency_max: f64,
+#[derive(Debug, Clone, Args)]
+struct RelabelArgs {
+    /// The sweep.csv (or its folder).
+    #[arg(value_name = "FILE")]
+    file: PathBuf,
 }
 
+#[derive(Debug, Clone, Args)]
+struct MergeArgs {
+    /// Shard files (sweep.csv) or the folders holding them.
+    #[arg(required = true, value_name = "SHARD")]
+    shards: Vec<PathBuf>,
+    /// Output folder for the merged sweep.csv and plots.
+    #[arg(long, value_name = "DIR", required = true)]
+    out: PathBuf,
+}
+
+fn shard(s: &str) -> Result<Shard, vlab::validation::InvalidParameter> {
+    Shard::parse(s).map_err(|e| e.renamed("value"))
+}
+
+/// Runs the command.
 pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
-    if a.seeds.is_empty() {
-        bail!("--seeds is empty: give at least one seed");
+    match a.action {
+        Some(SweepAction::Merge(m)) => return merge(m),
+        Some(SweepAction::Relabel(r)) => return relabel(r),
+        None => {}
     }
-    let gammas = a.gammas.clone();
-    let scene = a.scene.resolve()?;
-    for &g in &gammas {
-        check_drive(&scene, a.freq_hz, g)?;
+    let flags = args::FlagKeys::new()
+        .set(a.cycles.is_some(), "drive.cycles", "--cycles")
+        .set(
+            a.steady_cycles.is_some(),
+            "drive.steady_cycles",
+            "--steady-cycles",
+        )
+        .set(a.dt_s.is_some(), "simulation.dt_s", "--dt-s")
+        .set(true, "freq_hz", "--freq")
+        .set(true, "gamma", "--gamma")
+        .set(true, "seeds", "--seeds")
+        .set(true, "fill_ratio", "--fill-ratio");
+    let scene = Scene::load_or_thesis(a.scene.as_deref())?;
+    let scene = SceneOverrides {
+        cycles: a.cycles,
+        steady_cycles: a.steady_cycles,
+        orientation: None,
+        seed: None,
+        dt_s: a.dt_s,
     }
-    let out_dir = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from("signals").join(format!("sweep-{}-{}Hz", scene.name, a.freq_hz))
-    });
-    let made = OutputDir::prepare(&out_dir)?;
-    let progress = Mutex::new(ProgressLine::new("sweep", quiet));
-    let total = a.seeds.len() * (1 + gammas.len());
-    let done = Mutex::new(0usize);
-    let tick = |what: String| {
-        let mut d = done.lock().unwrap_or_else(|e| e.into_inner());
-        *d += 1;
-        let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
-        p.note(&format!("sweep: {}/{} {what}", *d, total));
+    .apply(scene)
+    .map_err(|e| flags.name_flags(e.into()))?;
+    let plan = SweepPlan {
+        scene,
+        rig: a.rig.clone(),
+        shaker: a.shaker,
+        freqs_hz: a.freqs_hz.clone(),
+        gammas: a.gammas.clone(),
+        seeds: a.seeds.clone(),
+        fill_ratios: a.fill_ratios.clone(),
+        orientations: a.orientation.clone(),
     };
-    let result = (|| -> Result<Vec<SweepRow>> {
-        let beds: Vec<SettledBed> = a
-            .seeds
-            .par_iter()
-            .map(|&seed| {
-                let mut s = scene.clone();
-                s.simulation.seed = seed;
-                let bed = settle_bed(&s, &mut |_| {})
-                    .with_context(|| format!("settling the bed of seed {seed}"));
-                tick(format!("bed of seed {seed} settled"));
-                bed
-            })
-            .collect::<Result<_>>()?;
-        let jobs: Vec<(usize, f64)> = (0..beds.len())
-            .flat_map(|b| gammas.iter().map(move |&g| (b, g)))
-            .collect();
-        jobs.par_iter()
-            .map(|&(b, gamma)| {
-                let row = drive_once(&scene, &beds[b], a.seeds[b], a.freq_hz, gamma);
-                tick(format!("seed {} Gamma {gamma} driven", a.seeds[b]));
-                row
-            })
-            .collect()
-    })();
-    let rows = made.keep_if_ok(result)?;
-    let stats = statistics(&gammas, &rows);
-    write_results(&out_dir, &rows, &stats, a.freq_hz, &scene)?;
-    if a.json {
+    plan.validate()
+        .map_err(|e| flags.name_flags(e.into()))
+        .with_context(|| format!("--rig {}", a.rig))?;
+    let shard = a.shard.unwrap_or(Shard::ALL);
+    let out_dir = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("signals").join(format!("sweep-{}", plan.scene.name)));
+    if !a.resume && out_dir.join("sweep.csv").exists() {
+        bail!(
+            "{} exists: pass --resume to continue that sweep, or choose another --out",
+            out_dir.join("sweep.csv").display()
+        );
+    }
+    let made = OutputDir::prepare(&out_dir)
+        .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
+    let progress = Mutex::new(ProgressLine::new("sweep", quiet));
+    let note = |text: String| {
+        let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
+        p.note(&text);
+    };
+    let on_event = |e: SweepEvent| match e {
+        SweepEvent::Started {
+            total,
+            already_done,
+            beds,
+        } => note(format!(
+            "sweep{}: {total} conditions, {already_done} already in sweep.csv, {beds} bed{} to settle",
+            if shard == Shard::ALL {
+                String::new()
+            } else {
+                format!(" shard {shard}")
+            },
+            if beds == 1 { "" } else { "s" }
+        )),
+        SweepEvent::BedSettled { seed, wall_time_s } => note(format!(
+            "sweep: bed of seed {seed} settled ({wall_time_s:.0} s)"
+        )),
+        SweepEvent::ConditionDone {
+            row,
+            done,
+            total,
+            eta_s,
+        } => {
+            let c = &row.condition;
+            let what = match row.status {
+                RowStatus::Ok => format!(
+                    "efficiency {:.3} +- {:.3}, measured {:.3}, {} ({} cycles{}, {:.0} s)",
+                    row.efficiency,
+                    row.efficiency_se,
+                    row.efficiency_measured,
+                    row.phase,
+                    row.cycles,
+                    if row.steady == "capped" {
+                        ", NOT steady at the cap"
+                    } else {
+                        ""
+                    },
+                    row.wall_time_s
+                ),
+                RowStatus::Unreachable => "beyond the rig".into(),
+                RowStatus::Failed => format!("FAILED: {}", row.note),
+            };
+            note(format!(
+                "sweep: {done}/{total}  {} Hz Gamma {} seed {}: {what}; ETA {}",
+                c.freq_hz,
+                c.gamma,
+                c.seed,
+                eta(eta_s)
+            ))
+        }
+    };
+    let result =
+        run_sweep(&plan, shard, &out_dir, a.resume, &on_event).context("running the sweep");
+    let file = made.keep_if_ok(result)?;
+    let plots = if shard == Shard::ALL {
+        plot_sweep(&file, &out_dir).context("drawing the sweep's plots")?
+    } else {
+        Vec::new()
+    };
+    report(&file, &out_dir, &plots, a.json)
+}
+
+fn eta(s: f64) -> String {
+    if !s.is_finite() {
+        "?".into()
+    } else if s < 90.0 {
+        format!("{s:.0} s")
+    } else if s < 5400.0 {
+        format!("{:.0} min", s / 60.0)
+    } else {
+        format!("{:.1} h", s / 3600.0)
+    }
+}
+
+fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result<()> {
+    let summary = summarise(file);
+    if json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&serde_json::json!({ "runs": rows, "by_gamma": stats }))?
+            serde_json::to_string_pretty(&serde_json::json!({
+                "sweep_id": file.header.sweep_id,
+                "shard": file.header.shard.to_string(),
+                "rows": file.rows,
+                "by_condition": summary,
+            }))?
         );
-    } else {
-        println!(
-            "{} damper, {} Hz, {}: efficiency over seeds {:?}",
-            scene.name,
-            a.freq_hz,
-            scene.enclosure.orientation.as_str(),
-            a.seeds
-        );
-        println!("   Gamma   mean    std     min     max");
-        for s in &stats {
+        return Ok(());
+    }
+    let h = &file.header;
+    println!(
+        "{} damper, rig {}, {}, seeds {:?}{}:",
+        h.scene,
+        h.rig,
+        if h.cycles.starts_with("steady") {
+            format!("each condition driven until {}", h.cycles)
+        } else {
+            format!("{} cycles (last {} kept)", h.cycles, h.steady_cycles)
+        },
+        h.seeds,
+        if h.shard == Shard::ALL {
+            String::new()
+        } else {
+            format!(", shard {}", h.shard)
+        }
+    );
+    println!("  fill   orientation  freq    Gamma   efficiency (DEM +- se)  measured  phase");
+    for s in &summary {
+        if s.status == "ok" {
             println!(
-                "  {:6}  {:.3}  {:.3}  {:.3}  {:.3}",
-                s.gamma, s.efficiency_mean, s.efficiency_std, s.efficiency_min, s.efficiency_max
+                "  {:.3}  {:<11}  {:>5}  {:>6}   {:.3} +- {:.3}          {:.3}     {}",
+                s.fill_ratio,
+                s.orientation.as_str(),
+                s.freq_hz,
+                s.gamma,
+                s.efficiency,
+                s.efficiency_se,
+                s.efficiency_measured,
+                s.phase
+            );
+        } else {
+            println!(
+                "  {:.3}  {:<11}  {:>5}  {:>6}   {}",
+                s.fill_ratio,
+                s.orientation.as_str(),
+                s.freq_hz,
+                s.gamma,
+                s.status
             );
         }
-        println!("  wrote {}", out_dir.display());
+    }
+    println!("  wrote {}", dir.join("sweep.csv").display());
+    for p in plots {
+        println!("  wrote {}", p.display());
     }
     Ok(())
 }
 
-fn drive_once(
-    scene: &Scene,
-    bed: &SettledBed,
-    seed: u64,
-    freq_hz: f64,
-    gamma: f64,
-) -> Result<SweepRow> {
-    let mut world = prepare_drive(bed, scene, scene.drive_dt_s(freq_hz, gamma))?;
-    let g = scene.simulation.gravity_mps2;
-    let plan = DrivePlan {
-        freq_hz,
-        gamma,
-        gravity_mps2: g,
-        length: scene.drive_length(),
+fn relabel(r: RelabelArgs) -> Result<()> {
+    let path = if r.file.is_dir() {
+        r.file.join("sweep.csv")
+    } else {
+        r.file.clone()
     };
-    let mut drive = SineMotion::new(freq_hz, gamma, g);
-    let out = run_drive(&mut world, &plan, &mut drive, &mut NoObserver, &mut |_| {})
-        .with_context(|| format!("driving seed {seed} at Gamma {gamma}"))?;
-    let d = out.dissipated_per_cycle;
-    let total = d.total();
-    Ok(SweepRow {
-        freq_hz,
-        gamma,
-        seed,
-        efficiency: out.efficiency,
-        energy_per_cycle_j: out.energy_per_cycle_j,
-        e_max_j: out.e_max_j,
-        friction_share: (d.pp_tangential + d.pw_tangential) / total,
-        particle_particle_share: (d.pp_normal + d.pp_tangential) / total,
-        ledger_residual_rel: out.whole.residual_relative(),
-    })
+    let mut file = SweepFile::read(&path)?;
+    let changed = file.relabel(&vlab::scene::phases::PhaseThresholds::default());
+    file.write(&path)?;
+    let dir = path
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    let plots = if file.header.shard == Shard::ALL {
+        plot_sweep(&file, &dir).context("drawing the sweep's plots")?
+    } else {
+        Vec::new()
+    };
+    eprintln!("relabelled {changed} of {} rows", file.rows.len());
+    report(&file, &dir, &plots, false)
 }
 
-fn statistics(gammas: &[f64], rows: &[SweepRow]) -> Vec<GammaStats> {
-    gammas
-        .iter()
-        .map(|&g| {
-            let e: Vec<f64> = rows
-                .iter()
-                .filter(|r| r.gamma == g)
-                .map(|r| r.efficiency)
-                .collect();
-            let n = e.len() as f64;
-            let mean = e.iter().sum::<f64>() / n;
-            let var = if e.len() > 1 {
-                e.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)
-            } else {
-                0.0
-            };
-            GammaStats {
-                gamma: g,
-                efficiency_mean: mean,
-                efficiency_std: var.sqrt(),
-                efficiency_min: e.iter().copied().fold(f64::INFINITY, f64::min),
-                efficiency_max: e.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            }
-        })
-        .collect()
-}
-
-fn write_results(
-    dir: &std::path::Path,
-    rows: &[SweepRow],
-    stats: &[GammaStats],
-    freq_hz: f64,
-    scene: &Scene,
-) -> Result<()> {
-    let csv = dir.join("sweep.csv");
-    write_atomic(&csv, |w| {
-        use std::io::Write;
-        writeln!(
-            w,
-            "freq [Hz],gamma [],seed [],efficiency [],energy_per_cycle [J],e_max [J],friction_share [],particle_particle_share [],ledger_residual_rel []"
-        )?;
-        for r in rows {
-            writeln!(
-                w,
-                "{},{},{},{},{},{},{},{},{}",
-                r.freq_hz,
-                r.gamma,
-                r.seed,
-                r.efficiency,
-                r.energy_per_cycle_j,
-                r.e_max_j,
-                r.friction_share,
-                r.particle_particle_share,
-                r.ledger_residual_rel
-            )?;
-        }
-        Ok(())
-    })
-    .with_context(|| format!("writing {}", csv.display()))?;
-    let series = [
-        Series {
-            name: "mean over seeds".into(),
-            points: stats.iter().map(|s| (s.gamma, s.efficiency_mean)).collect(),
-            style: SeriesStyle::Line,
-        },
-        Series {
-            name: "each seed".into(),
-            points: rows.iter().map(|r| (r.gamma, r.efficiency)).collect(),
-            style: SeriesStyle::Points,
-        },
-    ];
-    let svg = dir.join("efficiency.svg");
-    plot_xy_svg(
-        &svg,
-        &format!(
-            "{} damper, {} Hz: damping efficiency (eq. 6.8)",
-            scene.name, freq_hz
-        ),
-        "Gamma (peak acceleration / g)",
-        "efficiency",
-        &series,
-    )?;
-    Ok(())
+fn merge(m: MergeArgs) -> Result<()> {
+    let mut files = Vec::new();
+    for p in &m.shards {
+        let path = if p.is_dir() {
+            p.join("sweep.csv")
+        } else {
+            p.clone()
+        };
+        files.push(SweepFile::read(&path)?);
+    }
+    let merged = merge_shards(&files)?;
+    let made = OutputDir::prepare(&m.out)
+        .with_context(|| format!("cannot create output folder {}", m.out.display()))?;
+    let path = m.out.join("sweep.csv");
+    made.keep_if_ok(merged.write(&path))?;
+    let plots = plot_sweep(&merged, &m.out).context("drawing the sweep's plots")?;
+    report(&merged, &m.out, &plots, false)
 }

@@ -129,6 +129,9 @@ pub struct World {
     baseline: LedgerSnapshot,
     /// Largest normal approach speed at contact onset since the last reset (m/s).
     pub impact_speeds: ImpactSpeeds,
+    /// Energy each particle's contacts dissipated since tracking began (J),
+    /// while tracked ([`World::track_particle_dissipation`]).
+    particle_dissipation_j: Option<Vec<f64>>,
     /// Fewest time steps a collision that opened since the last reset is
     /// resolved with (the Hertz duration at its approach speed, eq. 5.10, over
     /// the step); infinite when none opened.
@@ -171,6 +174,7 @@ impl World {
             wall_force: DVec3::ZERO,
             baseline: LedgerSnapshot::default(),
             impact_speeds: ImpactSpeeds::default(),
+            particle_dissipation_j: None,
             fewest_steps_per_contact: f64::INFINITY,
         };
         world.reset_contacts();
@@ -338,6 +342,39 @@ impl World {
             .filter(|s| s.delta_prev > 0.0)
             .count();
         (pp, pw)
+    }
+
+    /// Number of contacts (particle-particle and particle-wall) each particle
+    /// is in now, into `counts` (resized to the particle count).
+    pub fn contacts_per_particle(&self, counts: &mut Vec<u32>) {
+        let n = self.particles.len();
+        counts.clear();
+        counts.resize(n, 0);
+        for (&(i, j), st) in self.neighbours.pairs.iter().zip(&self.neighbours.states) {
+            if st.delta_prev > 0.0 {
+                counts[i as usize] += 1;
+                counts[j as usize] += 1;
+            }
+        }
+        let n_walls = self.walls.len().max(1);
+        for (k, st) in self.wall_states.iter().enumerate() {
+            if st.delta_prev > 0.0 {
+                counts[k / n_walls] += 1;
+            }
+        }
+    }
+
+    /// Starts (from zero) or stops booking dissipated energy per particle: a
+    /// pair contact's dissipation is shared half and half, a wall contact's
+    /// goes to its particle. Off by default; it costs one branch per contact.
+    pub fn track_particle_dissipation(&mut self, on: bool) {
+        self.particle_dissipation_j = on.then(|| vec![0.0; self.particles.len()]);
+    }
+
+    /// Energy each particle's contacts dissipated since tracking began (J),
+    /// when tracked.
+    pub fn particle_dissipation_j(&self) -> Option<&[f64]> {
+        self.particle_dissipation_j.as_deref()
     }
 
     /// Mechanical energy stored now.
@@ -516,6 +553,16 @@ impl World {
             self.ledger.stiffness_work_j += out.stiffness_work_j;
             self.ledger.integrator_j += out.integrator_j;
             self.step_stored_change_j += out.stored_change_j;
+            if let Some(per) = &mut self.particle_dissipation_j {
+                let e = out.dissipated_normal_j + out.dissipated_tangential_j;
+                match at {
+                    ContactAt::Pair(i, j) => {
+                        per[i] += 0.5 * e;
+                        per[j] += 0.5 * e;
+                    }
+                    ContactAt::Wall(i, _) => per[i] += e,
+                }
+            }
         }
         Ok(())
     }

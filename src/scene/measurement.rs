@@ -24,7 +24,9 @@ use serde::Serialize;
 use crate::dem::World;
 use crate::rig::{Daq, DaqReport, RigSpec, Shaker, ShakerKind, ShakerReport, transducer_force_n};
 use crate::rig::{EnclosureMotion, Kinematics};
-use crate::scene::damper::{DriveOutcome, DrivePlan, Progress, StepObserver, run_drive};
+use crate::scene::damper::{
+    DriveOutcome, DrivePlan, NoObserver, Progress, StepObserver, run_drive,
+};
 use crate::scene::file::{Orientation, Scene, SceneError};
 use crate::scene::record::{TruthRecorder, TruthSamples};
 use crate::signals::{
@@ -34,16 +36,19 @@ use crate::signals::{
 };
 use crate::stats::{MeanStderr, mean_stderr};
 
-/// Feeds the rig's DAQ and the truth recorder from every DEM step.
-struct Instruments {
+/// Feeds the rig's DAQ and the truth recorder from every DEM step, and the
+/// caller's own observer (a dump, the motional-phase indicators).
+struct Instruments<'a> {
     truth: TruthRecorder,
     daq: Daq,
     enclosure_mass_kg: f64,
     static_weight_n: f64,
+    extra: &'a mut dyn StepObserver,
 }
 
-impl StepObserver for Instruments {
+impl StepObserver for Instruments<'_> {
     fn observe(&mut self, t_s: f64, world: &World, enclosure: &Kinematics) {
+        self.extra.observe(t_s, world, enclosure);
         self.truth.observe(t_s, world, enclosure);
         let particle_force = -world.wall_force().dot(world.walls.axis);
         let a = enclosure.acceleration_mps2;
@@ -153,6 +158,18 @@ pub fn run_measured_shake(
     setup: &ShakeSetup,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeExperiment, SceneError> {
+    run_measured_shake_observed(scene, world, setup, &mut NoObserver, progress)
+}
+
+/// [`run_measured_shake`], with `observer` also called after every DEM step
+/// of the drive (before the rig's instruments, with the same arguments).
+pub fn run_measured_shake_observed(
+    scene: &Scene,
+    world: &mut World,
+    setup: &ShakeSetup,
+    observer: &mut dyn StepObserver,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<ShakeExperiment, SceneError> {
     let g = scene.simulation.gravity_mps2;
     let rig = &setup.rig;
     let plan = DrivePlan {
@@ -196,6 +213,7 @@ pub fn run_measured_shake(
         daq,
         enclosure_mass_kg: rig.enclosure.mass_kg,
         static_weight_n: static_weight_n(scene, rig),
+        extra: observer,
     };
     let outcome = run_drive(world, &plan, &mut shaker, &mut instruments, progress)?;
     let metadata = trace_metadata(scene, setup, particle_mass, g);

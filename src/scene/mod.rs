@@ -5,13 +5,20 @@
 
 pub mod damper;
 pub mod drop;
+pub mod dump;
 pub mod file;
 pub mod fill;
 pub mod impact;
 pub mod lammps;
 pub mod measurement;
+pub mod phases;
+pub mod predict;
 pub mod record;
 pub mod replay;
 pub mod settle;
 pub mod shake;
+pub mod snapshots;
+pub mod sweep;
+#[cfg(feature = "plot")]
+pub mod sweep_plot;
 pub mod validity;

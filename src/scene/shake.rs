@@ -32,11 +32,13 @@ use serde::Serialize;
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
-use crate::scene::damper::{DriveOutcome, Progress, Steadiness};
+use crate::scene::damper::{DriveOutcome, NoObserver, Progress, Steadiness, StepObserver};
 use crate::scene::file::{Scene, SceneError};
-use crate::scene::measurement::{Measured, ShakeExperiment, ShakeSetup, run_measured_shake};
+use crate::scene::measurement::{
+    Measured, ShakeExperiment, ShakeSetup, run_measured_shake_observed,
+};
 use crate::scene::record::TruthSamples;
-use crate::scene::settle::{prepare_drive, settle_bed};
+use crate::scene::settle::{SettledBed, prepare_drive, settle_bed};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
 use crate::validation::{InvalidParameter, positive};
 
@@ -307,11 +309,38 @@ pub fn run_shake(
     setup: &ShakeSetup,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
+    run_shake_observed(scene, setup, &mut NoObserver, progress)
+}
+
+/// [`run_shake`] with `observer` called after every DEM step of the drive
+/// (a ParaView dump, the motional-phase indicators).
+pub fn run_shake_observed(
+    scene: &Scene,
+    setup: &ShakeSetup,
+    observer: &mut dyn StepObserver,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<ShakeRun, SceneError> {
+    check_drive(scene, setup.freq_hz, setup.gamma)?;
+    let bed = settle_bed(scene, progress)?;
+    run_shake_on_bed(scene, &bed, setup, observer, progress)
+}
+
+/// Drives an already settled `bed` of `scene` (the same scene and seed:
+/// [`settle_bed`] is deterministic, so this equals [`run_shake`]) through the
+/// rig of `setup` and measures it; the bed itself is not changed. A sweep
+/// settles each bed once and drives it at every frequency and amplitude this
+/// way.
+pub fn run_shake_on_bed(
+    scene: &Scene,
+    bed: &SettledBed,
+    setup: &ShakeSetup,
+    observer: &mut dyn StepObserver,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<ShakeRun, SceneError> {
     check_drive(scene, setup.freq_hz, setup.gamma)?;
     let dt = scene.drive_dt_s(setup.freq_hz, setup.gamma);
-    let bed = settle_bed(scene, progress)?;
-    let mut world = prepare_drive(&bed, scene, dt)?;
-    let experiment = run_measured_shake(scene, &mut world, setup, progress)?;
+    let mut world = prepare_drive(bed, scene, dt)?;
+    let experiment = run_measured_shake_observed(scene, &mut world, setup, observer, progress)?;
     let outcome = &experiment.outcome;
     let n = world.particles.len();
     let dem = DemTruth::new(outcome, scene);

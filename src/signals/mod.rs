@@ -15,7 +15,7 @@
 //!   DEM code's enclosure motion and force): CSV, or the text LAMMPS and
 //!   LIGGGHTS write with `fix ave/time` / `fix print`; time axis checked for
 //!   gaps and reversals;
-//! - [`plot`]: small SVG plots;
+//! - [`plot`]: small SVG and PNG plots (x-y, log x with error bars, heat maps);
 //! - [`bench`](mod@bench): a timing hook for `vlab bench`.
 //!
 //! SI units throughout. This module imports neither `dem` nor `rig`. Every
@@ -50,7 +50,10 @@ pub use impacts::{
 };
 pub use lammps::read_lammps_text;
 #[cfg(feature = "plot")]
-pub use plot::{Series, SeriesStyle, plot_xy_svg};
+pub use plot::{
+    CirclePanel, ErrorSeries, HeatCell, HeatMap, HeatOverlay, LogXPlot, MarkerLine, PanelStrip,
+    RgbColor, Series, SeriesStyle, plot_heat_map, plot_log_x, plot_panel_strip, plot_xy_svg,
+};
 pub use power::{
     BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,
     WindowPlan, YangPower, efficiency, max_energy_per_cycle_j, mean_power_time_domain, plan_window,

@@ -1,18 +1,95 @@
-//! Small SVG plots of x-y data: time traces, COR against impact speed,
-//! efficiency against Gamma. No thesis equation lives here.
+//! Small plots of x-y data: time traces, COR against impact speed,
+//! efficiency against Gamma on a log axis with error bars and marker lines,
+//! and heat maps of a value over two lists of conditions. No thesis equation
+//! lives here.
 //!
-//! Plots are rendered by plotters' SVG backend into a string, then written
-//! with [`crate::atomic_write`], so a failed plot never leaves half an SVG.
-//! Text is laid out with plotters' built-in size estimate (no font files are
-//! needed); the viewer's sans-serif font draws it. Every point is drawn:
-//! decimate long traces before plotting them.
+//! The file's extension picks the format: `.svg` (plotters' SVG backend,
+//! rendered into a string) or `.png` (plotters' bitmap backend, rendered to a
+//! hidden temporary file next to the target). Either is then put in place
+//! atomically ([`crate::atomic_write`]), so a failed plot never leaves half a
+//! file. Text is laid out, and drawn in PNGs, with DejaVu Sans, embedded in the
+//! binary by the `dejavu` crate (Bitstream Vera licence) and registered with
+//! plotters' `ab_glyph` renderer as "sans-serif": no system font is needed; an
+//! SVG viewer draws the text with its own sans-serif font. Every point is
+//! drawn: decimate long traces before plotting them.
 
 use std::path::Path;
 
+use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::error::{Result, SignalsError};
 use crate::atomic_write::write_bytes_atomic;
+
+type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
+
+/// Registers the embedded font with plotters, once.
+fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // DejaVu Sans is a valid TrueType font; were it not, text would fail
+        // to draw and the plot would report it.
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
+    });
+}
+
+/// A figure that can draw itself on any plotters backend.
+trait Figure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static;
+}
+
+/// Draws `figure` into `path`, SVG or PNG by the extension, atomically.
+fn write_figure(path: &Path, size: (u32, u32), figure: &impl Figure) -> Result<()> {
+    register_font();
+    let plot_err = |message: String| SignalsError::Plot {
+        path: path.to_path_buf(),
+        message,
+    };
+    let io_err = |source: std::io::Error| SignalsError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("svg") => {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+                figure.draw(&root).map_err(|e| plot_err(e.to_string()))?;
+            }
+            write_bytes_atomic(path, svg.as_bytes()).map_err(io_err)
+        }
+        Some("png") => {
+            let name = path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let tmp = path.with_file_name(format!(".{name}.tmp-{}.png", std::process::id()));
+            let drawn = {
+                let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+                figure.draw(&root).map_err(|e| plot_err(e.to_string()))
+            };
+            let moved = drawn.and_then(|()| std::fs::rename(&tmp, path).map_err(io_err));
+            if moved.is_err() {
+                let _ = std::fs::remove_file(&tmp);
+            }
+            moved
+        }
+        _ => Err(plot_err(
+            "the file name must end in .svg or .png".to_string(),
+        )),
+    }
+}
 
 /// Plot size in pixels.
 pub const PLOT_SIZE_PX: (u32, u32) = (800, 600);
@@ -37,9 +114,9 @@ pub struct Series {
     pub style: SeriesStyle,
 }
 
-/// Writes an SVG plot of `series` to `path` (atomically). Axis ranges cover
-/// all points with a 5 % margin; at least one point is needed and every point
-/// must be finite.
+/// Writes a plot of `series` to `path` (SVG or PNG by its extension,
+/// atomically). Axis ranges cover all points with a 5 % margin; at least one
+/// point is needed and every point must be finite.
 pub fn plot_xy_svg(
     path: &Path,
     title: &str,
@@ -47,34 +124,42 @@ pub fn plot_xy_svg(
     y_label: &str,
     series: &[Series],
 ) -> Result<()> {
-    let plot_err = |message: String| SignalsError::Plot {
-        path: path.to_path_buf(),
-        message,
+    check_finite(path, series)?;
+    let all = series.iter().flat_map(|s| s.points.iter().copied());
+    let Some((x_range, y_range)) = ranges(all) else {
+        return Err(SignalsError::Plot {
+            path: path.to_path_buf(),
+            message: "no points to plot".into(),
+        });
     };
+    let figure = XyFigure {
+        title,
+        x_label,
+        y_label,
+        series,
+        x_range,
+        y_range,
+    };
+    write_figure(path, PLOT_SIZE_PX, &figure)
+}
+
+fn check_finite(path: &Path, series: &[Series]) -> Result<()> {
     for s in series {
         if let Some(i) = s
             .points
             .iter()
             .position(|(x, y)| !(x.is_finite() && y.is_finite()))
         {
-            return Err(plot_err(format!(
-                "series '{}' point {i} is ({}, {}): points must be finite",
-                s.name, s.points[i].0, s.points[i].1
-            )));
+            return Err(SignalsError::Plot {
+                path: path.to_path_buf(),
+                message: format!(
+                    "series '{}' point {i} is ({}, {}): points must be finite",
+                    s.name, s.points[i].0, s.points[i].1
+                ),
+            });
         }
     }
-    let all = series.iter().flat_map(|s| s.points.iter().copied());
-    let Some((x_range, y_range)) = ranges(all) else {
-        return Err(plot_err("no points to plot".into()));
-    };
-
-    let mut svg = String::new();
-    render(&mut svg, title, x_label, y_label, series, x_range, y_range)
-        .map_err(|e| plot_err(e.to_string()))?;
-    write_bytes_atomic(path, svg.as_bytes()).map_err(|source| SignalsError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    Ok(())
 }
 
 type Range = std::ops::Range<f64>;
@@ -106,52 +191,621 @@ fn pad(lo: f64, hi: f64) -> Range {
     (lo - margin)..(hi + margin)
 }
 
-fn render(
-    svg: &mut String,
-    title: &str,
-    x_label: &str,
-    y_label: &str,
-    series: &[Series],
+struct XyFigure<'a> {
+    title: &'a str,
+    x_label: &'a str,
+    y_label: &'a str,
+    series: &'a [Series],
     x_range: Range,
     y_range: Range,
-) -> std::result::Result<(), Box<dyn std::error::Error>> {
-    let root = SVGBackend::with_string(svg, PLOT_SIZE_PX).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 24))
-        .margin(12)
-        .x_label_area_size(48)
-        .y_label_area_size(72)
-        .build_cartesian_2d(x_range, y_range)?;
-    chart
-        .configure_mesh()
-        .x_desc(x_label)
-        .y_desc(y_label)
-        .draw()?;
-    for (i, s) in series.iter().enumerate() {
-        let color = Palette99::pick(i).to_rgba();
-        let drawn = match s.style {
-            SeriesStyle::Line => chart.draw_series(LineSeries::new(
-                s.points.iter().copied(),
-                color.stroke_width(2),
-            ))?,
-            SeriesStyle::Points => {
-                chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, color.filled())))?
-            }
-        };
-        drawn
-            .label(s.name.as_str())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+}
+
+impl Figure for XyFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(root)
+            .caption(self.title, ("sans-serif", 24))
+            .margin(12)
+            .x_label_area_size(48)
+            .y_label_area_size(72)
+            .build_cartesian_2d(self.x_range.clone(), self.y_range.clone())?;
+        chart
+            .configure_mesh()
+            .x_desc(self.x_label)
+            .y_desc(self.y_label)
+            .draw()?;
+        for (i, s) in self.series.iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            let drawn = match s.style {
+                SeriesStyle::Line => chart.draw_series(LineSeries::new(
+                    s.points.iter().copied(),
+                    color.stroke_width(2),
+                ))?,
+                SeriesStyle::Points => chart
+                    .draw_series(s.points.iter().map(|&p| Circle::new(p, 3, color.filled())))?,
+            };
+            drawn
+                .label(s.name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        }
+        if self.series.iter().any(|s| !s.name.is_empty()) {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()?;
+        }
+        root.present()?;
+        Ok(())
     }
-    if series.iter().any(|s| !s.name.is_empty()) {
+}
+
+/// Points with a symmetric error on y, drawn as a line through the points
+/// with vertical error bars.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ErrorSeries {
+    pub name: String,
+    /// (x, y, half-width of the error bar); a NaN half-width draws no bar.
+    pub points: Vec<(f64, f64, f64)>,
+    /// Palette index of the colour (series sharing one keep one colour).
+    pub color: usize,
+    /// Line through the points (else points only).
+    pub line: bool,
+}
+
+/// A labelled vertical line at `x` (dashed), e.g. a predicted optimum.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarkerLine {
+    pub name: String,
+    pub x: f64,
+    pub color: usize,
+}
+
+/// A plot with a logarithmic x axis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogXPlot {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<ErrorSeries>,
+    pub markers: Vec<MarkerLine>,
+    /// Horizontal reference level drawn as a thin grey line (e.g. 0.3), if any.
+    pub reference_y: Option<f64>,
+}
+
+/// Writes a [`LogXPlot`] (SVG or PNG by the extension). x must be positive;
+/// non-finite points are left out; at least one point is needed.
+pub fn plot_log_x(path: &Path, plot: &LogXPlot) -> Result<()> {
+    let pts = || {
+        plot.series
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.0 > 0.0 && p.0.is_finite() && p.1.is_finite())
+    };
+    let (mut xmin, mut xmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut ymin, mut ymax) = (f64::INFINITY, f64::NEG_INFINITY);
+    for &(x, y, e) in pts() {
+        let e = if e.is_finite() { e } else { 0.0 };
+        xmin = xmin.min(x);
+        xmax = xmax.max(x);
+        ymin = ymin.min(y - e);
+        ymax = ymax.max(y + e);
+    }
+    for m in plot.markers.iter().filter(|m| m.x > 0.0 && m.x.is_finite()) {
+        xmin = xmin.min(m.x);
+        xmax = xmax.max(m.x);
+    }
+    if !xmin.is_finite() || !ymin.is_finite() {
+        return Err(SignalsError::Plot {
+            path: path.to_path_buf(),
+            message: "no points to plot".into(),
+        });
+    }
+    if let Some(r) = plot.reference_y {
+        ymin = ymin.min(r);
+        ymax = ymax.max(r);
+    }
+    let y_range = pad(ymin.min(0.0), ymax);
+    let x_range = (xmin / 1.25)..(xmax * 1.25);
+    write_figure(
+        path,
+        PLOT_SIZE_PX,
+        &LogXFigure {
+            plot,
+            x_range,
+            y_range,
+        },
+    )
+}
+
+struct LogXFigure<'a> {
+    plot: &'a LogXPlot,
+    x_range: Range,
+    y_range: Range,
+}
+
+impl Figure for LogXFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let p = self.plot;
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(root)
+            .caption(p.title.as_str(), ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(48)
+            .y_label_area_size(64)
+            .build_cartesian_2d(self.x_range.clone().log_scale(), self.y_range.clone())?;
+        chart
+            .configure_mesh()
+            .x_desc(p.x_label.as_str())
+            .y_desc(p.y_label.as_str())
+            .x_label_formatter(&|x| format!("{x}"))
+            .draw()?;
+        let (y0, y1) = (self.y_range.start, self.y_range.end);
+        if let Some(r) = p.reference_y {
+            let grey = RGBColor(150, 150, 150);
+            chart
+                .draw_series(LineSeries::new(
+                    [(self.x_range.start, r), (self.x_range.end, r)],
+                    grey.stroke_width(1),
+                ))?
+                .label(format!("efficiency {r}"))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
+        }
+        for m in &p.markers {
+            let color = Palette99::pick(m.color).to_rgba();
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(m.x, y0), (m.x, y1)],
+                    6,
+                    4,
+                    color.stroke_width(2),
+                ))?
+                .label(m.name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 8, y)], color));
+        }
+        for s in &p.series {
+            let color = Palette99::pick(s.color).to_rgba();
+            let ok: Vec<(f64, f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|q| q.0 > 0.0 && q.0.is_finite() && q.1.is_finite())
+                .collect();
+            if ok.is_empty() {
+                continue;
+            }
+            let anno = if s.line {
+                chart.draw_series(LineSeries::new(
+                    ok.iter().map(|q| (q.0, q.1)),
+                    color.stroke_width(2),
+                ))?
+            } else {
+                chart.draw_series(
+                    ok.iter()
+                        .map(|q| TriangleMarker::new((q.0, q.1), 5, color.filled())),
+                )?
+            };
+            let line = s.line;
+            anno.label(s.name.as_str()).legend(move |(x, y)| {
+                if line {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                } else {
+                    PathElement::new(vec![(x + 8, y), (x + 12, y)], color.stroke_width(5))
+                }
+            });
+            if s.line {
+                chart.draw_series(
+                    ok.iter()
+                        .map(|q| Circle::new((q.0, q.1), 3, color.filled())),
+                )?;
+            }
+            chart.draw_series(ok.iter().filter(|q| q.2.is_finite() && q.2 > 0.0).map(|q| {
+                ErrorBar::new_vertical(q.0, q.1 - q.2, q.1, q.1 + q.2, color.stroke_width(1), 8)
+            }))?;
+        }
         chart
             .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
+            .label_font(("sans-serif", 13))
             .draw()?;
+        root.present()?;
+        Ok(())
     }
-    root.present()?;
-    Ok(())
+}
+
+/// One cell of a [`HeatMap`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeatCell {
+    /// Column and row (0-based; row 0 at the bottom).
+    pub col: usize,
+    pub row: usize,
+    /// The value coloured; None draws a hatched grey cell.
+    pub value: Option<f64>,
+    /// Text written in the cell (one or two short lines, '\n' between).
+    pub text: String,
+}
+
+/// Dashed segments over a [`HeatMap`], in cell coordinates (column c spans
+/// x = c..c + 1, row r spans y = r..r + 1), e.g. a predicted amplitude
+/// marked across each frequency's column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeatOverlay {
+    pub name: String,
+    pub segments: Vec<[(f64, f64); 2]>,
+    pub color: RgbColor,
+}
+
+/// A colour, for callers that do not use plotters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RgbColor(pub u8, pub u8, pub u8);
+
+/// A value over columns × rows of conditions, coloured, with text in each cell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeatMap {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub columns: Vec<String>,
+    pub rows: Vec<String>,
+    pub cells: Vec<HeatCell>,
+    /// Name of the value, on the colour bar.
+    pub value_label: String,
+    /// Values mapped to the ends of the colour scale.
+    pub value_range: (f64, f64),
+    pub overlays: Vec<HeatOverlay>,
+    /// A note under the plot (e.g. a legend of the cell texts).
+    pub footnote: String,
+}
+
+/// Writes a [`HeatMap`] (SVG or PNG by the extension).
+pub fn plot_heat_map(path: &Path, map: &HeatMap) -> Result<()> {
+    if map.columns.is_empty() || map.rows.is_empty() {
+        return Err(SignalsError::Plot {
+            path: path.to_path_buf(),
+            message: "a heat map needs at least one column and one row".into(),
+        });
+    }
+    write_figure(path, (900, 700), &HeatFigure(map))
+}
+
+struct HeatFigure<'a>(&'a HeatMap);
+
+/// Viridis, sampled at 6 stops and interpolated linearly; `t` in 0..1.
+fn viridis(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 6] = [
+        (68.0, 1.0, 84.0),
+        (65.0, 68.0, 135.0),
+        (42.0, 120.0, 142.0),
+        (34.0, 168.0, 132.0),
+        (122.0, 209.0, 81.0),
+        (253.0, 231.0, 37.0),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let x = t * (STOPS.len() - 1) as f64;
+    let i = (x.floor() as usize).min(STOPS.len() - 2);
+    let f = x - i as f64;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let mix = |p: f64, q: f64| (p + (q - p) * f).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+impl Figure for HeatFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let m = self.0;
+        let (nc, nr) = (m.columns.len() as f64, m.rows.len() as f64);
+        root.fill(&WHITE)?;
+        let (w, h) = root.dim_in_pixel();
+        let (main, bar) = root.split_horizontally(w - 110);
+        let mut chart = ChartBuilder::on(&main)
+            .caption(m.title.as_str(), ("sans-serif", 22))
+            .margin(12)
+            .margin_bottom(40)
+            .x_label_area_size(56)
+            .y_label_area_size(72)
+            .build_cartesian_2d(0f64..nc, 0f64..nr)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(0)
+            .y_labels(0)
+            .x_desc(m.x_label.as_str())
+            .y_desc(m.y_label.as_str())
+            .draw()?;
+        let (lo, hi) = m.value_range;
+        let scale = |v: f64| (v - lo) / (hi - lo).max(f64::MIN_POSITIVE);
+        chart.draw_series(m.cells.iter().map(|c| {
+            let (x, y) = (c.col as f64, c.row as f64);
+            let fill = match c.value {
+                Some(v) if v.is_finite() => viridis(scale(v)).filled(),
+                _ => RGBColor(215, 215, 215).filled(),
+            };
+            Rectangle::new([(x, y), (x + 1.0, y + 1.0)], fill)
+        }))?;
+        // Hatch the cells without a value.
+        for c in m
+            .cells
+            .iter()
+            .filter(|c| !c.value.is_some_and(f64::is_finite))
+        {
+            let (x, y) = (c.col as f64, c.row as f64);
+            for k in 1..4 {
+                let f = k as f64 / 4.0;
+                chart.draw_series(LineSeries::new(
+                    [(x + f, y), (x, y + f)],
+                    RGBColor(160, 160, 160).stroke_width(1),
+                ))?;
+                chart.draw_series(LineSeries::new(
+                    [(x + 1.0, y + f), (x + f, y + 1.0)],
+                    RGBColor(160, 160, 160).stroke_width(1),
+                ))?;
+            }
+        }
+        for c in &m.cells {
+            let dark = c.value.is_some_and(|v| v.is_finite() && scale(v) < 0.6);
+            let color = if dark { WHITE } else { BLACK };
+            let lines: Vec<&str> = c.text.lines().collect();
+            let n = lines.len() as f64;
+            for (k, line) in lines.iter().enumerate() {
+                let dy = (k as f64 - (n - 1.0) / 2.0) * 0.22;
+                let style = ("sans-serif", 13)
+                    .into_font()
+                    .color(&color)
+                    .pos(Pos::new(HPos::Center, VPos::Center));
+                chart.draw_series(std::iter::once(Text::new(
+                    line.to_string(),
+                    (c.col as f64 + 0.5, c.row as f64 + 0.5 - dy),
+                    style,
+                )))?;
+            }
+        }
+        for o in &m.overlays {
+            let color = RGBColor(o.color.0, o.color.1, o.color.2);
+            for (k, seg) in o.segments.iter().enumerate() {
+                let drawn = chart.draw_series(DashedLineSeries::new(
+                    seg.iter().copied(),
+                    8,
+                    4,
+                    color.stroke_width(3),
+                ))?;
+                if k == 0 {
+                    drawn.label(o.name.as_str()).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+                    });
+                }
+            }
+        }
+        if !m.overlays.is_empty() {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperLeft)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .draw()?;
+        }
+        // Column and row names at the cell centres.
+        let tick = ("sans-serif", 14).into_font();
+        for (i, name) in m.columns.iter().enumerate() {
+            let (px, py) = chart.backend_coord(&(i as f64 + 0.5, 0.0));
+            root.draw(&Text::new(
+                name.clone(),
+                (px, py + 6),
+                tick.clone()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Center, VPos::Top)),
+            ))?;
+        }
+        for (j, name) in m.rows.iter().enumerate() {
+            let (px, py) = chart.backend_coord(&(0.0, j as f64 + 0.5));
+            root.draw(&Text::new(
+                name.clone(),
+                (px - 6, py),
+                tick.clone()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Right, VPos::Center)),
+            ))?;
+        }
+        if !m.footnote.is_empty() {
+            root.draw(&Text::new(
+                m.footnote.clone(),
+                (12, h as i32 - 20),
+                ("sans-serif", 13)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+        }
+        // Colour bar.
+        let (_, bh) = bar.dim_in_pixel();
+        let (top, bottom) = (60i32, bh as i32 - 100);
+        let steps = 100;
+        for k in 0..steps {
+            let t0 = k as f64 / steps as f64;
+            let y_a = bottom - ((bottom - top) as f64 * t0) as i32;
+            let y_b = bottom - ((bottom - top) as f64 * (t0 + 1.0 / steps as f64)) as i32;
+            bar.draw(&Rectangle::new(
+                [(10, y_b - 1), (40, y_a)],
+                viridis(t0).filled(),
+            ))?;
+        }
+        bar.draw(&Rectangle::new(
+            [(10, top), (40, bottom)],
+            BLACK.stroke_width(1),
+        ))?;
+        for k in 0..=4 {
+            let t = k as f64 / 4.0;
+            let y = bottom - ((bottom - top) as f64 * t) as i32;
+            bar.draw(&Text::new(
+                format!("{:.2}", lo + t * (hi - lo)),
+                (46, y),
+                ("sans-serif", 13)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+        }
+        bar.draw(&Text::new(
+            m.value_label.clone(),
+            (10, top - 24),
+            ("sans-serif", 14)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Left, VPos::Center)),
+        ))?;
+        root.present()?;
+        Ok(())
+    }
+}
+
+/// One panel of a [`PanelStrip`]: circles in data units, over a rectangle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CirclePanel {
+    pub title: String,
+    /// Opposite corners of the outline drawn behind the circles (data units).
+    pub outline: [(f64, f64); 2],
+    /// (x, y, radius, value), drawn in order (last on top).
+    pub circles: Vec<(f64, f64, f64, f64)>,
+}
+
+/// Panels side by side sharing axes and a colour scale (e.g. views of a bed
+/// at several phases of a cycle).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PanelStrip {
+    pub title: String,
+    pub panels: Vec<CirclePanel>,
+    /// Data ranges of every panel (equal scales keep circles round).
+    pub x_range: (f64, f64),
+    pub y_range: (f64, f64),
+    pub value_label: String,
+    pub value_range: (f64, f64),
+    pub footnote: String,
+}
+
+/// Writes a [`PanelStrip`] (SVG or PNG by the extension).
+pub fn plot_panel_strip(path: &Path, strip: &PanelStrip) -> Result<()> {
+    let n = strip.panels.len().max(1) as u32;
+    let (xw, yh) = (
+        strip.x_range.1 - strip.x_range.0,
+        strip.y_range.1 - strip.y_range.0,
+    );
+    if !(xw > 0.0 && yh > 0.0) || strip.panels.is_empty() {
+        return Err(SignalsError::Plot {
+            path: path.to_path_buf(),
+            message: "a panel strip needs panels and positive ranges".into(),
+        });
+    }
+    let panel_w = 170u32;
+    let panel_h = ((panel_w - 20) as f64 * yh / xw) as u32 + 50;
+    write_figure(path, (n * panel_w + 110, panel_h + 90), &StripFigure(strip))
+}
+
+struct StripFigure<'a>(&'a PanelStrip);
+
+impl Figure for StripFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let s = self.0;
+        root.fill(&WHITE)?;
+        let (w, h) = root.dim_in_pixel();
+        let titled = root.titled(s.title.as_str(), ("sans-serif", 20))?;
+        let (body, foot) = titled.split_vertically(h as i32 - 70);
+        let (panels_area, bar) = body.split_horizontally(w as i32 - 110);
+        let areas = panels_area.split_evenly((1, s.panels.len()));
+        let (lo, hi) = s.value_range;
+        let scale = |v: f64| (v - lo) / (hi - lo).max(f64::MIN_POSITIVE);
+        for (area, panel) in areas.iter().zip(&s.panels) {
+            let mut chart = ChartBuilder::on(area)
+                .caption(panel.title.as_str(), ("sans-serif", 14))
+                .margin(6)
+                .build_cartesian_2d(s.x_range.0..s.x_range.1, s.y_range.0..s.y_range.1)?;
+            let [a, b] = panel.outline;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [a, b],
+                RGBColor(235, 235, 235).filled(),
+            )))?;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [a, b],
+                BLACK.stroke_width(2),
+            )))?;
+            let (x0, _) = chart.backend_coord(&(s.x_range.0, s.y_range.0));
+            let (x1, _) = chart.backend_coord(&(s.x_range.1, s.y_range.0));
+            let px_per_unit = (x1 - x0) as f64 / (s.x_range.1 - s.x_range.0);
+            chart.draw_series(panel.circles.iter().map(|&(x, y, r, v)| {
+                let px = ((r * px_per_unit).round() as i32).max(1);
+                Circle::new((x, y), px, viridis(scale(v)).filled())
+            }))?;
+            chart.draw_series(panel.circles.iter().map(|&(x, y, r, _)| {
+                let px = ((r * px_per_unit).round() as i32).max(1);
+                Circle::new((x, y), px, RGBColor(40, 40, 40).stroke_width(1))
+            }))?;
+        }
+        // Colour bar.
+        let (_, bh) = bar.dim_in_pixel();
+        let (top, bottom) = (30i32, bh as i32 - 20);
+        let steps = 100;
+        for k in 0..steps {
+            let t0 = k as f64 / steps as f64;
+            let y_a = bottom - ((bottom - top) as f64 * t0) as i32;
+            let y_b = bottom - ((bottom - top) as f64 * (t0 + 1.0 / steps as f64)) as i32;
+            bar.draw(&Rectangle::new(
+                [(10, y_b - 1), (35, y_a)],
+                viridis(t0).filled(),
+            ))?;
+        }
+        bar.draw(&Rectangle::new(
+            [(10, top), (35, bottom)],
+            BLACK.stroke_width(1),
+        ))?;
+        for k in 0..=4 {
+            let t = k as f64 / 4.0;
+            let y = bottom - ((bottom - top) as f64 * t) as i32;
+            bar.draw(&Text::new(
+                format!("{:.2}", lo + t * (hi - lo)),
+                (40, y),
+                ("sans-serif", 12)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+        }
+        bar.draw(&Text::new(
+            s.value_label.clone(),
+            (5, top - 16),
+            ("sans-serif", 13)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Left, VPos::Center)),
+        ))?;
+        for (k, line) in s.footnote.lines().enumerate() {
+            foot.draw(&Text::new(
+                line.to_string(),
+                (12, 14 + 18 * k as i32),
+                ("sans-serif", 13)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+        }
+        root.present()?;
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -194,6 +848,79 @@ mod tests {
         ] {
             assert!(svg.contains(text), "missing {text}");
         }
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn log_plots_and_heat_maps_render_as_svg_and_png() {
+        let dir = std::env::temp_dir().join(format!("vlab-plot-more-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let plot = LogXPlot {
+            title: "efficiency".into(),
+            x_label: "Gamma".into(),
+            y_label: "eta".into(),
+            series: vec![ErrorSeries {
+                name: "DEM 40 Hz".into(),
+                points: vec![(1.0, 0.01, f64::NAN), (3.0, 0.5, 0.02), (20.0, 0.8, 0.01)],
+                color: 0,
+                line: true,
+            }],
+            markers: vec![MarkerLine {
+                name: "CP onset".into(),
+                x: 22.3,
+                color: 0,
+            }],
+            reference_y: Some(0.3),
+        };
+        let map = HeatMap {
+            title: "map".into(),
+            x_label: "f".into(),
+            y_label: "Gamma".into(),
+            columns: vec!["20".into(), "40".into()],
+            rows: vec!["1".into(), "3".into()],
+            cells: vec![
+                HeatCell {
+                    col: 0,
+                    row: 0,
+                    value: Some(0.1),
+                    text: "S\n0.10".into(),
+                },
+                HeatCell {
+                    col: 1,
+                    row: 1,
+                    value: None,
+                    text: "rig".into(),
+                },
+            ],
+            value_label: "eta".into(),
+            value_range: (0.0, 1.0),
+            overlays: vec![HeatOverlay {
+                name: "CP".into(),
+                segments: vec![[(0.0, 1.2), (1.0, 1.2)]],
+                color: RgbColor(255, 0, 0),
+            }],
+            footnote: "S solid-like".into(),
+        };
+        for ext in ["svg", "png"] {
+            let p = dir.join(format!("eff.{ext}"));
+            plot_log_x(&p, &plot).expect("log plot");
+            let m = dir.join(format!("map.{ext}"));
+            plot_heat_map(&m, &map).expect("heat map");
+            let bytes = std::fs::read(&p).expect("read");
+            if ext == "png" {
+                assert_eq!(&bytes[1..4], b"PNG");
+            } else {
+                let svg = String::from_utf8(bytes).expect("utf8");
+                assert!(svg.contains("CP onset") && svg.contains("DEM 40 Hz"));
+            }
+        }
+        let leftovers: Vec<_> = std::fs::read_dir(&dir)
+            .expect("list")
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+            .collect();
+        assert!(leftovers.is_empty(), "temporary files left");
+        assert!(plot_log_x(&dir.join("x.pdf"), &plot).is_err());
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -1,0 +1,189 @@
+//! Side views of the bed at eight phases of one steady cycle, coloured by
+//! particle speed, the way the thesis shows its motional phases (Fig. 6.6,
+//! 6.14, 6.19–6.21).
+//!
+//! [`PhaseSnapshots`] is a [`StepObserver`] that keeps the particles at the
+//! steps nearest to `(n + k / 8) T`, k = 0..7, of the last whole drive cycle n
+//! (phase 0: the enclosure at mid-stroke moving in +z, at its peak speed). It
+//! captures every cycle and keeps the last whole one, so it works for a drive
+//! whose length is known only at its end (run until steady). The view is
+//! the x–z plane (enclosure axis up) for a vertical damper and the z–y plane
+//! (axis across, gravity down) for a horizontal one; nearer particles are
+//! drawn over farther ones.
+
+#[cfg(feature = "plot")]
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::dem::World;
+use crate::scene::damper::{Kinematics, StepObserver};
+#[cfg(feature = "plot")]
+use crate::scene::file::Orientation;
+#[cfg(feature = "plot")]
+use crate::signals::{CirclePanel, PanelStrip, SignalsError, plot_panel_strip};
+
+/// Phases per cycle.
+pub const PHASES: usize = 8;
+
+/// One captured phase.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    /// Degrees of the drive cycle.
+    pub phase_deg: f64,
+    pub time_s: f64,
+    pub enclosure_displacement_m: f64,
+    pub enclosure_velocity_mps: f64,
+    pub position: Vec<DVec3>,
+    pub speed_mps: Vec<f64>,
+    pub radius_m: Vec<f64>,
+}
+
+/// Captures [`PHASES`] snapshots of the last whole cycle of a drive.
+#[derive(Debug, Clone)]
+pub struct PhaseSnapshots {
+    period_s: f64,
+    /// Index of the next phase to capture, counted from the drive start
+    /// (cycle `next / PHASES`, phase `next % PHASES`).
+    next: u64,
+    current: Vec<Snapshot>,
+    /// The last whole cycle captured (empty until one is).
+    pub snapshots: Vec<Snapshot>,
+}
+
+impl PhaseSnapshots {
+    /// Snapshots of the last whole cycle of `freq_hz` that starts at or after
+    /// `from_s` (from the drive start; earlier cycles are not captured).
+    pub fn new(freq_hz: f64, from_s: f64) -> Self {
+        let period = 1.0 / freq_hz;
+        let first_cycle = (from_s / period - 1e-9).ceil().max(0.0) as u64;
+        PhaseSnapshots {
+            period_s: period,
+            next: first_cycle * PHASES as u64,
+            current: Vec::with_capacity(PHASES),
+            snapshots: Vec::new(),
+        }
+    }
+
+    /// Draws the strip into `path` (SVG or PNG by the extension): `title`
+    /// above, the enclosure of `radius_m` × `length_m` in each panel, speeds
+    /// coloured from 0 to twice `peak_speed_mps` (the enclosure's).
+    #[cfg(feature = "plot")]
+    #[allow(clippy::too_many_arguments)]
+    pub fn plot(
+        &self,
+        path: &Path,
+        title: &str,
+        orientation: Orientation,
+        radius_m: f64,
+        length_m: f64,
+        peak_speed_mps: f64,
+    ) -> Result<(), SignalsError> {
+        let mm = 1e3;
+        let amp = self
+            .snapshots
+            .iter()
+            .map(|s| s.enclosure_displacement_m.abs())
+            .fold(0.0, f64::max);
+        // (across, along-the-view-up, depth) of a point, in mm.
+        let view = |p: DVec3| match orientation {
+            Orientation::Vertical => (p.x, p.z, p.y),
+            Orientation::Horizontal => (p.z, p.y, p.x),
+        };
+        let (x_range, y_range) = match orientation {
+            Orientation::Vertical => (
+                (-radius_m * mm * 1.05, radius_m * mm * 1.05),
+                (
+                    (-amp - 0.05 * length_m) * mm,
+                    (length_m + amp + 0.05 * length_m) * mm,
+                ),
+            ),
+            Orientation::Horizontal => (
+                (
+                    (-amp - 0.05 * length_m) * mm,
+                    (length_m + amp + 0.05 * length_m) * mm,
+                ),
+                (-radius_m * mm * 1.05, radius_m * mm * 1.05),
+            ),
+        };
+        let panels = self
+            .snapshots
+            .iter()
+            .map(|s| {
+                let u = s.enclosure_displacement_m;
+                let outline = match orientation {
+                    Orientation::Vertical => [
+                        (-radius_m * mm, u * mm),
+                        (radius_m * mm, (u + length_m) * mm),
+                    ],
+                    Orientation::Horizontal => [
+                        (u * mm, -radius_m * mm),
+                        ((u + length_m) * mm, radius_m * mm),
+                    ],
+                };
+                let mut order: Vec<usize> = (0..s.position.len()).collect();
+                order.sort_by(|&a, &b| view(s.position[b]).2.total_cmp(&view(s.position[a]).2));
+                CirclePanel {
+                    title: format!(
+                        "{:.0} deg, v_enc {:+.2} m/s",
+                        s.phase_deg, s.enclosure_velocity_mps
+                    ),
+                    outline,
+                    circles: order
+                        .into_iter()
+                        .map(|i| {
+                            let (x, y, _) = view(s.position[i]);
+                            (x * mm, y * mm, s.radius_m[i] * mm, s.speed_mps[i])
+                        })
+                        .collect(),
+                }
+            })
+            .collect();
+        plot_panel_strip(
+            path,
+            &PanelStrip {
+                title: title.to_string(),
+                panels,
+                x_range,
+                y_range,
+                value_label: "speed (m/s)".into(),
+                value_range: (0.0, 2.0 * peak_speed_mps),
+                footnote: format!(
+                    "side views (mm) at 8 phases of the last drive cycle; phase 0: enclosure at mid-stroke moving {} at its peak speed {peak_speed_mps:.2} m/s",
+                    match orientation {
+                        Orientation::Vertical => "up",
+                        Orientation::Horizontal => "right",
+                    }
+                ),
+            },
+        )
+    }
+}
+
+impl StepObserver for PhaseSnapshots {
+    fn observe(&mut self, t_s: f64, world: &World, enclosure: &Kinematics) {
+        let target = self.next as f64 * self.period_s / PHASES as f64;
+        let dt = world.dt_s();
+        if t_s + 0.5 * dt < target {
+            return;
+        }
+        let k = (self.next % PHASES as u64) as usize;
+        self.next += 1;
+        if k == 0 {
+            self.current.clear();
+        }
+        let p = &world.particles;
+        self.current.push(Snapshot {
+            phase_deg: 360.0 * k as f64 / PHASES as f64,
+            time_s: t_s,
+            enclosure_displacement_m: enclosure.displacement_m,
+            enclosure_velocity_mps: enclosure.velocity_mps,
+            position: p.position.clone(),
+            speed_mps: p.velocity.iter().map(|v| v.length()).collect(),
+            radius_m: p.radius.clone(),
+        });
+        if k == PHASES - 1 && self.current.len() == PHASES {
+            std::mem::swap(&mut self.snapshots, &mut self.current);
+        }
+    }
+}

@@ -1,0 +1,1498 @@
+//! Sweeps: damping efficiency and motional phase over many conditions
+//! (fill ratio × orientation × frequency × amplitude × seed), crash-safe,
+//! resumable and shardable (thesis Fig. 6.4, 6.8, 7.10–7.11).
+//!
+//! A sweep is a [`SweepPlan`]: a base scene, a rig, and lists of values. Its
+//! conditions come in one canonical order (fill ratio, orientation,
+//! frequency, Γ, seed: the last varies fastest). Each condition is the shake
+//! `vlab shake` runs ([`run_shake_on_bed`]: the same settling, drive protocol,
+//! rig and on-the-fly phase calibration), so a sweep row and a `shake` of the
+//! same condition give the same numbers. Beds are settled once per seed, fill
+//! ratio and orientation and driven at every frequency and amplitude.
+//!
+//! `sweep.csv` is self-describing: `#` lines name the sweep (its lists, the
+//! scene, the rig, a fingerprint of the protocol and of the whole sweep, and
+//! the shard), then one header row and one row per condition. The file is
+//! rewritten atomically after every finished condition, so a crash or a kill
+//! loses only the conditions in progress; a resumed sweep reads it back and
+//! runs only what it lacks; when the sweep completes the rows are put in
+//! canonical order. Conditions the rig cannot reach are rows too, with status
+//! `unreachable` and the rig's reason; a condition whose DEM fails is a row
+//! with status `failed` and the error (it is not retried on resume).
+//!
+//! Shard `I/N` (1 ≤ I ≤ N) runs the conditions whose canonical index k has
+//! `k mod N = I − 1`; [`merge_shards`] joins the N shard files of one sweep into
+//! the file the unsharded sweep writes, and refuses files of different sweeps,
+//! missing or repeated shards, and incomplete shards.
+
+use std::collections::{BTreeMap, HashMap};
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::atomic_write::write_atomic;
+use crate::rig::{RigFile, RigSpec, ShakerKind};
+use crate::scene::file::{CyclesSpec, Orientation, Scene, SceneError};
+use crate::scene::measurement::{CalibrationSource, ShakeSetup, shaker_name};
+use crate::scene::phases::{
+    PhaseIndicators, PhaseObserver, PhaseThresholds, classify, collective_impacts,
+};
+use crate::scene::predict::{CLOSE_PACKING, effective_clearance_m};
+use crate::scene::settle::{SettledBed, settle_bed};
+use crate::scene::shake::{check_drive, resolve_rig, run_shake_on_bed};
+use crate::validation::InvalidParameter;
+
+/// First line of every sweep file.
+pub const SWEEP_MAGIC: &str = "# vlab sweep";
+
+/// Errors of a sweep.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Invalid(#[from] InvalidParameter),
+    #[error("cannot write {path}: {source}")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("cannot read {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path} is not a sweep file: {reason}")]
+    NotASweep { path: PathBuf, reason: String },
+    #[error("{path} holds another sweep ({what} differ{s}): {hint}", s = if what.ends_with('s') { "" } else { "s" })]
+    OtherSweep {
+        path: PathBuf,
+        what: String,
+        hint: String,
+    },
+    #[error("cannot merge: {0}")]
+    Merge(String),
+}
+
+/// One condition of a sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Condition {
+    pub fill_ratio: f64,
+    pub orientation: Orientation,
+    pub freq_hz: f64,
+    pub gamma: f64,
+    pub seed: u64,
+}
+
+impl Condition {
+    /// Identity of a condition, exact (the CSV writes floats so that they read
+    /// back bit for bit).
+    fn key(&self) -> (u64, &'static str, u64, u64, u64) {
+        (
+            self.fill_ratio.to_bits(),
+            self.orientation.as_str(),
+            self.freq_hz.to_bits(),
+            self.gamma.to_bits(),
+            self.seed,
+        )
+    }
+
+    /// Identity of the settled bed this condition drives.
+    fn bed_key(&self) -> (u64, &'static str, u64) {
+        (
+            self.fill_ratio.to_bits(),
+            self.orientation.as_str(),
+            self.seed,
+        )
+    }
+
+    /// Relative cost: drive steps scale with cycles / frequency.
+    fn cost(&self) -> f64 {
+        1.0 / self.freq_hz
+    }
+}
+
+/// A deterministic slice of a sweep: conditions `k` with `k mod count = index − 1`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// 1-based.
+    pub index: u32,
+    pub count: u32,
+}
+
+impl Shard {
+    /// The whole sweep.
+    pub const ALL: Shard = Shard { index: 1, count: 1 };
+
+    /// Parses `I/N` with 1 ≤ I ≤ N.
+    pub fn parse(s: &str) -> Result<Shard, InvalidParameter> {
+        let bad = || InvalidParameter::new("shard", format!("'{s}'"), "", "I/N with 1 <= I <= N");
+        let (i, n) = s.trim().split_once('/').ok_or_else(bad)?;
+        let index: u32 = i.trim().parse().map_err(|_| bad())?;
+        let count: u32 = n.trim().parse().map_err(|_| bad())?;
+        if index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+
+    fn holds(&self, k: usize) -> bool {
+        k % self.count as usize == (self.index - 1) as usize
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// What to sweep.
+#[derive(Debug, Clone)]
+pub struct SweepPlan {
+    /// The scene; each condition sets its seed, orientation and fill ratio.
+    pub scene: Scene,
+    /// Built-in rig name or rig file.
+    pub rig: String,
+    /// Drive of the rig [default: the rig's own].
+    pub shaker: Option<ShakerKind>,
+    pub freqs_hz: Vec<f64>,
+    pub gammas: Vec<f64>,
+    pub seeds: Vec<u64>,
+    /// Fill ratios, reached by changing the enclosure length with the particle
+    /// count fixed (as thesis Table 6.1 did); empty: the scene's own.
+    pub fill_ratios: Vec<f64>,
+    /// Empty: the scene's own.
+    pub orientations: Vec<Orientation>,
+}
+
+impl SweepPlan {
+    fn fills(&self) -> Vec<f64> {
+        if self.fill_ratios.is_empty() {
+            vec![self.scene.fill_ratio()]
+        } else {
+            self.fill_ratios.clone()
+        }
+    }
+
+    fn orients(&self) -> Vec<Orientation> {
+        if self.orientations.is_empty() {
+            vec![self.scene.enclosure.orientation]
+        } else {
+            self.orientations.clone()
+        }
+    }
+
+    /// Every condition, in canonical order.
+    pub fn conditions(&self) -> Vec<Condition> {
+        let mut out = Vec::new();
+        for fill_ratio in self.fills() {
+            for orientation in self.orients() {
+                for &freq_hz in &self.freqs_hz {
+                    for &gamma in &self.gammas {
+                        for &seed in &self.seeds {
+                            out.push(Condition {
+                                fill_ratio,
+                                orientation,
+                                freq_hz,
+                                gamma,
+                                seed,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The conditions of `shard`, in canonical order.
+    pub fn shard_conditions(&self, shard: Shard) -> Vec<Condition> {
+        self.conditions()
+            .into_iter()
+            .enumerate()
+            .filter(|(k, _)| shard.holds(*k))
+            .map(|(_, c)| c)
+            .collect()
+    }
+
+    /// The scene of condition `c`: the plan's scene with its seed, orientation
+    /// and (through the enclosure length) fill ratio.
+    pub fn scene_for(&self, c: &Condition) -> Result<Scene, SceneError> {
+        let mut s = self.scene.clone();
+        s.simulation.seed = c.seed;
+        s.enclosure.orientation = c.orientation;
+        if c.fill_ratio.to_bits() != self.scene.fill_ratio().to_bits() {
+            let r = 0.5 * s.enclosure.inner_diameter_m;
+            s.enclosure.inner_length_m =
+                s.particles.count as f64 * s.particle_volume_m3() / (c.fill_ratio * PI * r * r);
+        }
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Checks every value and every scene before anything runs.
+    pub fn validate(&self) -> Result<(), SweepError> {
+        let nonempty = |key: &str, n: usize| {
+            if n == 0 {
+                Err(InvalidParameter::new(
+                    key,
+                    "[]",
+                    "",
+                    "a list of at least one value",
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        nonempty("freq_hz", self.freqs_hz.len())?;
+        nonempty("gamma", self.gammas.len())?;
+        nonempty("seeds", self.seeds.len())?;
+        for &g in &self.gammas {
+            crate::validation::positive("gamma", g, "")?;
+        }
+        for &f in &self.fill_ratios {
+            crate::validation::in_range(
+                "fill_ratio",
+                f,
+                "",
+                crate::validation::Bound::Open(0.0),
+                crate::validation::Bound::Open(CLOSE_PACKING),
+            )?;
+        }
+        // A drive run until steady keeps at least 5/8 of 4 cycles.
+        if matches!(self.scene.drive.cycles, CyclesSpec::Count(_))
+            && self.scene.drive.steady_cycles < 2
+        {
+            return Err(InvalidParameter::new(
+                "drive.steady_cycles",
+                self.scene.drive.steady_cycles,
+                "",
+                "at least 2: the rig's record needs 2 whole periods for Yang's method",
+            )
+            .into());
+        }
+        for &f in &self.freqs_hz {
+            for &g in &self.gammas {
+                check_drive(&self.scene, f, g)?;
+            }
+        }
+        // The rig must load (its limits are checked per condition).
+        RigSpec::from_name_or_path(&self.rig).map_err(SceneError::from)?;
+        for c in self.conditions() {
+            self.scene_for(&c)?;
+        }
+        Ok(())
+    }
+
+    /// Fingerprint of everything that makes two rows comparable: the scene,
+    /// the rig, the drive, the vlab version.
+    pub fn protocol_id(&self) -> String {
+        let rig = RigSpec::from_name_or_path(&self.rig)
+            .map(|r| format!("{r:?}"))
+            .unwrap_or_else(|_| self.rig.clone());
+        fingerprint(&format!(
+            "{}\n{}\n{rig}\n{:?}",
+            env!("CARGO_PKG_VERSION"),
+            self.scene.to_toml(),
+            self.shaker
+        ))
+    }
+
+    /// Fingerprint of the protocol and the lists: one sweep.
+    pub fn sweep_id(&self) -> String {
+        fingerprint(&format!("{}\n{}", self.protocol_id(), self.lists_text()))
+    }
+
+    fn lists_text(&self) -> String {
+        let join = |v: &[f64]| {
+            v.iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        format!(
+            "# freq_hz: {}\n# gamma: {}\n# seeds: {}\n# fill_ratio: {}\n# orientation: {}\n",
+            join(&self.freqs_hz),
+            join(&self.gammas),
+            self.seeds
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+            join(&self.fills()),
+            self.orients()
+                .iter()
+                .map(|o| o.as_str())
+                .collect::<Vec<_>>()
+                .join(","),
+        )
+    }
+
+    fn header(&self, shard: Shard) -> SweepHeader {
+        SweepHeader {
+            sweep_id: self.sweep_id(),
+            protocol_id: self.protocol_id(),
+            shard,
+            scene: self.scene.name.clone(),
+            rig: self.rig.clone(),
+            shaker: self.shaker.map(shaker_name).unwrap_or("rig default").into(),
+            cycles: cycles_text(&self.scene),
+            steady_cycles: self.scene.drive.steady_cycles,
+            freqs_hz: self.freqs_hz.clone(),
+            gammas: self.gammas.clone(),
+            seeds: self.seeds.clone(),
+            fill_ratios: self.fills(),
+            orientations: self.orients(),
+            particle_count: self.scene.particles.count,
+            inner_length_m: self.scene.enclosure.inner_length_m,
+            scene_fill_ratio: self.scene.fill_ratio(),
+            gravity_mps2: self.scene.simulation.gravity_mps2,
+        }
+    }
+}
+
+/// The drive length as the header states it: a number of cycles, or
+/// `steady (min-max cycles, balance b, stderr s)`.
+fn cycles_text(scene: &Scene) -> String {
+    let d = &scene.drive;
+    match &d.cycles {
+        CyclesSpec::Count(n) => n.to_string(),
+        CyclesSpec::Rule(_) => format!(
+            "steady ({}-{} cycles, balance {}, stderr {})",
+            d.min_cycles, d.max_cycles, d.balance_rel, d.stderr_rel
+        ),
+    }
+}
+
+/// FNV-1a, 64 bit, as 16 hex digits: stable across platforms and versions.
+fn fingerprint(text: &str) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+/// Status of a row.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum RowStatus {
+    #[serde(rename = "ok")]
+    Ok,
+    /// The rig cannot drive this condition.
+    #[serde(rename = "unreachable")]
+    Unreachable,
+    /// The DEM or the measurement failed; `note` says why.
+    #[serde(rename = "failed")]
+    Failed,
+}
+
+impl RowStatus {
+    fn as_str(self) -> &'static str {
+        match self {
+            RowStatus::Ok => "ok",
+            RowStatus::Unreachable => "unreachable",
+            RowStatus::Failed => "failed",
+        }
+    }
+
+    fn parse(s: &str) -> Option<Self> {
+        match s {
+            "ok" => Some(RowStatus::Ok),
+            "unreachable" => Some(RowStatus::Unreachable),
+            "failed" => Some(RowStatus::Failed),
+            _ => None,
+        }
+    }
+}
+
+/// The results of one condition; numbers are NaN unless `status` is ok.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SweepRow {
+    pub condition: Condition,
+    pub status: RowStatus,
+    /// The rig's reason for `unreachable`, the error for `failed`.
+    pub note: String,
+    /// DEM efficiency over the steady cycles (eq. 6.8).
+    pub efficiency: f64,
+    /// Its standard error from the cycle-to-cycle spread.
+    pub efficiency_se: f64,
+    /// Efficiency the rig measured (Yang's method, phase-corrected) and its
+    /// standard error over blocks of two periods (NaN below two blocks).
+    pub efficiency_measured: f64,
+    pub efficiency_measured_se: f64,
+    /// DEM energy dissipated per steady cycle (J) and its standard error.
+    pub energy_per_cycle_j: f64,
+    pub energy_per_cycle_se_j: f64,
+    pub e_max_j: f64,
+    /// (work in − dissipated) / dissipated over the steady cycles.
+    pub steadiness_rel: f64,
+    /// `yes` when the window met the scene's steady criteria, `capped` when a
+    /// drive run until steady stopped at its most cycles, else `no` (a fixed
+    /// number of cycles that did not); empty unless ok.
+    pub steady: String,
+    /// Dissipation shares: particle-particle and particle-wall, normal and tangential.
+    pub share_pp_normal: f64,
+    pub share_pp_tangential: f64,
+    pub share_pw_normal: f64,
+    pub share_pw_tangential: f64,
+    pub indicators: Option<PhaseIndicators>,
+    /// The heuristic's name of the motional phase (empty unless ok).
+    pub phase: String,
+    pub cycles: u32,
+    pub steady_cycles: u32,
+    pub steps: u64,
+    /// Wall-clock time of the drive and its measurement (s; the shared bed's
+    /// settling is not included).
+    pub wall_time_s: f64,
+}
+
+impl SweepRow {
+    fn empty(condition: Condition, status: RowStatus, note: String) -> Self {
+        SweepRow {
+            condition,
+            status,
+            note,
+            efficiency: f64::NAN,
+            efficiency_se: f64::NAN,
+            efficiency_measured: f64::NAN,
+            efficiency_measured_se: f64::NAN,
+            energy_per_cycle_j: f64::NAN,
+            energy_per_cycle_se_j: f64::NAN,
+            e_max_j: f64::NAN,
+            steadiness_rel: f64::NAN,
+            steady: String::new(),
+            share_pp_normal: f64::NAN,
+            share_pp_tangential: f64::NAN,
+            share_pw_normal: f64::NAN,
+            share_pw_tangential: f64::NAN,
+            indicators: None,
+            phase: String::new(),
+            cycles: 0,
+            steady_cycles: 0,
+            steps: 0,
+            wall_time_s: 0.0,
+        }
+    }
+}
+
+/// Whether the rig can drive condition `c`; the rig's refusal otherwise.
+fn reachability(plan: &SweepPlan, c: &Condition) -> Result<(), String> {
+    let g = plan.scene.simulation.gravity_mps2;
+    resolve_rig(&plan.rig, plan.shaker, c.freq_hz, c.gamma, g)
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
+/// Runs condition `c` on its settled `bed` (or reports it unreachable).
+pub fn run_condition(plan: &SweepPlan, bed: &SettledBed, c: &Condition) -> SweepRow {
+    if let Err(why) = reachability(plan, c) {
+        return SweepRow::empty(*c, RowStatus::Unreachable, why);
+    }
+    match try_condition(plan, bed, c) {
+        Ok(row) => row,
+        Err(e) => SweepRow::empty(*c, RowStatus::Failed, e.to_string()),
+    }
+}
+
+fn try_condition(
+    plan: &SweepPlan,
+    bed: &SettledBed,
+    c: &Condition,
+) -> Result<SweepRow, SceneError> {
+    let started = Instant::now();
+    let scene = plan.scene_for(c)?;
+    let g = scene.simulation.gravity_mps2;
+    let (rig, shaker) = resolve_rig(&plan.rig, plan.shaker, c.freq_hz, c.gamma, g)?;
+    let setup = ShakeSetup {
+        rig,
+        shaker,
+        freq_hz: c.freq_hz,
+        gamma: c.gamma,
+        calibration: CalibrationSource::OnTheFly,
+    };
+    // Sample the bed from the earliest cycle the steady window can begin at.
+    let sample_from = f64::from(scene.drive_length().min_transient_cycles()) / c.freq_hz;
+    let clearance = effective_clearance_m(
+        scene.fill_ratio(),
+        CLOSE_PACKING,
+        scene.enclosure.inner_length_m,
+    );
+    let dt = scene.drive_dt_s(c.freq_hz, c.gamma);
+    let mut observer = PhaseObserver::new(c.freq_hz, c.gamma, g, dt, sample_from, clearance);
+    let run = run_shake_on_bed(&scene, bed, &setup, &mut observer, &mut |_| {})?;
+    let s = &run.summary;
+    let impacts = collective_impacts(
+        &run.experiment.truth,
+        s.steady_start_s,
+        c.freq_hz,
+        c.gamma,
+        s.particle_mass_kg,
+        g,
+    );
+    let ind = observer.indicators(&impacts, s.steady_start_s);
+    let st = &s.dem.steadiness;
+    let pc = &s.dem.dissipated_per_cycle_j;
+    let total = pc.total();
+    Ok(SweepRow {
+        condition: *c,
+        status: RowStatus::Ok,
+        note: String::new(),
+        efficiency: s.dem.efficiency,
+        efficiency_se: s.dem.efficiency_stderr,
+        efficiency_measured: s.measured.efficiency,
+        efficiency_measured_se: s.measured.efficiency_stderr.unwrap_or(f64::NAN),
+        energy_per_cycle_j: s.dem.energy_per_cycle_j,
+        energy_per_cycle_se_j: s.dem.energy_per_cycle_stderr_j,
+        e_max_j: s.dem.e_max_j,
+        steadiness_rel: s.dem.steadiness_rel,
+        steady: if st.capped {
+            "capped"
+        } else if st.reached {
+            "yes"
+        } else {
+            "no"
+        }
+        .into(),
+        share_pp_normal: pc.pp_normal / total,
+        share_pp_tangential: pc.pp_tangential / total,
+        share_pw_normal: pc.pw_normal / total,
+        share_pw_tangential: pc.pw_tangential / total,
+        phase: classify(&ind, &PhaseThresholds::default()).as_str().into(),
+        indicators: Some(ind),
+        cycles: s.cycles,
+        steady_cycles: s.steady_cycles,
+        steps: s.steps,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// What a running sweep reports.
+#[derive(Debug, Clone)]
+pub enum SweepEvent<'a> {
+    /// The sweep starts: conditions of this shard, how many the file already
+    /// holds, beds to settle.
+    Started {
+        total: usize,
+        already_done: usize,
+        beds: usize,
+    },
+    /// A bed was settled.
+    BedSettled { seed: u64, wall_time_s: f64 },
+    /// A condition finished and its row is in the file.
+    ConditionDone {
+        row: &'a SweepRow,
+        done: usize,
+        total: usize,
+        /// Estimated wall time to the end (s), from the work done so far.
+        eta_s: f64,
+    },
+}
+
+/// The header of a sweep file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepHeader {
+    pub sweep_id: String,
+    pub protocol_id: String,
+    pub shard: Shard,
+    pub scene: String,
+    pub rig: String,
+    pub shaker: String,
+    /// A number of cycles, or `steady (...)`: the drive runs until steady.
+    pub cycles: String,
+    pub steady_cycles: u32,
+    pub freqs_hz: Vec<f64>,
+    pub gammas: Vec<f64>,
+    pub seeds: Vec<u64>,
+    pub fill_ratios: Vec<f64>,
+    pub orientations: Vec<Orientation>,
+    /// The scene's particle count, enclosure length and fill ratio (for the
+    /// bouncing-bed prediction at other fill ratios), and gravity.
+    pub particle_count: usize,
+    pub inner_length_m: f64,
+    pub scene_fill_ratio: f64,
+    pub gravity_mps2: f64,
+}
+
+impl SweepHeader {
+    /// Every condition of the sweep in canonical order.
+    pub fn conditions(&self) -> Vec<Condition> {
+        let mut out = Vec::new();
+        for &fill_ratio in &self.fill_ratios {
+            for &orientation in &self.orientations {
+                for &freq_hz in &self.freqs_hz {
+                    for &gamma in &self.gammas {
+                        for &seed in &self.seeds {
+                            out.push(Condition {
+                                fill_ratio,
+                                orientation,
+                                freq_hz,
+                                gamma,
+                                seed,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The enclosure length (m) that gives `fill_ratio` with the scene's particles.
+    pub fn length_for_fill_m(&self, fill_ratio: f64) -> f64 {
+        self.inner_length_m * self.scene_fill_ratio / fill_ratio
+    }
+
+    fn text(&self) -> String {
+        let join = |v: &[f64]| {
+            v.iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        let mut t = String::new();
+        let _ = writeln!(
+            t,
+            "{SWEEP_MAGIC} (one row per condition and seed; numbers NaN unless status = ok)"
+        );
+        let _ = writeln!(t, "# vlab_version: {}", env!("CARGO_PKG_VERSION"));
+        let _ = writeln!(t, "# sweep_id: {}", self.sweep_id);
+        let _ = writeln!(t, "# protocol_id: {}", self.protocol_id);
+        let _ = writeln!(t, "# shard: {}", self.shard);
+        let _ = writeln!(t, "# scene: {}", self.scene);
+        let _ = writeln!(t, "# rig: {}", self.rig);
+        let _ = writeln!(t, "# shaker: {}", self.shaker);
+        let _ = writeln!(t, "# cycles: {}", self.cycles);
+        let _ = writeln!(t, "# steady_cycles: {}", self.steady_cycles);
+        let _ = writeln!(t, "# freq_hz: {}", join(&self.freqs_hz));
+        let _ = writeln!(t, "# gamma: {}", join(&self.gammas));
+        let _ = writeln!(
+            t,
+            "# seeds: {}",
+            self.seeds
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        );
+        let _ = writeln!(t, "# fill_ratio: {}", join(&self.fill_ratios));
+        let _ = writeln!(
+            t,
+            "# orientation: {}",
+            self.orientations
+                .iter()
+                .map(|o| o.as_str())
+                .collect::<Vec<_>>()
+                .join(",")
+        );
+        let _ = writeln!(t, "# particle_count: {}", self.particle_count);
+        let _ = writeln!(t, "# inner_length_m: {}", self.inner_length_m);
+        let _ = writeln!(t, "# scene_fill_ratio: {}", self.scene_fill_ratio);
+        let _ = writeln!(t, "# gravity_mps2: {}", self.gravity_mps2);
+        t
+    }
+
+    fn parse(lines: &BTreeMap<String, String>, path: &Path) -> Result<Self, SweepError> {
+        let bad = |reason: String| SweepError::NotASweep {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let get = |k: &str| {
+            lines
+                .get(k)
+                .cloned()
+                .ok_or_else(|| bad(format!("no '# {k}:' line")))
+        };
+        let floats = |k: &str| -> Result<Vec<f64>, SweepError> {
+            get(k)?
+                .split(',')
+                .map(|s| {
+                    s.trim()
+                        .parse::<f64>()
+                        .map_err(|_| bad(format!("'# {k}:' has '{s}'")))
+                })
+                .collect()
+        };
+        let num = |k: &str| -> Result<f64, SweepError> {
+            get(k)?
+                .trim()
+                .parse()
+                .map_err(|_| bad(format!("'# {k}:' is not a number")))
+        };
+        let whole = |k: &str| -> Result<u64, SweepError> {
+            get(k)?
+                .trim()
+                .parse()
+                .map_err(|_| bad(format!("'# {k}:' is not a whole number")))
+        };
+        Ok(SweepHeader {
+            sweep_id: get("sweep_id")?,
+            protocol_id: get("protocol_id")?,
+            shard: Shard::parse(&get("shard")?).map_err(|e| bad(e.to_string()))?,
+            scene: get("scene")?,
+            rig: get("rig")?,
+            shaker: get("shaker")?,
+            cycles: get("cycles")?,
+            steady_cycles: whole("steady_cycles")? as u32,
+            freqs_hz: floats("freq_hz")?,
+            gammas: floats("gamma")?,
+            seeds: get("seeds")?
+                .split(',')
+                .map(|s| {
+                    s.trim()
+                        .parse::<u64>()
+                        .map_err(|_| bad(format!("'# seeds:' has '{s}'")))
+                })
+                .collect::<Result<_, _>>()?,
+            fill_ratios: floats("fill_ratio")?,
+            orientations: get("orientation")?
+                .split(',')
+                .map(|s| {
+                    parse_orientation(s.trim()).ok_or_else(|| bad(format!("orientation '{s}'")))
+                })
+                .collect::<Result<_, _>>()?,
+            particle_count: whole("particle_count")? as usize,
+            inner_length_m: num("inner_length_m")?,
+            scene_fill_ratio: num("scene_fill_ratio")?,
+            gravity_mps2: num("gravity_mps2")?,
+        })
+    }
+}
+
+fn parse_orientation(s: &str) -> Option<Orientation> {
+    match s {
+        "vertical" => Some(Orientation::Vertical),
+        "horizontal" => Some(Orientation::Horizontal),
+        _ => None,
+    }
+}
+
+/// Columns a sweep file written before they existed may lack; they read as
+/// NaN or empty.
+const LATER_COLUMNS: [&str; 2] = ["efficiency_measured_se", "steady"];
+
+/// Column names of `sweep.csv`, units in the names.
+pub const COLUMNS: [&str; 35] = [
+    "fill_ratio",
+    "orientation",
+    "freq_hz",
+    "gamma",
+    "seed",
+    "status",
+    "efficiency",
+    "efficiency_se",
+    "efficiency_measured",
+    "efficiency_measured_se",
+    "energy_per_cycle_j",
+    "energy_per_cycle_se_j",
+    "e_max_j",
+    "steadiness_rel",
+    "steady",
+    "share_pp_normal",
+    "share_pp_tangential",
+    "share_pw_normal",
+    "share_pw_tangential",
+    "impacts_per_cycle",
+    "bottom_impacts_per_cycle",
+    "lid_impacts_per_cycle",
+    "impact_phase_deg",
+    "impact_impulse_rel",
+    "contact_fraction",
+    "contact_fraction_min",
+    "com_offset_rel",
+    "com_range_rel",
+    "granular_temperature_rel",
+    "phase",
+    "cycles",
+    "steady_cycles",
+    "steps",
+    "wall_time_s",
+    "note",
+];
+
+fn row_record(r: &SweepRow) -> Vec<String> {
+    let c = &r.condition;
+    let f = |x: f64| x.to_string();
+    let i = r.indicators;
+    let ind = |g: fn(&PhaseIndicators) -> f64| i.as_ref().map_or(f64::NAN, g).to_string();
+    vec![
+        f(c.fill_ratio),
+        c.orientation.as_str().into(),
+        f(c.freq_hz),
+        f(c.gamma),
+        c.seed.to_string(),
+        r.status.as_str().into(),
+        f(r.efficiency),
+        f(r.efficiency_se),
+        f(r.efficiency_measured),
+        f(r.efficiency_measured_se),
+        f(r.energy_per_cycle_j),
+        f(r.energy_per_cycle_se_j),
+        f(r.e_max_j),
+        f(r.steadiness_rel),
+        r.steady.clone(),
+        f(r.share_pp_normal),
+        f(r.share_pp_tangential),
+        f(r.share_pw_normal),
+        f(r.share_pw_tangential),
+        ind(|p| p.impacts_per_cycle),
+        ind(|p| p.bottom_impacts_per_cycle),
+        ind(|p| p.lid_impacts_per_cycle),
+        ind(|p| p.impact_phase_deg),
+        ind(|p| p.impact_impulse_rel),
+        ind(|p| p.contact_fraction),
+        ind(|p| p.contact_fraction_min),
+        ind(|p| p.com_offset_rel),
+        ind(|p| p.com_range_rel),
+        ind(|p| p.granular_temperature_rel),
+        r.phase.clone(),
+        r.cycles.to_string(),
+        r.steady_cycles.to_string(),
+        r.steps.to_string(),
+        f(r.wall_time_s),
+        r.note.replace(['\n', '\r'], " "),
+    ]
+}
+
+/// Where each of [`COLUMNS`] is in a file's header row (`None`: a column of
+/// [`LATER_COLUMNS`] the file lacks).
+type ColumnIndex = [Option<usize>; COLUMNS.len()];
+
+fn column_index(names: &csv::StringRecord) -> Result<ColumnIndex, String> {
+    let mut index = [None; COLUMNS.len()];
+    for (slot, name) in index.iter_mut().zip(COLUMNS) {
+        *slot = names.iter().position(|n| n == name);
+        if slot.is_none() && !LATER_COLUMNS.contains(&name) {
+            return Err(format!("it has no column '{name}'"));
+        }
+    }
+    Ok(index)
+}
+
+fn parse_row(
+    rec: &csv::StringRecord,
+    index: &ColumnIndex,
+    line: u64,
+    path: &Path,
+) -> Result<SweepRow, SweepError> {
+    let bad = |what: String| SweepError::NotASweep {
+        path: path.to_path_buf(),
+        reason: format!("line {line}: {what}"),
+    };
+    // The cell of column `name`; empty for a later column the file lacks.
+    let cell = |name: &str| -> &str {
+        COLUMNS
+            .iter()
+            .position(|c| *c == name)
+            .and_then(|k| index[k])
+            .and_then(|k| rec.get(k))
+            .unwrap_or("")
+    };
+    let f = |name: &str| -> Result<f64, SweepError> {
+        let v = cell(name);
+        if v.is_empty() && LATER_COLUMNS.contains(&name) {
+            return Ok(f64::NAN);
+        }
+        v.parse::<f64>()
+            .map_err(|_| bad(format!("{name} = '{v}' is not a number")))
+    };
+    let u = |name: &str| -> Result<u64, SweepError> {
+        let v = cell(name);
+        v.parse::<u64>()
+            .map_err(|_| bad(format!("{name} = '{v}' is not a whole number")))
+    };
+    let status = RowStatus::parse(cell("status"))
+        .ok_or_else(|| bad(format!("status '{}'", cell("status"))))?;
+    let indicators = if status == RowStatus::Ok {
+        Some(PhaseIndicators {
+            impacts_per_cycle: f("impacts_per_cycle")?,
+            bottom_impacts_per_cycle: f("bottom_impacts_per_cycle")?,
+            lid_impacts_per_cycle: f("lid_impacts_per_cycle")?,
+            impact_phase_deg: f("impact_phase_deg")?,
+            impact_impulse_rel: f("impact_impulse_rel")?,
+            contact_fraction: f("contact_fraction")?,
+            contact_fraction_min: f("contact_fraction_min")?,
+            com_offset_rel: f("com_offset_rel")?,
+            com_range_rel: f("com_range_rel")?,
+            granular_temperature_rel: f("granular_temperature_rel")?,
+        })
+    } else {
+        None
+    };
+    let orientation = cell("orientation");
+    Ok(SweepRow {
+        condition: Condition {
+            fill_ratio: f("fill_ratio")?,
+            orientation: parse_orientation(orientation)
+                .ok_or_else(|| bad(format!("orientation '{orientation}'")))?,
+            freq_hz: f("freq_hz")?,
+            gamma: f("gamma")?,
+            seed: u("seed")?,
+        },
+        status,
+        efficiency: f("efficiency")?,
+        efficiency_se: f("efficiency_se")?,
+        efficiency_measured: f("efficiency_measured")?,
+        efficiency_measured_se: f("efficiency_measured_se")?,
+        energy_per_cycle_j: f("energy_per_cycle_j")?,
+        energy_per_cycle_se_j: f("energy_per_cycle_se_j")?,
+        e_max_j: f("e_max_j")?,
+        steadiness_rel: f("steadiness_rel")?,
+        steady: cell("steady").to_string(),
+        share_pp_normal: f("share_pp_normal")?,
+        share_pp_tangential: f("share_pp_tangential")?,
+        share_pw_normal: f("share_pw_normal")?,
+        share_pw_tangential: f("share_pw_tangential")?,
+        indicators,
+        phase: cell("phase").to_string(),
+        cycles: u("cycles")? as u32,
+        steady_cycles: u("steady_cycles")? as u32,
+        steps: u("steps")?,
+        wall_time_s: f("wall_time_s")?,
+        note: cell("note").to_string(),
+    })
+}
+
+/// A sweep file in memory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepFile {
+    pub header: SweepHeader,
+    pub rows: Vec<SweepRow>,
+}
+
+impl SweepFile {
+    /// Reads a sweep file.
+    pub fn read(path: &Path) -> Result<SweepFile, SweepError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    fn parse(text: &str, path: &Path) -> Result<SweepFile, SweepError> {
+        if !text.starts_with(SWEEP_MAGIC) {
+            return Err(SweepError::NotASweep {
+                path: path.to_path_buf(),
+                reason: format!("it does not start with '{SWEEP_MAGIC}'"),
+            });
+        }
+        let mut meta = BTreeMap::new();
+        for line in text.lines().take_while(|l| l.starts_with('#')) {
+            if let Some((k, v)) = line.trim_start_matches('#').split_once(':') {
+                meta.insert(k.trim().to_string(), v.trim().to_string());
+            }
+        }
+        let header = SweepHeader::parse(&meta, path)?;
+        let mut reader = csv::ReaderBuilder::new()
+            .comment(Some(b'#'))
+            .from_reader(text.as_bytes());
+        let names = reader.headers().map_err(|e| SweepError::NotASweep {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        let index = column_index(names).map_err(|reason| SweepError::NotASweep {
+            path: path.to_path_buf(),
+            reason,
+        })?;
+        let mut rows = Vec::new();
+        for rec in reader.records() {
+            let rec = rec.map_err(|e| SweepError::NotASweep {
+                path: path.to_path_buf(),
+                reason: e.to_string(),
+            })?;
+            let line = rec.position().map_or(0, |p| p.line());
+            rows.push(parse_row(&rec, &index, line, path)?);
+        }
+        Ok(SweepFile { header, rows })
+    }
+
+    /// Writes the file atomically.
+    pub fn write(&self, path: &Path) -> Result<(), SweepError> {
+        let mut body = Vec::new();
+        {
+            let mut w = csv::Writer::from_writer(&mut body);
+            let io = |e: csv::Error| std::io::Error::other(e.to_string());
+            let result = (|| -> std::io::Result<()> {
+                w.write_record(COLUMNS).map_err(io)?;
+                for r in &self.rows {
+                    w.write_record(row_record(r)).map_err(io)?;
+                }
+                w.flush()
+            })();
+            result.map_err(|source| SweepError::Write {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        }
+        let head = self.header.text();
+        write_atomic(path, |f| {
+            f.write_all(head.as_bytes())?;
+            f.write_all(&body)
+        })
+        .map_err(|source| SweepError::Write {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    /// Puts the rows in the canonical order of the header's conditions
+    /// (rows of other conditions last, in their order).
+    pub fn sort_canonical(&mut self) {
+        let order: HashMap<_, usize> = self
+            .header
+            .conditions()
+            .iter()
+            .enumerate()
+            .map(|(k, c)| (c.key(), k))
+            .collect();
+        self.rows
+            .sort_by_key(|r| order.get(&r.condition.key()).copied().unwrap_or(usize::MAX));
+    }
+}
+
+/// Runs `shard` of `plan`, keeping `sweep.csv` in `dir` up to date. With
+/// `resume`, an existing file of the same sweep and shard is read and only its
+/// missing conditions run; without it, an existing file is refused.
+pub fn run_sweep(
+    plan: &SweepPlan,
+    shard: Shard,
+    dir: &Path,
+    resume: bool,
+    on_event: &(dyn Fn(SweepEvent) + Sync),
+) -> Result<SweepFile, SweepError> {
+    plan.validate()?;
+    let path = dir.join("sweep.csv");
+    let header = plan.header(shard);
+    let mut file = if path.exists() {
+        if !resume {
+            return Err(SweepError::OtherSweep {
+                path: path.clone(),
+                what: "nothing yet, but the file exists".into(),
+                hint: "pass --resume to continue it, or choose another --out".into(),
+            }
+            .into_exists());
+        }
+        let old = SweepFile::read(&path)?;
+        for (what, same) in [
+            (
+                "the scene, rig or protocol",
+                old.header.protocol_id == header.protocol_id,
+            ),
+            (
+                "the lists of conditions",
+                old.header.sweep_id == header.sweep_id,
+            ),
+            ("the shards", old.header.shard == header.shard),
+        ] {
+            if !same {
+                return Err(SweepError::OtherSweep {
+                    path,
+                    what: what.into(),
+                    hint: "resume with the same arguments it was started with, or choose another --out".into(),
+                });
+            }
+        }
+        old
+    } else {
+        SweepFile {
+            header: header.clone(),
+            rows: Vec::new(),
+        }
+    };
+    let conditions = plan.shard_conditions(shard);
+    let done: std::collections::HashSet<_> = file.rows.iter().map(|r| r.condition.key()).collect();
+    let mut pending: Vec<Condition> = conditions
+        .iter()
+        .filter(|c| !done.contains(&c.key()))
+        .copied()
+        .collect();
+    let already_done = conditions.len() - pending.len();
+
+    // Unreachable conditions need no bed: book them at once.
+    let (reachable, unreachable): (Vec<_>, Vec<_>) = pending
+        .drain(..)
+        .partition(|c| reachability(plan, c).is_ok());
+    for c in &unreachable {
+        let why = reachability(plan, c).err().unwrap_or_default();
+        file.rows
+            .push(SweepRow::empty(*c, RowStatus::Unreachable, why));
+    }
+    let mut bed_keys: Vec<Condition> = Vec::new();
+    for c in &reachable {
+        if !bed_keys.iter().any(|b| b.bed_key() == c.bed_key()) {
+            bed_keys.push(*c);
+        }
+    }
+    on_event(SweepEvent::Started {
+        total: conditions.len(),
+        already_done,
+        beds: bed_keys.len(),
+    });
+    file.write(&path)?;
+    let total = conditions.len();
+    let done_count = already_done + unreachable.len();
+
+    let beds: Vec<Result<SettledBed, SceneError>> = bed_keys
+        .par_iter()
+        .with_max_len(1)
+        .map(|c| {
+            let scene = plan.scene_for(c)?;
+            let bed = settle_bed(&scene, &mut |_| {})?;
+            on_event(SweepEvent::BedSettled {
+                seed: c.seed,
+                wall_time_s: bed.wall_time_s,
+            });
+            Ok(bed)
+        })
+        .collect();
+    // A bed that cannot be settled is a fault of the scene, not of a
+    // condition: stop (the rows so far stay in the file).
+    let mut by_key = HashMap::new();
+    for (c, bed) in bed_keys.iter().zip(beds) {
+        by_key.insert(c.bed_key(), bed?);
+    }
+
+    // Longest first, so the last conditions to finish are short ones.
+    let mut jobs = reachable;
+    jobs.sort_by(|a, b| b.cost().total_cmp(&a.cost()));
+    let total_cost: f64 = jobs.iter().map(Condition::cost).sum();
+    let started = Instant::now();
+    struct Shared {
+        file: SweepFile,
+        done: usize,
+        cost_done: f64,
+        error: Option<SweepError>,
+    }
+    let shared = Mutex::new(Shared {
+        file,
+        done: done_count,
+        cost_done: 0.0,
+        error: None,
+    });
+    jobs.par_iter().with_max_len(1).for_each(|c| {
+        let row = match by_key.get(&c.bed_key()) {
+            Some(bed) => run_condition(plan, bed, c),
+            None => SweepRow::empty(*c, RowStatus::Failed, "no bed".into()),
+        };
+        let mut s = shared.lock().unwrap_or_else(|e| e.into_inner());
+        s.done += 1;
+        s.cost_done += c.cost();
+        s.file.rows.push(row);
+        if let Err(e) = s.file.write(&path) {
+            s.error.get_or_insert(e);
+        }
+        let elapsed = started.elapsed().as_secs_f64();
+        let eta_s = elapsed * (total_cost - s.cost_done) / s.cost_done.max(f64::MIN_POSITIVE);
+        let done = s.done;
+        if let Some(row) = s.file.rows.last() {
+            on_event(SweepEvent::ConditionDone {
+                row,
+                done,
+                total,
+                eta_s,
+            });
+        }
+    });
+    let s = shared.into_inner().unwrap_or_else(|e| e.into_inner());
+    if let Some(e) = s.error {
+        return Err(e);
+    }
+    let mut file = s.file;
+    file.sort_canonical();
+    file.write(&path)?;
+    Ok(file)
+}
+
+impl SweepError {
+    fn into_exists(self) -> SweepError {
+        match self {
+            SweepError::OtherSweep { path, hint, .. } => {
+                SweepError::Merge(format!("{} exists: {hint}", path.display()))
+            }
+            e => e,
+        }
+    }
+}
+
+/// Joins the shard files of one sweep into the file the unsharded sweep
+/// writes (rows in canonical order, shard `1/1`).
+pub fn merge_shards(files: &[SweepFile]) -> Result<SweepFile, SweepError> {
+    let first = files
+        .first()
+        .ok_or_else(|| SweepError::Merge("no shard files given".into()))?;
+    let n = first.header.shard.count;
+    let mut seen = vec![false; n as usize];
+    for f in files {
+        let h = &f.header;
+        if h.sweep_id != first.header.sweep_id {
+            return Err(SweepError::Merge(format!(
+                "shard {} is of sweep {}, shard {} of sweep {}: shards of different sweeps",
+                first.header.shard, first.header.sweep_id, h.shard, h.sweep_id
+            )));
+        }
+        if h.shard.count != n {
+            return Err(SweepError::Merge(format!(
+                "shards of {} and of {} parts: run every shard with the same N",
+                n, h.shard.count
+            )));
+        }
+        let slot = &mut seen[(h.shard.index - 1) as usize];
+        if *slot {
+            return Err(SweepError::Merge(format!("shard {} given twice", h.shard)));
+        }
+        *slot = true;
+    }
+    let missing: Vec<String> = seen
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| !**s)
+        .map(|(i, _)| format!("{}/{n}", i + 1))
+        .collect();
+    if !missing.is_empty() {
+        return Err(SweepError::Merge(format!(
+            "shard{} {} missing",
+            if missing.len() > 1 { "s" } else { "" },
+            missing.join(", ")
+        )));
+    }
+    let all = first.header.conditions();
+    let mut header = first.header.clone();
+    header.shard = Shard::ALL;
+    let mut rows = Vec::new();
+    for f in files {
+        let expected: Vec<_> = all
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| f.header.shard.holds(*k))
+            .map(|(_, c)| c.key())
+            .collect();
+        let have: std::collections::HashSet<_> = f.rows.iter().map(|r| r.condition.key()).collect();
+        let lacking = expected.iter().filter(|k| !have.contains(k)).count();
+        if lacking > 0 {
+            return Err(SweepError::Merge(format!(
+                "shard {} lacks {lacking} of its {} conditions: finish it with --resume",
+                f.header.shard,
+                expected.len()
+            )));
+        }
+        rows.extend(f.rows.iter().cloned());
+    }
+    let mut merged = SweepFile { header, rows };
+    merged.sort_canonical();
+    Ok(merged)
+}
+
+impl SweepFile {
+    /// Names the motional phase of every ok row again from its stored
+    /// indicators with `thresholds` (after the heuristic was tuned); returns
+    /// how many names changed.
+    pub fn relabel(&mut self, thresholds: &PhaseThresholds) -> usize {
+        let mut changed = 0;
+        for r in self.rows.iter_mut() {
+            if let Some(ind) = &r.indicators {
+                let name = classify(ind, thresholds).as_str();
+                if r.phase != name {
+                    r.phase = name.to_string();
+                    changed += 1;
+                }
+            }
+        }
+        changed
+    }
+}
+
+/// Mean, sample standard deviation and count of the ok rows' DEM efficiency
+/// per (fill, orientation, frequency, Γ), in canonical order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ConditionSummary {
+    pub fill_ratio: f64,
+    pub orientation: Orientation,
+    pub freq_hz: f64,
+    pub gamma: f64,
+    /// Seeds with an ok row.
+    pub n: usize,
+    pub efficiency: f64,
+    /// Standard error of the mean: over seeds when there are several, else the
+    /// one row's cycle-to-cycle standard error.
+    pub efficiency_se: f64,
+    pub efficiency_measured: f64,
+    /// The most common phase name over seeds (empty if none ok).
+    pub phase: String,
+    /// `ok`, or the status of the rows when none is ok.
+    pub status: String,
+}
+
+/// Summaries over seeds of every (fill, orientation, frequency, Γ) of the header.
+pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
+    let h = &file.header;
+    let mut out = Vec::new();
+    for &fill_ratio in &h.fill_ratios {
+        for &orientation in &h.orientations {
+            for &freq_hz in &h.freqs_hz {
+                for &gamma in &h.gammas {
+                    let rows: Vec<&SweepRow> = file
+                        .rows
+                        .iter()
+                        .filter(|r| {
+                            let c = &r.condition;
+                            c.fill_ratio.to_bits() == fill_ratio.to_bits()
+                                && c.orientation == orientation
+                                && c.freq_hz.to_bits() == freq_hz.to_bits()
+                                && c.gamma.to_bits() == gamma.to_bits()
+                        })
+                        .collect();
+                    if rows.is_empty() {
+                        continue;
+                    }
+                    let ok: Vec<&&SweepRow> =
+                        rows.iter().filter(|r| r.status == RowStatus::Ok).collect();
+                    let n = ok.len();
+                    let mean = |g: fn(&SweepRow) -> f64| {
+                        if n == 0 {
+                            f64::NAN
+                        } else {
+                            ok.iter().map(|r| g(r)).sum::<f64>() / n as f64
+                        }
+                    };
+                    let eff = mean(|r| r.efficiency);
+                    let se = if n > 1 {
+                        let var = ok.iter().map(|r| (r.efficiency - eff).powi(2)).sum::<f64>()
+                            / (n - 1) as f64;
+                        (var / n as f64).sqrt()
+                    } else if n == 1 {
+                        ok[0].efficiency_se
+                    } else {
+                        f64::NAN
+                    };
+                    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+                    for r in &ok {
+                        *counts.entry(r.phase.as_str()).or_default() += 1;
+                    }
+                    let phase = counts
+                        .iter()
+                        .max_by_key(|(_, c)| **c)
+                        .map(|(p, _)| p.to_string())
+                        .unwrap_or_default();
+                    out.push(ConditionSummary {
+                        fill_ratio,
+                        orientation,
+                        freq_hz,
+                        gamma,
+                        n,
+                        efficiency: eff,
+                        efficiency_se: se,
+                        efficiency_measured: mean(|r| r.efficiency_measured),
+                        phase,
+                        status: if n > 0 {
+                            "ok".into()
+                        } else {
+                            rows[0].status.as_str().into()
+                        },
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan() -> SweepPlan {
+        SweepPlan {
+            scene: Scene::thesis(),
+            rig: "thesis-shaker".into(),
+            shaker: None,
+            freqs_hz: vec![20.0, 40.0],
+            gammas: vec![1.0, 15.0, 30.0],
+            seeds: vec![1, 2],
+            fill_ratios: vec![],
+            orientations: vec![],
+        }
+    }
+
+    #[test]
+    fn shards_partition_the_conditions() {
+        let p = plan();
+        let all = p.conditions();
+        assert_eq!(all.len(), 12);
+        let mut joined: Vec<_> = (1..=5)
+            .flat_map(|i| p.shard_conditions(Shard { index: i, count: 5 }))
+            .map(|c| c.key())
+            .collect();
+        joined.sort();
+        let mut keys: Vec<_> = all.iter().map(|c| c.key()).collect();
+        keys.sort();
+        assert_eq!(joined, keys);
+        assert_eq!(Shard::parse("2/4"), Ok(Shard { index: 2, count: 4 }));
+        for bad in ["0/4", "5/4", "x", "1/0", "1/"] {
+            assert!(Shard::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn the_sweep_id_changes_with_lists_and_protocol() {
+        let p = plan();
+        let mut q = plan();
+        q.gammas.push(40.0);
+        assert_eq!(p.protocol_id(), q.protocol_id());
+        assert_ne!(p.sweep_id(), q.sweep_id());
+        let mut r = plan();
+        r.scene.drive.cycles = CyclesSpec::Count(9);
+        assert_ne!(p.protocol_id(), r.protocol_id());
+    }
+
+    #[test]
+    fn a_file_reads_back_bit_for_bit() {
+        let p = plan();
+        let header = p.header(Shard { index: 2, count: 3 });
+        let c = p.conditions()[4];
+        let mut ok = SweepRow::empty(c, RowStatus::Ok, String::new());
+        ok.efficiency = 0.1 + 0.2;
+        ok.efficiency_se = 1.0 / 3.0;
+        ok.indicators = Some(PhaseIndicators {
+            impacts_per_cycle: 2.0,
+            bottom_impacts_per_cycle: 1.0,
+            lid_impacts_per_cycle: 1.0,
+            impact_phase_deg: -12.5,
+            impact_impulse_rel: f64::NAN,
+            contact_fraction: 0.7,
+            contact_fraction_min: 0.2,
+            com_offset_rel: 0.1,
+            com_range_rel: 0.9,
+            granular_temperature_rel: 0.05,
+        });
+        ok.phase = "bouncing bed".into();
+        ok.steps = 123;
+        let far = SweepRow::empty(
+            p.conditions()[5],
+            RowStatus::Unreachable,
+            "Gamma 30 at 20 Hz needs \"31 mm\", the stroke is 15 mm".into(),
+        );
+        let file = SweepFile {
+            header,
+            rows: vec![ok, far],
+        };
+        let dir = std::env::temp_dir().join(format!("vlab-sweep-rt-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("sweep.csv");
+        file.write(&path).expect("write");
+        let back = SweepFile::read(&path).expect("read");
+        assert_eq!(back.header, file.header);
+        assert_eq!(back.rows.len(), 2);
+        // NaN != NaN: compare the text.
+        assert_eq!(row_record(&back.rows[0]), row_record(&file.rows[0]));
+        assert_eq!(row_record(&back.rows[1]), row_record(&file.rows[1]));
+        std::fs::remove_dir_all(dir).ok();
+    }
+}
