@@ -1,8 +1,10 @@
 //! `vlab analyze`: Yang's structure-independent method (thesis eq. 7.8–7.12) on
 //! a force/acceleration record, from vlab or from a real lab (CSV of any common
 //! dialect, WAV or TDMS): the dissipated power, the energy per cycle, the efficiency
-//! (eq. 7.7) when the particle mass and amplitude are known, and the phase
-//! correction used. Also home of [`LabFileArgs`], the options for reading a lab
+//! (eq. 7.7) when the particle mass and amplitude are known, the phase
+//! correction used (at the drive and, through the calibration's high-pass +
+//! skew model, at its harmonics) and the force polarity (a record whose force
+//! is the gauge reaction is detected, said so and corrected). Also home of [`LabFileArgs`], the options for reading a lab
 //! record that `vlab cor` shares.
 
 use std::path::{Path, PathBuf};
@@ -13,8 +15,8 @@ use serde::Serialize;
 
 use vlab::signals::csv::{CsvReadOptions, parse_delimiter};
 use vlab::signals::{
-    HarmonicPower, PhaseCalibration, PhaseCorrection, PowerOptions, Trace, TraceFormat, efficiency,
-    read_trace_with, yang_power_of_trace,
+    ForcePolarity, HarmonicPower, PhaseCalibration, PhaseCorrection, PolarityVerdict, PowerOptions,
+    Trace, TraceFormat, efficiency, read_trace_with, yang_power_of_trace,
 };
 
 use super::args;
@@ -94,6 +96,9 @@ pub struct Analysis {
     pub efficiency: Option<f64>,
     pub phase_correction_rad: f64,
     pub calibration: String,
+    /// How the phase error is carried to the harmonics.
+    pub harmonics_correction: String,
+    pub force_polarity: PolarityVerdict,
     pub n_periods: usize,
     pub n_samples: usize,
     pub per_harmonic: Vec<HarmonicPower>,
@@ -147,6 +152,7 @@ pub fn analyse(a: &AnalyzeArgs) -> Result<Analysis> {
         .map_or(PhaseCorrection::None, PhaseCorrection::Table);
     let options = PowerOptions {
         phase_correction: correction,
+        force_polarity: ForcePolarity::Detect,
         ..PowerOptions::default()
     };
     let r = yang_power_of_trace(&trace, &a.force_channel, &a.accel_channel, freq, &options)
@@ -169,6 +175,12 @@ pub fn analyse(a: &AnalyzeArgs) -> Result<Analysis> {
     if table.is_none() {
         warnings.push("no phase correction: pass --calibration to subtract the rig's phase error (thesis Fig. 7.9)".into());
     }
+    if r.force_polarity.reversed {
+        warnings.push(polarity_note(&r.force_polarity));
+    }
+    if table.as_ref().is_some_and(|t| t.model.is_none()) {
+        warnings.push("the calibration holds one frequency: its phase error is carried to the harmonics as a pure delay; calibrate at several (vlab calibrate --freq 40,160,640) to fit the rig's high-pass + skew".into());
+    }
     Ok(Analysis {
         drive_freq_hz: freq,
         power_w: r.power_w,
@@ -179,11 +191,37 @@ pub fn analyse(a: &AnalyzeArgs) -> Result<Analysis> {
             .calibration
             .as_ref()
             .map_or("none".into(), |p| p.display().to_string()),
+        harmonics_correction: harmonics_correction(table.as_ref()),
+        force_polarity: r.force_polarity,
         n_periods: r.n_periods,
         n_samples: r.n_samples,
         per_harmonic: r.per_harmonic,
         warnings,
     })
+}
+
+/// What the calibration does at the harmonics, in words.
+fn harmonics_correction(table: Option<&PhaseCalibration>) -> String {
+    match table {
+        None => "none".into(),
+        Some(t) => match &t.model {
+            Some(m) => format!(
+                "high-pass + skew model fitted to {} frequencies: net high-pass corner {:.3} Hz, skew {:.3} us",
+                t.points.len(),
+                m.force_high_pass_hz - m.accel_high_pass_hz,
+                1e6 * m.skew_s
+            ),
+            None => "pure delay through the one calibrated frequency".into(),
+        },
+    }
+}
+
+/// The sentence that says a record's force was the gauge reaction.
+fn polarity_note(v: &PolarityVerdict) -> String {
+    format!(
+        "force polarity reversed: corrected (the drive bin's complex power lies at {:.1} deg, where the gauge reaction puts it; a force on the enclosure lies near +90 deg)",
+        v.drive_power_angle_rad.to_degrees()
+    )
 }
 
 pub fn run(a: AnalyzeArgs) -> Result<()> {
@@ -216,6 +254,10 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
         1e3 * r.phase_correction_rad,
         r.calibration
     );
+    println!("  at the harmonics      {}", r.harmonics_correction);
+    if r.force_polarity.reversed {
+        println!("  force polarity reversed: corrected");
+    }
     println!("  harmonic   freq [Hz]   force [N]   velocity [m/s]   power [W]");
     for h in r.per_harmonic.iter().take(5) {
         println!(

@@ -141,6 +141,23 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
                 r.rig_model_phase_error_rad.to_degrees()
             );
         }
+        match &table.model {
+            Some(m) => println!(
+                "  high-pass + skew fit: net high-pass corner {:.4} Hz, skew {:.3} us (rig model: {:.4} Hz, {:.3} us)",
+                m.force_high_pass_hz - m.accel_high_pass_hz,
+                1e6 * m.skew_s,
+                rig.force.high_pass_hz - rig.accelerometer.high_pass_hz,
+                1e6 * (rig.force.sample_skew_s - rig.accelerometer.sample_skew_s)
+            ),
+            None => println!(
+                "  one frequency: harmonics will be corrected as a pure delay; give two or more to fit the high-pass + skew"
+            ),
+        }
+        if table.force_polarity_reversed {
+            println!(
+                "  force polarity reversed on the empty enclosure (phase near pi): stored without the pi"
+            );
+        }
         println!("  wrote {}", out.display());
     }
     Ok(())

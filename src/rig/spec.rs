@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 use super::error::{InvalidParameter, RigError, finite, non_negative, positive};
 use super::file::{RigFile, RigKind, check_header, shaker_kind};
 use super::filter::{MAX_LOW_PASS_ORDER, butterworth_response, high_pass_response};
-use crate::signals::wrap_phase_rad;
+use crate::signals::{PhaseErrorModel, wrap_phase_rad};
 use crate::validation::count_in;
 
 /// Name of the default rig.
@@ -416,6 +416,17 @@ impl RigSpec {
         let ha = self.accel_channel().response(freq_hz, fs);
         wrap_phase_rad(hf.arg() - ha.arg())
     }
+
+    /// The high-pass + skew part of [`Self::expected_phase_error_rad`]
+    /// (`signals::phase_model`, eq. M1): all of it when the two channels'
+    /// low-passes and sampling are alike, as in the built-in rigs.
+    pub fn phase_error_model(&self) -> PhaseErrorModel {
+        PhaseErrorModel {
+            force_high_pass_hz: self.force.high_pass_hz,
+            accel_high_pass_hz: self.accelerometer.high_pass_hz,
+            skew_s: self.force.sample_skew_s - self.accelerometer.sample_skew_s,
+        }
+    }
 }
 
 impl RigFile for RigSpec {
@@ -609,6 +620,13 @@ mod tests {
             assert!((got - want).abs() < 1e-12, "{freq} Hz: {got} vs {want}");
             // "A fraction of a degree" at the thesis frequencies.
             assert!(got > 0.0 && got.to_degrees() < 1.0, "{freq} Hz: {got}");
+        }
+        // The high-pass + skew model is all of it, up to the 16th harmonic of
+        // 1 kHz (tol 1e-12 rad).
+        let model = rig.phase_error_model();
+        for freq in [8.0, 40.0, 1000.0, 16_000.0] {
+            let d = model.phase_error_at(freq) - rig.expected_phase_error_rad(freq);
+            assert!(d.abs() < 1e-12, "{freq} Hz: {d}");
         }
         let ideal = RigSpec::builtin("ideal").expect("built in");
         assert_eq!(ideal.expected_phase_error_rad(40.0), 0.0);

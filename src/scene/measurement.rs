@@ -15,7 +15,14 @@
 //! The calibration runs the same rig with no particles (no DEM is built) at the
 //! same drive frequency, the same number of cycles and the same record window as
 //! the damper run, over a few amplitudes, and averages the phase error over them
-//! as the thesis did.
+//! as the thesis did. It also runs at two harmonics of the drive
+//! ([`calibration_freqs_hz`]), so that the table's high-pass + skew model
+//! (`signals::phase_model`) gives the phase error at every harmonic Yang's sum
+//! adds, rather than a pure delay extrapolated from the fundamental.
+//!
+//! The force polarity of the record is checked (`signals::power`, "Force
+//! polarity"); the blocks of the statistical error use the whole record's
+//! verdict.
 
 use std::f64::consts::PI;
 
@@ -30,8 +37,8 @@ use crate::scene::damper::{
 use crate::scene::file::{Orientation, Scene, SceneError};
 use crate::scene::record::{TruthRecorder, TruthSamples};
 use crate::signals::{
-    PhaseCalibration, PhaseCorrection, PhaseErrorPoint, PowerOptions, PowerResult, PowerWindow,
-    Trace, TraceMetadata, estimate_phase_error, max_energy_per_cycle_j, yang_power,
+    ForcePolarity, PhaseCalibration, PhaseCorrection, PhaseErrorPoint, PowerOptions, PowerResult,
+    PowerWindow, Trace, TraceMetadata, estimate_phase_error, max_energy_per_cycle_j, yang_power,
     yang_power_of_trace,
 };
 use crate::stats::{MeanStderr, mean_stderr};
@@ -96,6 +103,9 @@ pub struct Measured {
     pub efficiency_stderr: Option<f64>,
     /// Phase error subtracted at the drive frequency (rad).
     pub phase_correction_rad: f64,
+    /// True when the record's force read as the gauge reaction and was
+    /// negated (`signals::power`, "Force polarity").
+    pub force_polarity_reversed: bool,
     /// (measured − DEM dissipated per cycle) / DEM dissipated per cycle.
     pub error_vs_dem_rel: f64,
     /// (measured − DEM work in per cycle) / DEM work in per cycle: the error of
@@ -225,6 +235,7 @@ pub fn run_measured_shake_observed(
     let trace = record.from_time(steady_start_s - record_start);
     let steady_cycles = outcome.cycles - outcome.steady_first_cycle;
 
+    let cal_freqs = calibration_freqs_hz(setup.freq_hz, rig.daq.sample_rate_hz);
     let calibration = match &setup.calibration {
         CalibrationSource::Given(table, _) => table.clone(),
         CalibrationSource::OnTheFly => {
@@ -232,7 +243,7 @@ pub fn run_measured_shake_observed(
             calibrate_rig(
                 rig,
                 setup.shaker,
-                &[setup.freq_hz],
+                &cal_freqs,
                 &gammas,
                 g,
                 dt,
@@ -246,15 +257,25 @@ pub fn run_measured_shake_observed(
     let source = match &setup.calibration {
         CalibrationSource::Given(_, s) => s.clone(),
         CalibrationSource::OnTheFly => format!(
-            "measured on the fly: empty enclosure of rig {} at {} Hz, Gamma {} and {}, averaged",
+            "measured on the fly: empty enclosure of rig {} at {} Hz, Gamma {} and {}, averaged{}",
             rig.name,
-            setup.freq_hz,
+            join_hz(&cal_freqs),
             0.5 * setup.gamma,
-            setup.gamma
+            setup.gamma,
+            if calibration.model.is_some() {
+                "; harmonics by the fitted high-pass + skew model"
+            } else {
+                ""
+            }
         ),
     };
     let corrected = analyse(&trace, setup.freq_hz, PhaseCorrection::Table(&calibration))?;
-    let raw = analyse(&trace, setup.freq_hz, PhaseCorrection::None)?;
+    let polarity = if corrected.force_polarity.reversed {
+        ForcePolarity::Reversed
+    } else {
+        ForcePolarity::AsRecorded
+    };
+    let raw = analyse_with(&trace, setup.freq_hz, PhaseCorrection::None, polarity)?;
     let truth = outcome.energy_per_cycle_j;
     let work_truth = outcome.work_in_per_cycle_j;
     let omega = 2.0 * PI * setup.freq_hz;
@@ -262,7 +283,7 @@ pub fn run_measured_shake_observed(
     let phi = rig.expected_phase_error_rad(setup.freq_hz);
     let shaker_report = shaker.report();
     let e_max = max_energy_per_cycle_j(particle_mass, setup.gamma, setup.freq_hz, g)?;
-    let blocks = block_power(&trace, setup.freq_hz, &calibration)?;
+    let blocks = block_power(&trace, setup.freq_hz, &calibration, polarity)?;
     let measured = Measured {
         power_w: corrected.power_w,
         energy_per_cycle_j: corrected.energy_per_cycle_j,
@@ -272,6 +293,7 @@ pub fn run_measured_shake_observed(
         efficiency_stderr: blocks.map(|b| b.stderr / setup.freq_hz / e_max),
         unsteadiness_rel: work_truth / truth - 1.0,
         phase_correction_rad: corrected.phase_correction_rad,
+        force_polarity_reversed: corrected.force_polarity.reversed,
         error_vs_dem_rel: corrected.energy_per_cycle_j / truth - 1.0,
         error_vs_dem_work_rel: corrected.energy_per_cycle_j / work_truth - 1.0,
         uncorrected_energy_per_cycle_j: raw.energy_per_cycle_j,
@@ -297,12 +319,33 @@ pub fn run_measured_shake_observed(
     })
 }
 
+/// The frequencies the on-the-fly calibration runs at, Hz: the drive and its
+/// 4th and 16th harmonics, those below an eighth of the sample rate (two or
+/// three points, so a high-pass + skew model can be fitted up to 1.25 kHz
+/// drives at 40 kHz; above, the drive alone).
+pub fn calibration_freqs_hz(drive_freq_hz: f64, sample_rate_hz: f64) -> Vec<f64> {
+    let mut freqs: Vec<f64> = [4.0, 16.0]
+        .iter()
+        .map(|h| h * drive_freq_hz)
+        .filter(|&f| f < sample_rate_hz / 8.0)
+        .collect();
+    freqs.insert(0, drive_freq_hz);
+    freqs
+}
+
+fn join_hz(freqs: &[f64]) -> String {
+    let list: Vec<String> = freqs.iter().map(|f| f.to_string()).collect();
+    list.join(", ")
+}
+
 /// Yang's power of successive blocks of two periods of `trace`, corrected with
-/// `calibration`, as a mean with its standard error; `None` below two blocks.
+/// `calibration` and `polarity`, as a mean with its standard error; `None`
+/// below two blocks.
 fn block_power(
     trace: &Trace,
     freq_hz: f64,
     calibration: &PhaseCalibration,
+    polarity: ForcePolarity,
 ) -> Result<Option<MeanStderr>, SceneError> {
     // Blocks start on whole periods, rounded to a sample: at drive
     // frequencies that are not a divisor of the sample rate (1024 Hz: 39.06
@@ -320,6 +363,7 @@ fn block_power(
         let end = (((b + 1) as f64 * block_samples).round() as usize).min(trace.len());
         let options = PowerOptions {
             phase_correction: PhaseCorrection::Table(calibration),
+            force_polarity: polarity,
             window: PowerWindow::Explicit {
                 start,
                 len: end - start,
@@ -331,14 +375,26 @@ fn block_power(
     Ok(Some(mean_stderr(&powers)))
 }
 
-/// Yang's power of a rig trace over all its whole drive periods.
+/// Yang's power of a rig trace over all its whole drive periods, its force
+/// polarity detected.
 pub fn analyse(
     trace: &Trace,
     freq_hz: f64,
     correction: PhaseCorrection<'_>,
 ) -> Result<PowerResult, SceneError> {
+    analyse_with(trace, freq_hz, correction, ForcePolarity::Detect)
+}
+
+/// [`analyse`] with the force polarity given.
+pub fn analyse_with(
+    trace: &Trace,
+    freq_hz: f64,
+    correction: PhaseCorrection<'_>,
+    polarity: ForcePolarity,
+) -> Result<PowerResult, SceneError> {
     let options = PowerOptions {
         phase_correction: correction,
+        force_polarity: polarity,
         ..PowerOptions::default()
     };
     Ok(yang_power_of_trace(

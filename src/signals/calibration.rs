@@ -14,20 +14,37 @@
 //! *advanced* by `tau` relative to the acceleration channel
 //! (`f(t) = m a(t + tau)`) gives `phi_err = w tau`.
 //!
+//! # Force polarity
+//!
+//! A lab that records the gauge's reaction (the force the enclosure exerts on
+//! the gauge) has `f = -m_enc a`: the measured phase error is near `pi`. A
+//! point with `|phi_err| > pi/2` is taken as such a record: it is flagged
+//! ([`PhaseErrorPoint::force_polarity_reversed`]) and its error is stored
+//! without the `pi`, `wrap(phi_err - pi)`, so that the table describes the
+//! chain and the polarity separately (Yang's power detects and corrects the
+//! polarity of each record on its own: [`super::power::ForcePolarity`]).
+//!
+//! # Across frequency
+//!
 //! [`estimate_phase_error`] measures one point; [`PhaseCalibration::from_points`]
 //! averages the points of each frequency over the amplitudes tested (the
-//! thesis' amplitude-averaged error) into a table, and
-//! [`PhaseCalibration::phase_error_at`] interpolates it:
+//! thesis' amplitude-averaged error) into a table and, from two or more
+//! frequencies, fits the chain's high-pass + skew model
+//! ([`super::phase_model`], eq. M1). [`PhaseCalibration::phase_error_at`]
+//! evaluates the table at any frequency, e.g. at every harmonic of the drive:
 //!
-//! - between table frequencies: linearly in frequency;
-//! - below the first / above the last: as a pure time delay through the
-//!   nearest point, `phi(f) = phi_end f / f_end` (a delay is the usual
-//!   source of an inter-channel phase error, and it gives 0 at DC rather than
-//!   an arbitrary constant). Far outside the table this can grow large:
-//!   calibrate the frequencies you test.
+//! - with a model: the model, plus the table's residual from it interpolated
+//!   linearly between table frequencies (held at the end values outside), so
+//!   the table's own points are reproduced exactly and the harmonics follow
+//!   the rig's high-pass (falling as `1/f`) and skew (growing as `f`);
+//! - with a single frequency (no model can be fitted): as a pure time delay
+//!   through the point, `phi(f) = phi_1 f / f_1`, which overstates the error
+//!   at the harmonics of a rig with AC coupling; calibrate at several
+//!   frequencies (the drive and a few of its harmonics) to avoid it.
 //!
 //! Tables are saved as JSON (atomically) with a `version` field and strict
-//! field checking.
+//! field checking; version 1 files (no polarity, no model) are read, and a
+//! model is fitted to them when they hold two or more frequencies.
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -35,11 +52,15 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::error::{Result, SignalsError};
+use super::phase_model::PhaseErrorModel;
 use super::power::{PowerWindow, YangPower, plan_window, wrap_phase_rad};
 use crate::atomic_write::write_bytes_atomic;
 
-/// Version written into, and required of, calibration JSON files.
-pub const CALIBRATION_VERSION: u32 = 1;
+/// Version written into calibration JSON files (2: polarity and model).
+pub const CALIBRATION_VERSION: u32 = 2;
+
+/// Oldest version read (1: no polarity, no model).
+pub const OLDEST_CALIBRATION_VERSION: u32 = 1;
 
 /// Relative tolerance within which two calibration points count as the same
 /// frequency when building a table.
@@ -55,8 +76,13 @@ pub struct PhaseErrorPoint {
     pub accel_amplitude_mps2: f64,
     /// Force amplitude at the drive frequency, in N.
     pub force_amplitude_n: f64,
-    /// `phi_err` at the drive frequency, in rad, in (-pi, pi].
+    /// `phi_err` at the drive frequency, in rad, in (-pi, pi], without the
+    /// `pi` of a reversed force.
     pub phase_error_rad: f64,
+    /// True when the record's force was the gauge reaction (measured phase
+    /// error near `pi`; see the module docs).
+    #[serde(default)]
+    pub force_polarity_reversed: bool,
 }
 
 /// The amplitude-averaged phase error at one frequency.
@@ -87,6 +113,12 @@ pub struct PhaseCalibration {
     pub note: String,
     /// Entries in strictly increasing frequency.
     pub points: Vec<CalibrationEntry>,
+    /// True when the empty enclosure's force was the gauge reaction.
+    #[serde(default)]
+    pub force_polarity_reversed: bool,
+    /// High-pass + skew model fitted to the points (two or more frequencies).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<PhaseErrorModel>,
 }
 
 /// Measures the phase error of an empty-enclosure record at the drive
@@ -130,13 +162,26 @@ pub fn estimate_phase_error(
         });
     }
     // phi_V = phi_A - pi/2, so phi_F - phi_V - pi/2 = phi_F - phi_A.
-    let phase_error_rad = wrap_phase_rad(f_k.arg() - a_k.arg());
+    let (phase_error_rad, force_polarity_reversed) =
+        split_polarity(wrap_phase_rad(f_k.arg() - a_k.arg()));
     Ok(PhaseErrorPoint {
         freq_hz: drive_freq_hz,
         accel_amplitude_mps2: a_k.norm(),
         force_amplitude_n: f_k.norm(),
         phase_error_rad,
+        force_polarity_reversed,
     })
+}
+
+/// Splits an empty-enclosure phase error `phi` in (-pi, pi] into the chain's
+/// error and the polarity: `|phi| > pi/2` is a reversed force, whose chain
+/// error is `wrap(phi - pi)`.
+pub fn split_polarity(phi_rad: f64) -> (f64, bool) {
+    if phi_rad.abs() > PI / 2.0 {
+        (wrap_phase_rad(phi_rad - PI), true)
+    } else {
+        (phi_rad, false)
+    }
 }
 
 impl PhaseCalibration {
@@ -154,6 +199,21 @@ impl PhaseCalibration {
                 });
             }
         }
+        let force_polarity_reversed = points.first().is_some_and(|p| p.force_polarity_reversed);
+        if let Some((i, _)) = points
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.force_polarity_reversed != force_polarity_reversed)
+        {
+            return Err(SignalsError::InvalidCalibration {
+                reason: format!(
+                    "point {i} ({} Hz) has the force polarity {} but point 0 has it {}: one rig,                      one wiring; check the force channel's sign",
+                    points[i].freq_hz,
+                    polarity_word(points[i].force_polarity_reversed),
+                    polarity_word(force_polarity_reversed)
+                ),
+            });
+        }
         let mut sorted: Vec<PhaseErrorPoint> = points.to_vec();
         sorted.sort_by(|a, b| a.freq_hz.total_cmp(&b.freq_hz));
         let mut entries = Vec::new();
@@ -170,24 +230,42 @@ impl PhaseCalibration {
         if !group.is_empty() {
             entries.push(average(&group));
         }
-        let cal = Self {
+        let mut cal = Self {
             version: CALIBRATION_VERSION,
             rig: rig.into(),
             note: String::new(),
             points: entries,
+            force_polarity_reversed,
+            model: None,
         };
         cal.validate()?;
+        cal.model = cal.fit_model();
         Ok(cal)
+    }
+
+    /// The high-pass + skew model through the table's points, `None` below
+    /// two frequencies.
+    pub fn fit_model(&self) -> Option<PhaseErrorModel> {
+        let points: Vec<(f64, f64)> = self
+            .points
+            .iter()
+            .map(|p| (p.freq_hz, p.phase_error_rad))
+            .collect();
+        PhaseErrorModel::fit(&points).ok()
     }
 
     /// Checks version, ordering and finiteness.
     pub fn validate(&self) -> Result<()> {
         let bad = |reason: String| Err(SignalsError::InvalidCalibration { reason });
-        if self.version != CALIBRATION_VERSION {
+        if !(OLDEST_CALIBRATION_VERSION..=CALIBRATION_VERSION).contains(&self.version) {
             return bad(format!(
-                "version {} is not supported (this vlab reads version {CALIBRATION_VERSION})",
+                "version {} is not supported (this vlab reads versions \
+                 {OLDEST_CALIBRATION_VERSION} to {CALIBRATION_VERSION})",
                 self.version
             ));
+        }
+        if let Some(model) = &self.model {
+            model.validate()?;
         }
         if self.points.is_empty() {
             return bad("the table has no points".into());
@@ -222,28 +300,33 @@ impl PhaseCalibration {
         Ok(())
     }
 
-    /// The phase error at `freq_hz`, in rad: linear between table points, a
-    /// pure time delay through the nearest end point outside them (see the
-    /// module docs). `freq_hz <= 0` gives 0.
+    /// The phase error at `freq_hz`, in rad (see the module docs): the model
+    /// plus the interpolated residual when there is a model, else linear
+    /// between points and a pure delay through the nearest end point outside.
+    /// `freq_hz <= 0` gives 0.
     pub fn phase_error_at(&self, freq_hz: f64) -> f64 {
-        let pts = &self.points;
-        let (Some(first), Some(last)) = (pts.first(), pts.last()) else {
-            return 0.0;
-        };
-        if freq_hz <= 0.0 || !freq_hz.is_finite() {
+        if freq_hz <= 0.0 || !freq_hz.is_finite() || self.points.is_empty() {
             return 0.0;
         }
+        match &self.model {
+            Some(model) => {
+                let residual = |f: f64, phi: f64| phi - model.phase_error_at(f);
+                model.phase_error_at(freq_hz) + interpolate_held(&self.points, freq_hz, residual)
+            }
+            None => self.delay_interpolation(freq_hz),
+        }
+    }
+
+    /// Linear between points, `phi_end f / f_end` outside.
+    fn delay_interpolation(&self, freq_hz: f64) -> f64 {
+        let (first, last) = (&self.points[0], &self.points[self.points.len() - 1]);
         if freq_hz <= first.freq_hz {
             return first.phase_error_rad * freq_hz / first.freq_hz;
         }
         if freq_hz >= last.freq_hz {
             return last.phase_error_rad * freq_hz / last.freq_hz;
         }
-        // First point strictly above freq_hz; 1 <= hi < len here.
-        let hi = pts.partition_point(|p| p.freq_hz <= freq_hz);
-        let (a, b) = (&pts[hi - 1], &pts[hi]);
-        let t = (freq_hz - a.freq_hz) / (b.freq_hz - a.freq_hz);
-        a.phase_error_rad + t * (b.phase_error_rad - a.phase_error_rad)
+        interpolate_held(&self.points, freq_hz, |_, phi| phi)
     }
 
     /// Writes the table as pretty JSON, atomically.
@@ -266,13 +349,40 @@ impl PhaseCalibration {
             path: path.to_path_buf(),
             source,
         })?;
-        let cal: Self = serde_json::from_str(&text).map_err(|source| SignalsError::Json {
+        let mut cal: Self = serde_json::from_str(&text).map_err(|source| SignalsError::Json {
             path: path.to_path_buf(),
             source,
         })?;
         cal.validate()?;
+        if cal.model.is_none() {
+            cal.model = cal.fit_model();
+        }
         Ok(cal)
     }
+}
+
+/// `value(f, phi)` of the points, linear in frequency between them and held
+/// at the end values outside (`points` non-empty, frequencies increasing).
+fn interpolate_held(
+    points: &[CalibrationEntry],
+    freq_hz: f64,
+    value: impl Fn(f64, f64) -> f64,
+) -> f64 {
+    let at = |p: &CalibrationEntry| value(p.freq_hz, p.phase_error_rad);
+    let hi = points.partition_point(|p| p.freq_hz <= freq_hz);
+    if hi == 0 {
+        return at(&points[0]);
+    }
+    if hi == points.len() {
+        return at(&points[hi - 1]);
+    }
+    let (a, b) = (&points[hi - 1], &points[hi]);
+    let t = (freq_hz - a.freq_hz) / (b.freq_hz - a.freq_hz);
+    at(a) + t * (at(b) - at(a))
+}
+
+fn polarity_word(reversed: bool) -> &'static str {
+    if reversed { "reversed" } else { "as recorded" }
 }
 
 /// Circular mean and spread of one frequency's points (non-empty).
@@ -303,6 +413,7 @@ fn average(group: &[PhaseErrorPoint]) -> CalibrationEntry {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::signals::phase_model::PhaseErrorModel;
     use crate::signals::power::{PhaseCorrection, PowerOptions, yang_power};
 
     const FS: f64 = 40_000.0;
@@ -390,6 +501,7 @@ mod tests {
             accel_amplitude_mps2: 1.0,
             force_amplitude_n: 1.0,
             phase_error_rad: phase,
+            force_polarity_reversed: false,
         };
         let cal = PhaseCalibration::from_points("r", &[pt(0.01), pt(0.02), pt(0.03)]).expect("t");
         // Small angles: circular mean ~ arithmetic 0.02, std ~ 0.01 (tol 1e-6).
@@ -413,6 +525,8 @@ mod tests {
             rig: "r".into(),
             note: String::new(),
             points: vec![entry(20.0, 0.01), entry(40.0, 0.03), entry(80.0, 0.05)],
+            force_polarity_reversed: false,
+            model: None,
         };
         cal.validate().expect("valid");
         // Exact arithmetic expectations, tol 1e-15.
@@ -435,6 +549,7 @@ mod tests {
             accel_amplitude_mps2: 100.0,
             force_amplitude_n: 30.0,
             phase_error_rad: phi,
+            force_polarity_reversed: false,
         };
         let mut cal =
             PhaseCalibration::from_points("thesis-shaker", &[pt(40.0, 0.0087), pt(20.0, 0.004)])
@@ -445,9 +560,9 @@ mod tests {
         assert_eq!(back, cal);
 
         let text = std::fs::read_to_string(&path).expect("read");
-        std::fs::write(&path, text.replace("\"version\": 1", "\"version\": 2")).expect("w");
-        let err = PhaseCalibration::load_json(&path).expect_err("version 2");
-        assert!(err.to_string().contains("version 2"), "{err}");
+        std::fs::write(&path, text.replace("\"version\": 2", "\"version\": 3")).expect("w");
+        let err = PhaseCalibration::load_json(&path).expect_err("version 3");
+        assert!(err.to_string().contains("version 3"), "{err}");
         std::fs::write(&path, text.replace("\"rig\"", "\"extra\": 1, \"rig\"")).expect("w");
         assert!(matches!(
             PhaseCalibration::load_json(&path),
@@ -457,12 +572,97 @@ mod tests {
     }
 
     #[test]
+    fn a_reversed_empty_enclosure_reads_pi_and_is_split_off() {
+        // The gauge reaction, f = -m a(t + tau): phase error pi + w tau. The
+        // point is flagged and keeps w tau (tol 1e-12 rad against the
+        // unflipped record's estimate); the table says so too.
+        let (m, f, v_amp, tau) = (0.3, 40.0, 0.78, 35e-6);
+        let (force, accel) = empty_enclosure(m, f, v_amp, tau, 40_000);
+        let reaction: Vec<f64> = force.iter().map(|x| -x).collect();
+        let normal = estimate_phase_error(&force, &accel, FS, f).expect("normal");
+        let flipped = estimate_phase_error(&reaction, &accel, FS, f).expect("flipped");
+        assert!(!normal.force_polarity_reversed && flipped.force_polarity_reversed);
+        assert!((flipped.phase_error_rad - normal.phase_error_rad).abs() < 1e-12);
+        let cal = PhaseCalibration::from_points("r", &[flipped]).expect("table");
+        assert!(cal.force_polarity_reversed);
+        // One rig, one wiring: a table that mixes them is refused.
+        let err = PhaseCalibration::from_points("r", &[flipped, normal]).expect_err("mixed");
+        assert!(err.to_string().contains("force polarity"), "{err}");
+        let (phi, reversed) = split_polarity(PI - 0.01);
+        assert!(reversed && (phi + 0.01).abs() < 1e-12, "{phi}");
+        assert_eq!(split_polarity(0.01), (0.01, false));
+    }
+
+    #[test]
+    fn several_frequencies_give_the_high_pass_and_skew_at_the_harmonics() {
+        // Points from the thesis rig's model at 40, 160 and 640 Hz: the table
+        // fits it and gives its phase error at every harmonic of 40 Hz to
+        // 1e-6 rad, where the one-point table's pure delay is off by
+        // 0.00375 (k - 1/k) rad.
+        let truth = PhaseErrorModel {
+            force_high_pass_hz: 0.35,
+            accel_high_pass_hz: 0.2,
+            skew_s: 5e-6,
+        };
+        let pt = |f: f64| PhaseErrorPoint {
+            freq_hz: f,
+            accel_amplitude_mps2: 100.0,
+            force_amplitude_n: 25.0,
+            phase_error_rad: truth.phase_error_at(f),
+            force_polarity_reversed: false,
+        };
+        let cal = PhaseCalibration::from_points("r", &[pt(40.0), pt(160.0), pt(640.0)]).expect("t");
+        assert!(cal.model.is_some());
+        let one = PhaseCalibration::from_points("r", &[pt(40.0)]).expect("t");
+        assert!(one.model.is_none());
+        for k in [1.0, 2.0, 3.0, 10.0, 50.0] {
+            let f = 40.0 * k;
+            assert!(
+                (cal.phase_error_at(f) - truth.phase_error_at(f)).abs() < 1e-6,
+                "{f} Hz"
+            );
+            let delay_err = one.phase_error_at(f) - truth.phase_error_at(f);
+            let hp = truth.phase_error_at(40.0) - 2.0 * PI * 40.0 * 5e-6;
+            assert!(
+                (delay_err - hp * (k - 1.0 / k)).abs() < 1e-5,
+                "{f} Hz: {delay_err}"
+            );
+        }
+        // The table's own points come back exactly (tol 1e-15 rad).
+        for p in &cal.points {
+            assert!((cal.phase_error_at(p.freq_hz) - p.phase_error_rad).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn a_version_1_file_is_read_and_fitted() {
+        let dir = std::env::temp_dir().join(format!("vlab-cal-v1-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("cal.json");
+        let v1 = r#"{"version": 1, "rig": "old", "note": "", "points": [
+            {"freq_hz": 20.0, "phase_error_rad": 0.008, "n_amplitudes": 3, "spread_rad": 0.0},
+            {"freq_hz": 160.0, "phase_error_rad": 0.006, "n_amplitudes": 3, "spread_rad": 0.0}]}"#;
+        std::fs::write(&path, v1).expect("write");
+        let cal = PhaseCalibration::load_json(&path).expect("version 1");
+        std::fs::remove_dir_all(dir).ok();
+        assert!(!cal.force_polarity_reversed);
+        // The model passes within (c/f)^3/3 of both points (1e-6 rad), the
+        // table through them (1e-15 rad).
+        let model = cal.model.expect("fitted on load");
+        for (f, phi) in [(20.0, 0.008), (160.0, 0.006)] {
+            assert!((model.phase_error_at(f) - phi).abs() < 1e-6, "{f} Hz");
+            assert!((cal.phase_error_at(f) - phi).abs() < 1e-15, "{f} Hz");
+        }
+    }
+
+    #[test]
     fn bad_points_are_rejected() {
         let pt = PhaseErrorPoint {
             freq_hz: f64::NAN,
             accel_amplitude_mps2: 1.0,
             force_amplitude_n: 1.0,
             phase_error_rad: 0.0,
+            force_polarity_reversed: false,
         };
         assert!(PhaseCalibration::from_points("r", &[pt]).is_err());
         assert!(PhaseCalibration::from_points("r", &[]).is_err());

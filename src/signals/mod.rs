@@ -9,6 +9,8 @@
 //! - [`power`]: Yang's structure-independent dissipated power, eq. 7.8-7.12,
 //!   and the damping efficiency, eq. 7.7 / 6.10;
 //! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
+//! - [`phase_model`]: the chain's phase error across frequency (high-pass +
+//!   skew), fitted to that table or taken from a rig;
 //! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
 //! - [`trace_file`]: any of these formats, told apart by the file's extension;
 //! - [`table`], [`lammps`]: records of named columns from other programs (a
@@ -27,6 +29,7 @@ pub mod csv;
 pub mod error;
 pub mod impacts;
 pub mod lammps;
+pub mod phase_model;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod power;
@@ -41,7 +44,9 @@ pub mod wav;
 mod testutil;
 
 pub use bench::{YangBenchReport, bench_yang_power};
-pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error};
+pub use calibration::{
+    CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error, split_polarity,
+};
 pub use csv::{CsvReadOptions, read_csv, read_csv_table, read_csv_with, write_csv};
 pub use error::{CsvErrorKind, RecordErrorKind, Result, SignalsError, TdmsErrorKind, WavErrorKind};
 pub use impacts::{
@@ -49,15 +54,16 @@ pub use impacts::{
     estimate_cor, restitution_from_impact_times,
 };
 pub use lammps::read_lammps_text;
+pub use phase_model::PhaseErrorModel;
 #[cfg(feature = "plot")]
 pub use plot::{
     CirclePanel, ErrorSeries, HeatCell, HeatMap, HeatOverlay, LogXPlot, MarkerLine, PanelStrip,
     RgbColor, Series, SeriesStyle, plot_heat_map, plot_log_x, plot_panel_strip, plot_xy_svg,
 };
 pub use power::{
-    BinSelection, HarmonicPower, PhaseCorrection, PowerOptions, PowerResult, PowerWindow,
-    WindowPlan, YangPower, efficiency, max_energy_per_cycle_j, mean_power_time_domain, plan_window,
-    wrap_phase_rad, yang_power, yang_power_of_trace,
+    BinSelection, ForcePolarity, HarmonicPower, PhaseCorrection, PolarityVerdict, PowerOptions,
+    PowerResult, PowerWindow, WindowPlan, YangPower, efficiency, max_energy_per_cycle_j,
+    mean_power_time_domain, plan_window, wrap_phase_rad, yang_power, yang_power_of_trace,
 };
 pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
 pub use table::{Table, TableFormat, read_table};
