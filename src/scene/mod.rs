@@ -3,6 +3,7 @@
 //! has particles, a cylinder and a drive; a drop test has one sphere, a plate and
 //! the drop rig).
 
+pub mod accuracy;
 pub mod damper;
 pub mod drop;
 pub mod file;
