@@ -27,9 +27,9 @@
 //! maximum overlap against Terzioglu 2023, eq. 5.8, the contact duration
 //! against eq. 5.10 (twice the time to maximum overlap) and against the exact
 //! Hertz integral `t_c = 2 I δ_max / v`, `I = ∫₀¹ (1 − x^{5/2})^{−1/2} dx =
-//! (2/5) B(2/5, 1/2) = 1.47164`: eq. 5.10's rounded constant 1.435 sits
-//! 6.2e-4 below it. The scene's damped collision: the realised normal
-//! restitution against the configured `e`.
+//! (2/5) B(2/5, 1/2) = 1.471638`: eq. 5.10's rounded constant 1.435 sits
+//! 6.0e-4 above it (1.4341 in eq. 5.10's form). The scene's damped
+//! collision: the realised normal restitution against the configured `e`.
 //!
 //! **(c) Yang's method** (eq. 7.8–7.12, Section 7.4.2) against the DEM truth.
 //! One DEM drive records the particles' force on the enclosure and its
@@ -78,7 +78,7 @@ use crate::validation::InvalidParameter;
 
 /// The exact Hertz duration constant: `t_c = 2 I δ_max / v` with
 /// `I = (2/5) B(2/5, 1/2)`.
-pub const HERTZ_DURATION_INTEGRAL: f64 = 1.471_639_5;
+pub const HERTZ_DURATION_INTEGRAL: f64 = 1.471_637_59;
 
 /// What the studies run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -192,7 +192,11 @@ impl AccuracyPlan {
                 format!("2..={s}, or a multiple of {s} up to {most} (seeds pooled)"),
             );
         }
-        if let Some(n) = self.steps_per_contact.iter().find(|n| !(**n >= 5.0)) {
+        if let Some(n) = self
+            .steps_per_contact
+            .iter()
+            .find(|n| n.is_nan() || **n < 5.0)
+        {
             return bad("steps_per_contact", n.to_string(), "at least 5".into());
         }
         if self.record_periods.is_empty() {
@@ -210,7 +214,7 @@ impl AccuracyPlan {
         if let Some(b) = self.adc_bits.iter().find(|b| !(1..=32).contains(*b)) {
             return bad("adc_bits", b.to_string(), "in 1..=32".into());
         }
-        if let Some(k) = self.noise_factors.iter().find(|k| !(**k >= 0.0)) {
+        if let Some(k) = self.noise_factors.iter().find(|k| k.is_nan() || **k < 0.0) {
             return bad("noise_factors", k.to_string(), "zero or positive".into());
         }
         if let Some(p) = self.residual_phase_mrad.iter().find(|p| !p.is_finite()) {
@@ -1005,7 +1009,8 @@ fn dem_study(
             .collect::<Vec<_>>(),
     );
     let default_stderr = seed_stats[0].relative();
-    let dominant = if !(default_err.abs() > 2.0 * default_se) {
+    let resolved = default_err.abs() > 2.0 * default_se;
+    let dominant = if !resolved {
         format!(
             "statistics: at the default time step ({default_x:.3} x Rayleigh) the discretisation error of the energy per cycle is not resolved, {:+.2} % +- {:.2} % against {ref_x} x Rayleigh over {n_dt} cycles (the integrator's own energy error is {:.1e} of the dissipation), while one run of {s} steady cycles has a standard error of {:.2} % and the seeds' means spread by {:.2} %",
             100.0 * default_err,
@@ -1791,6 +1796,6 @@ mod tests {
         assert!((i / HERTZ_DURATION_INTEGRAL - 1.0).abs() < 1e-6, "{i}");
         // Eq. 5.10's 1.435 in the δ_max / v form: 1.435 / (15/16)^{2/5}.
         let eq_5_10 = 1.435 / (15.0f64 / 16.0).powf(0.4);
-        assert!((eq_5_10 / HERTZ_DURATION_INTEGRAL - 1.0 - 6.2e-4).abs() < 0.2e-4);
+        assert!((eq_5_10 / HERTZ_DURATION_INTEGRAL - 1.0 - 6.0e-4).abs() < 0.2e-4);
     }
 }
