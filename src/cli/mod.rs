@@ -3,6 +3,7 @@
 //! line with context; the process then exits with status 1 (2 for usage errors,
 //! which clap reports itself).
 
+mod accuracy;
 mod analyze;
 mod args;
 mod bench;
@@ -65,6 +66,9 @@ enum Command {
     Plot(plot::PlotArgs),
     /// Measure speed: particle-steps per second on the thesis scene.
     Bench(bench::BenchArgs),
+    /// Error against run time: DEM time step, cycles and seeds; one
+    /// collision against Hertz; Yang's method against the DEM truth.
+    Accuracy(accuracy::AccuracyArgs),
     /// Drop test: bounce a sphere on the drop rig, record the force, estimate the restitution.
     Drop(drop::DropArgs),
     /// Estimate the restitution from a force record of a drop test (CSV or WAV).
@@ -137,6 +141,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Plot(a) => plot::run(a),
         Command::Bench(a) => bench::run(a, quiet),
         Command::Drop(a) => drop::run(a),
+        Command::Accuracy(a) => accuracy::run(a, quiet),
         Command::Cor(a) => cor::run(a),
         Command::Replay(a) => replay::run(a),
         Command::Export(a) => export::run(a, quiet),

@@ -3,6 +3,7 @@
 //! has particles, a cylinder and a drive; a drop test has one sphere, a plate and
 //! the drop rig; a replay has a record from another DEM code and the rig).
 
+pub mod accuracy;
 pub mod damper;
 pub mod drop;
 pub mod dump;
