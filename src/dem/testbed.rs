@@ -103,10 +103,14 @@ mod tests {
     fn the_bed_has_its_spheres_inside_and_steps() {
         let mut w = lattice_bed(500, 0.52, 3).expect("bed");
         assert_eq!(w.particles.len(), 500);
-        for _ in 0..200 {
+        // The spheres touch their neighbours at once and reach the walls,
+        // 0.05 r away at 0.3 m/s, within some 300 steps.
+        let mut touched_walls = false;
+        for _ in 0..1000 {
             w.step(0.0).expect("step");
+            touched_walls |= w.contact_counts().1 > 0;
         }
-        let (pp, pw) = w.contact_counts();
-        assert!(pp > 0 && pw > 0, "{pp} {pw}");
+        assert!(w.contact_counts().0 > 0);
+        assert!(touched_walls);
     }
 }
