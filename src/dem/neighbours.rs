@@ -8,6 +8,12 @@
 //! pair carries its [`ContactState`] (the tangential spring history); a rebuild
 //! hands the states of surviving pairs over to the new list. Pairs are sorted by
 //! `(i, j)`, so everything built from the list is independent of thread count.
+//!
+//! Each rebuild also lays out, for every particle, the pairs it belongs to in
+//! increasing pair order ([`NeighbourList::pairs_of`]): a thread that owns a
+//! particle can then gather its pair forces in exactly the order a serial loop
+//! over the pairs would have added them, which keeps the parallel force sums
+//! bit-identical to the serial ones.
 
 use glam::DVec3;
 
@@ -21,12 +27,18 @@ pub struct NeighbourList {
     /// Contact state of each pair, same order as `pairs`.
     pub states: Vec<ContactState>,
     skin_m: f64,
+    /// Pairs of particle `p`: `adjacency[adjacency_start[p]..adjacency_start[p + 1]]`,
+    /// each `2 k + side` for pair `k` (side 0: `p` is its `i`, 1: its `j`),
+    /// in increasing `k`.
+    adjacency_start: Vec<u32>,
+    adjacency: Vec<u32>,
     reference: Vec<DVec3>,
     rebuilds: u64,
     // Scratch reused between rebuilds.
     cell_start: Vec<u32>,
     cell_items: Vec<u32>,
     cell_of: Vec<u32>,
+    fill: Vec<u32>,
     new_pairs: Vec<(u32, u32)>,
     new_states: Vec<ContactState>,
     row: Vec<u32>,
@@ -57,17 +69,59 @@ impl NeighbourList {
         self.rebuilds
     }
 
+    /// The pairs particle `p` belongs to, in increasing pair order: `2 k` when
+    /// it is pair `k`'s `i`, `2 k + 1` when it is its `j`.
+    #[inline]
+    pub fn pairs_of(&self, p: usize) -> &[u32] {
+        let (s, e) = (self.adjacency_start[p], self.adjacency_start[p + 1]);
+        &self.adjacency[s as usize..e as usize]
+    }
+
     /// True when some particle moved more than half the skin since the last build
     /// (or the particle count changed), so that a new contact could be missed.
-    pub fn needs_rebuild(&self, positions: &[DVec3]) -> bool {
+    /// `parallel`: look with all threads (the answer is the same).
+    pub fn needs_rebuild(&self, positions: &[DVec3], parallel: bool) -> bool {
+        use rayon::prelude::*;
         if positions.len() != self.reference.len() {
             return true;
         }
         let limit_sq = 0.25 * self.skin_m * self.skin_m;
-        positions
-            .iter()
-            .zip(&self.reference)
-            .any(|(p, r)| (*p - *r).length_squared() > limit_sq)
+        let moved = |(p, r): (&DVec3, &DVec3)| (*p - *r).length_squared() > limit_sq;
+        if parallel {
+            positions
+                .par_iter()
+                .zip(&self.reference)
+                .with_min_len(1024)
+                .any(moved)
+        } else {
+            positions.iter().zip(&self.reference).any(moved)
+        }
+    }
+
+    /// Lays out the pairs of every particle (see [`Self::pairs_of`]): a
+    /// counting sort of the pair ends, filled in pair order.
+    fn build_adjacency(&mut self, n: usize) {
+        self.adjacency_start.clear();
+        self.adjacency_start.resize(n + 1, 0);
+        for &(i, j) in &self.pairs {
+            self.adjacency_start[i as usize + 1] += 1;
+            self.adjacency_start[j as usize + 1] += 1;
+        }
+        for p in 0..n {
+            self.adjacency_start[p + 1] += self.adjacency_start[p];
+        }
+        self.adjacency.clear();
+        self.adjacency.resize(2 * self.pairs.len(), 0);
+        self.fill.clear();
+        self.fill.extend_from_slice(&self.adjacency_start[..n]);
+        for (k, &(i, j)) in self.pairs.iter().enumerate() {
+            let k = k as u32;
+            for (p, side) in [(i, 0), (j, 1)] {
+                let at = &mut self.fill[p as usize];
+                self.adjacency[*at as usize] = 2 * k + side;
+                *at += 1;
+            }
+        }
     }
 
     /// Rebuilds the pair list from scratch with a cell grid; carries over the state
@@ -82,6 +136,7 @@ impl NeighbourList {
         if n < 2 {
             self.pairs.clear();
             self.states.clear();
+            self.build_adjacency(n);
             return;
         }
         let r_max = radii.iter().copied().fold(0.0, f64::max);
@@ -124,10 +179,11 @@ impl NeighbourList {
         }
         self.cell_items.clear();
         self.cell_items.resize(n, 0);
-        let mut fill: Vec<u32> = self.cell_start[..n_cells].to_vec();
+        self.fill.clear();
+        self.fill.extend_from_slice(&self.cell_start[..n_cells]);
         for (i, &c) in self.cell_of.iter().enumerate() {
-            self.cell_items[fill[c as usize] as usize] = i as u32;
-            fill[c as usize] += 1;
+            self.cell_items[self.fill[c as usize] as usize] = i as u32;
+            self.fill[c as usize] += 1;
         }
 
         // Pairs i < j within the cutoff, sorted by (i, j).
@@ -174,6 +230,7 @@ impl NeighbourList {
         }
         std::mem::swap(&mut self.pairs, &mut self.new_pairs);
         std::mem::swap(&mut self.states, &mut self.new_states);
+        self.build_adjacency(n);
     }
 }
 
@@ -227,6 +284,25 @@ mod tests {
             let mut list = NeighbourList::new(0.0005);
             list.rebuild(&pos, &radii);
             assert_eq!(list.pairs, brute_force(&pos, &radii, 0.0005), "n {n}");
+        }
+    }
+
+    #[test]
+    fn pairs_of_a_particle_are_listed_in_pair_order() {
+        let pos = scattered(300, 0.03, 5);
+        let radii = vec![0.0025; 300];
+        let mut list = NeighbourList::new(0.0005);
+        list.rebuild(&pos, &radii);
+        for p in 0..pos.len() {
+            let expect: Vec<u32> = (0..list.pairs.len() as u32)
+                .filter_map(|k| {
+                    let (i, j) = list.pairs[k as usize];
+                    (i as usize == p)
+                        .then_some(2 * k)
+                        .or((j as usize == p).then_some(2 * k + 1))
+                })
+                .collect();
+            assert_eq!(list.pairs_of(p), &expect[..], "particle {p}");
         }
     }
 

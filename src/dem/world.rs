@@ -11,20 +11,80 @@
 //! 5. second half kick, and the ledger is updated.
 //!
 //! Forces are summed in a fixed order (walls in order, then pairs sorted by
-//! `(i, j)`), and pair contributions are computed into a buffer before they are
-//! added, so results are bit-identical whatever the number of threads.
+//! `(i, j)`), so results are bit-identical whatever the number of threads.
+//!
+//! **What a step computes is chosen by the scene.** The laws are resolved
+//! once per step into an instance of the force loops with or without damping
+//! and friction (`D`, `F` below): a law with e = 1 computes no damping, one
+//! with μ = 0 no tangential force, no torque and no lever arms, and when no
+//! law has friction the rotation is not integrated at all (nothing could
+//! change it).
+//!
+//! **Threads.** Below [`AUTO_PARALLEL_MIN_PAIRS`] listed pairs (the thesis
+//! scene lists about 2500) one core runs everything, and each pair contact is
+//! added to the forces as soon as it is evaluated. Above it every loop is
+//! split into fixed blocks across the threads: the particle loops (kick,
+//! drift, gravity and walls: each particle's own), the pair loop (contact
+//! states and pair forces, each pair's own), then a gather in which each
+//! particle sums its pair forces in pair order, which is exactly the order
+//! the serial loop adds them in. What the contacts book into the ledger is
+//! kept per block and summed afterwards on one thread in contact order. Both
+//! ways give the same bits; the tests compare them.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::contact::{ContactGeometry, ContactLaw, ContactState, evaluate_contact};
+use super::contact::{
+    ContactGeometry, ContactLaw, ContactState, NormalDamping, Tangential, evaluate_contact_with,
+};
 use super::error::DemError;
 use super::hertz_theory;
 use super::ledger::{EnergyState, Ledger, LedgerBalance, LedgerSnapshot};
 use super::material::{effective_mass_kg, effective_radius_m};
 use super::neighbours::NeighbourList;
 use super::particles::Particles;
-use super::walls::Walls;
+use super::walls::{WallShape, Walls};
+
+/// Listed pairs from which a step is split across threads, when there are
+/// several: below it waking the other threads costs more than they save (a
+/// thesis-scene step, about 2500 pairs, takes some 30 µs on one core).
+pub const AUTO_PARALLEL_MIN_PAIRS: usize = 8192;
+
+/// Particles per block of the particle loops. Blocks are fixed, not one per
+/// thread, so that partial sums are the same for any number of threads.
+const PARTICLE_BLOCK: usize = 1024;
+/// Pairs per block of the pair loop.
+const PAIR_BLOCK: usize = 4096;
+
+/// The particle state contacts read, borrowed field by field from `$p` so
+/// that its forces and torques stay free to write.
+macro_rules! bodies {
+    ($p:expr) => {
+        Bodies {
+            position: &$p.position,
+            velocity: &$p.velocity,
+            angular_velocity: &$p.angular_velocity,
+            radius: &$p.radius,
+            mass: &$p.mass,
+        }
+    };
+}
+
+/// What the contacts of a step book into, borrowed field by field from the
+/// world `$w` so that its particles and lists stay free.
+macro_rules! tally {
+    ($w:expr) => {
+        Tally {
+            numerics: &$w.numerics,
+            ledger: &mut $w.ledger,
+            impact_speeds: &mut $w.impact_speeds,
+            fewest_steps_per_contact: &mut $w.fewest_steps_per_contact,
+            step_stored_change_j: &mut $w.step_stored_change_j,
+            wall_force: &mut $w.wall_force,
+            particle_dissipation_j: $w.particle_dissipation_j.as_deref_mut(),
+        }
+    };
+}
 
 /// Tunables of a world that are not physics.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,9 +95,10 @@ pub struct Numerics {
     pub skin_ratio: f64,
     /// Overlap, as a fraction of the smaller radius, taken as a sign of instability.
     pub max_overlap_ratio: f64,
-    /// The pair loop is split across threads only from this many listed pairs on:
-    /// below it, waking a second thread costs more than the loop (a thesis-scene
-    /// step, ~2500 pairs, takes about 25 µs on one core).
+    /// Deprecated: vlab chooses when to use threads ([`AUTO_PARALLEL_MIN_PAIRS`]).
+    /// A value below that makes the step go parallel from this many listed
+    /// pairs on (tests use 0 to run the parallel path on a small bed); the
+    /// results are the same bits either way.
     pub parallel_min_pairs: usize,
     /// A collision resolved in fewer time steps than this is refused.
     pub min_steps_per_collision: f64,
@@ -49,14 +110,14 @@ impl Numerics {
     /// Defaults for a given time step: skin 0.5 R, so that the cells of the
     /// neighbour grid are 2.5 R wide as in the thesis (Section 3.4; physics does
     /// not depend on the skin, and 0.1–0.5 R ran equally fast), overlap limit 10 % of R,
-    /// parallel pair loop from 16384 pairs, at least 5 steps per collision, energy
-    /// books checked every 2000 steps.
+    /// threads as vlab chooses, at least 5 steps per collision, energy books
+    /// checked every 2000 steps.
     pub fn with_dt(dt_s: f64) -> Self {
         Numerics {
             dt_s,
             skin_ratio: 0.5,
             max_overlap_ratio: 0.10,
-            parallel_min_pairs: 16384,
+            parallel_min_pairs: AUTO_PARALLEL_MIN_PAIRS,
             min_steps_per_collision: 5.0,
             energy_check_steps: 2000,
         }
@@ -68,7 +129,6 @@ impl Numerics {
 /// produce one, and [`World::book`] checks and accumulates both the same way.
 #[derive(Debug, Clone, Copy, Default)]
 struct ContactResult {
-    touching: bool,
     /// Force on particle `i` (N); particle `j` of a pair gets the opposite.
     force_i: DVec3,
     torque_i: DVec3,
@@ -122,7 +182,8 @@ pub struct World {
     step_stored_change_j: f64,
     /// Contact state of particle `i` with wall `w` at `i * n_walls + w`.
     wall_states: Vec<ContactState>,
-    pair_out: Vec<ContactResult>,
+    /// Scratch of the parallel step, kept from step to step.
+    scratch: StepScratch,
     /// Total force of the walls on the particles at the current step (N).
     wall_force: DVec3,
     /// Ledger reading the energy check compares against.
@@ -170,7 +231,7 @@ impl World {
             neighbours: NeighbourList::new(skin),
             step_stored_change_j: 0.0,
             wall_states: Vec::new(),
-            pair_out: Vec::new(),
+            scratch: StepScratch::default(),
             wall_force: DVec3::ZERO,
             baseline: LedgerSnapshot::default(),
             impact_speeds: ImpactSpeeds::default(),
@@ -304,6 +365,11 @@ impl World {
         self.wall_force
     }
 
+    /// Pairs in the neighbour list now (touching or within the skin).
+    pub fn listed_pairs(&self) -> usize {
+        self.neighbours.pairs.len()
+    }
+
     /// How often the neighbour list was rebuilt.
     pub fn neighbour_rebuilds(&self) -> u64 {
         self.neighbours.rebuilds()
@@ -415,24 +481,32 @@ impl World {
         }
     }
 
+    /// Whether this step runs on all threads: several threads, and enough
+    /// listed pairs to pay for waking them ([`AUTO_PARALLEL_MIN_PAIRS`]).
+    /// Either way the results are the same bits.
+    fn parallel(&self) -> bool {
+        let from = self
+            .numerics
+            .parallel_min_pairs
+            .min(AUTO_PARALLEL_MIN_PAIRS);
+        rayon::current_num_threads() > 1 && self.neighbours.pairs.len() >= from
+    }
+
+    /// True when some law has friction: only then can a particle's spin change.
+    fn rotates(&self) -> bool {
+        self.pp_law.has_friction() || self.pw_law.has_friction()
+    }
+
     /// Advances one step; the wall body ends the step at `wall_displacement_m`.
     pub fn step(&mut self, wall_displacement_m: f64) -> Result<(), DemError> {
         let dt = self.numerics.dt_s;
         let half = 0.5 * dt;
-        let g = self.gravity;
-        let p = &mut self.particles;
+        let parallel = self.parallel();
         // Work the contact forces do on the particles over the step, as velocity
         // Verlet applies them: the trapezoid of the forces (gravity taken out)
         // at both ends on the drift `v_half dt` (rotation: `ω_half dt`).
-        let mut contact_work_j = 0.0;
-        for i in 0..p.position.len() {
-            p.velocity[i] += p.force[i] * (p.inv_mass[i] * half);
-            p.angular_velocity[i] += p.torque[i] * (p.inv_inertia[i] * half);
-            p.position[i] += p.velocity[i] * dt;
-            contact_work_j += (p.force[i] - g * p.mass[i]).dot(p.velocity[i])
-                + p.torque[i].dot(p.angular_velocity[i]);
-        }
-        if let Some(i) = p.position.iter().position(|x| !x.is_finite()) {
+        let (kicked_work, nonfinite) = self.half_kick(Pass::KickDrift, 0.0, parallel);
+        if let Some(i) = nonfinite {
             return Err(DemError::NonFinite {
                 time_s: self.time_s + dt,
                 step: self.steps + 1,
@@ -446,7 +520,10 @@ impl World {
         self.walls.velocity_mps = du / dt;
         let axial_before = self.wall_force.dot(self.walls.axis);
 
-        if self.neighbours.needs_rebuild(&self.particles.position) {
+        if self
+            .neighbours
+            .needs_rebuild(&self.particles.position, parallel)
+        {
             self.neighbours
                 .rebuild(&self.particles.position, &self.particles.radius);
         }
@@ -454,13 +531,7 @@ impl World {
         self.step_stored_change_j = 0.0;
         self.compute_forces(dt)?;
 
-        let p = &mut self.particles;
-        for i in 0..p.position.len() {
-            contact_work_j += (p.force[i] - g * p.mass[i]).dot(p.velocity[i])
-                + p.torque[i].dot(p.angular_velocity[i]);
-            p.velocity[i] += p.force[i] * (p.inv_mass[i] * half);
-            p.angular_velocity[i] += p.torque[i] * (p.inv_inertia[i] * half);
-        }
+        let (mut contact_work_j, _) = self.half_kick(Pass::Kick, kicked_work, parallel);
         contact_work_j *= half;
         // Trapezoidal work of the walls on the particles over the step.
         let work_in_j = 0.5 * (axial_before + self.wall_force.dot(self.walls.axis)) * du;
@@ -481,6 +552,65 @@ impl World {
         Ok(())
     }
 
+    /// One half kick of every particle (and the drift, on the first pass),
+    /// in fixed blocks. Returns the sum of the contact power terms
+    /// `(F - m g)·v + τ·ω` over the particles, added to `carry` in particle
+    /// order (block by block, so the same for any thread count; for one block
+    /// the order of a plain loop), and the first particle whose position is
+    /// not finite.
+    fn half_kick(&mut self, pass: Pass, carry: f64, parallel: bool) -> (f64, Option<usize>) {
+        let kick = Kick {
+            pass,
+            dt: self.numerics.dt_s,
+            gravity: self.gravity,
+            rotation: self.rotates(),
+        };
+        let p = &mut self.particles;
+        let (force, torque, mass) = (&p.force, &p.torque, &p.mass);
+        let (inv_mass, inv_inertia) = (&p.inv_mass, &p.inv_inertia);
+        type Block<'b> = (usize, ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [DVec3]));
+        let block = |(c, ((x, v), w)): Block<'_>| {
+            let s = c * PARTICLE_BLOCK;
+            let e = s + x.len();
+            let loads = Loads {
+                force: &force[s..e],
+                torque: &torque[s..e],
+                mass: &mass[s..e],
+                inv_mass: &inv_mass[s..e],
+                inv_inertia: &inv_inertia[s..e],
+            };
+            let (work, bad) = kick.block(&loads, x, v, w, if c == 0 { carry } else { 0.0 });
+            (work, bad.map(|k| s + k))
+        };
+        let sums = &mut self.scratch.block_sums;
+        if parallel {
+            p.position
+                .par_chunks_mut(PARTICLE_BLOCK)
+                .zip(p.velocity.par_chunks_mut(PARTICLE_BLOCK))
+                .zip(p.angular_velocity.par_chunks_mut(PARTICLE_BLOCK))
+                .enumerate()
+                .map(block)
+                .collect_into_vec(sums);
+        } else {
+            sums.clear();
+            sums.extend(
+                p.position
+                    .chunks_mut(PARTICLE_BLOCK)
+                    .zip(p.velocity.chunks_mut(PARTICLE_BLOCK))
+                    .zip(p.angular_velocity.chunks_mut(PARTICLE_BLOCK))
+                    .enumerate()
+                    .map(block),
+            );
+        }
+        let mut total = if sums.is_empty() { carry } else { 0.0 };
+        let mut nonfinite = None;
+        for &(work, bad) in sums.iter() {
+            total += work;
+            nonfinite = nonfinite.or(bad);
+        }
+        (total, nonfinite)
+    }
+
     /// Human-readable name of a contact, for diagnoses.
     fn contact_name(&self, at: ContactAt) -> String {
         match at {
@@ -489,164 +619,603 @@ impl World {
         }
     }
 
-    /// Checks one contact's result and adds it to the forces, the ledger and
-    /// the impact speeds: the one path for pair and wall contacts. A collision
-    /// resolved in too few steps or an excessive overlap stops the run.
-    #[inline]
-    fn book(&mut self, at: ContactAt, out: &ContactResult, dt: f64) -> Result<(), DemError> {
+    /// The error that stops the run at contact `at`.
+    fn refusal(&self, at: ContactAt, out: &ContactResult, why: Refusal, dt: f64) -> DemError {
         let n = &self.numerics;
-        if out.steps_per_collision < n.min_steps_per_collision {
-            let duration_s = out.steps_per_collision * dt;
-            return Err(DemError::UnresolvedCollision {
-                time_s: self.time_s + dt,
-                step: self.steps + 1,
-                contact: self.contact_name(at),
-                speed_mps: out.onset_speed_mps,
-                duration_s,
-                steps: out.steps_per_collision,
-                dt_s: dt,
-                suggested_dt_s: duration_s / 20.0,
-            });
-        }
-        if out.overlap_ratio > n.max_overlap_ratio {
-            return Err(DemError::ExcessiveOverlap {
+        match why {
+            Refusal::Unresolved => {
+                let duration_s = out.steps_per_collision * dt;
+                DemError::UnresolvedCollision {
+                    time_s: self.time_s + dt,
+                    step: self.steps + 1,
+                    contact: self.contact_name(at),
+                    speed_mps: out.onset_speed_mps,
+                    duration_s,
+                    steps: out.steps_per_collision,
+                    dt_s: dt,
+                    suggested_dt_s: duration_s / 20.0,
+                }
+            }
+            Refusal::Overlap => DemError::ExcessiveOverlap {
                 time_s: self.time_s + dt,
                 step: self.steps + 1,
                 contact: self.contact_name(at),
                 overlap_percent: 100.0 * out.overlap_ratio,
                 limit_percent: 100.0 * n.max_overlap_ratio,
                 speed_mps: out.approach_mps,
-                dt_s: self.numerics.dt_s,
-            });
-        }
-        let p = &mut self.particles;
-        let (fastest, ledger_normal, ledger_tangential) = match at {
-            ContactAt::Pair(i, j) => {
-                p.force[i] += out.force_i;
-                p.force[j] -= out.force_i;
-                p.torque[i] += out.torque_i;
-                p.torque[j] += out.torque_j;
-                let d = &mut self.ledger.dissipated;
-                (
-                    &mut self.impact_speeds.particle_particle_mps,
-                    &mut d.pp_normal,
-                    &mut d.pp_tangential,
-                )
-            }
-            ContactAt::Wall(i, _) => {
-                p.force[i] += out.force_i;
-                p.torque[i] += out.torque_i;
-                self.wall_force += out.force_i;
-                let d = &mut self.ledger.dissipated;
-                (
-                    &mut self.impact_speeds.particle_wall_mps,
-                    &mut d.pw_normal,
-                    &mut d.pw_tangential,
-                )
-            }
-        };
-        *fastest = fastest.max(out.onset_speed_mps);
-        self.fewest_steps_per_contact = self.fewest_steps_per_contact.min(out.steps_per_collision);
-        if dt > 0.0 {
-            *ledger_normal += out.dissipated_normal_j;
-            *ledger_tangential += out.dissipated_tangential_j;
-            self.ledger.stiffness_work_j += out.stiffness_work_j;
-            self.ledger.integrator_j += out.integrator_j;
-            self.step_stored_change_j += out.stored_change_j;
-            if let Some(per) = &mut self.particle_dissipation_j {
-                let e = out.dissipated_normal_j + out.dissipated_tangential_j;
-                match at {
-                    ContactAt::Pair(i, j) => {
-                        per[i] += 0.5 * e;
-                        per[j] += 0.5 * e;
-                    }
-                    ContactAt::Wall(i, _) => per[i] += e,
+                dt_s: n.dt_s,
+            },
+            Refusal::Escaped => {
+                let (i, w) = match at {
+                    ContactAt::Wall(i, w) | ContactAt::Pair(i, w) => (i, w),
+                };
+                DemError::Escaped {
+                    time_s: self.time_s + dt,
+                    step: self.steps + 1,
+                    particle: i,
+                    wall: self.walls.names[w].to_string(),
+                    dt_s: n.dt_s,
                 }
             }
         }
-        Ok(())
     }
 
     /// Forces and torques at the current positions. `dt` is the step over which the
     /// tangential springs advance and the ledger accumulates (0 for a pure
     /// evaluation that changes no history).
     fn compute_forces(&mut self, dt: f64) -> Result<(), DemError> {
-        let p = &mut self.particles;
-        for i in 0..p.len() {
-            p.force[i] = self.gravity * p.mass[i];
-            p.torque[i] = DVec3::ZERO;
-        }
+        let parallel = self.parallel();
         self.wall_force = DVec3::ZERO;
-        self.wall_contacts(dt)?;
-        self.pair_contacts(dt)
+        match law_kind(&self.pw_law) {
+            (true, true) => self.wall_contacts::<true, true>(dt, parallel),
+            (true, false) => self.wall_contacts::<true, false>(dt, parallel),
+            (false, true) => self.wall_contacts::<false, true>(dt, parallel),
+            (false, false) => self.wall_contacts::<false, false>(dt, parallel),
+        }?;
+        match (law_kind(&self.pp_law), parallel) {
+            ((true, true), false) => self.pair_contacts::<true, true>(dt),
+            ((true, false), false) => self.pair_contacts::<true, false>(dt),
+            ((false, true), false) => self.pair_contacts::<false, true>(dt),
+            ((false, false), false) => self.pair_contacts::<false, false>(dt),
+            ((true, true), true) => self.pair_contacts_parallel::<true, true>(dt),
+            ((true, false), true) => self.pair_contacts_parallel::<true, false>(dt),
+            ((false, true), true) => self.pair_contacts_parallel::<false, true>(dt),
+            ((false, false), true) => self.pair_contacts_parallel::<false, false>(dt),
+        }
     }
 
-    fn wall_contacts(&mut self, dt: f64) -> Result<(), DemError> {
-        let n_walls = self.walls.len();
-        let offset = self.walls.offset();
-        let v_wall = self.walls.velocity();
-        for i in 0..self.particles.len() {
-            for w in 0..n_walls {
-                let p = &self.particles;
-                let st = &mut self.wall_states[i * n_walls + w];
-                let (dist, normal) =
-                    self.walls.shapes[w].distance_and_normal(p.position[i], offset);
-                let r = p.radius[i];
-                if r - dist <= 0.0 && st.delta_prev <= 0.0 {
-                    st.delta_prev = r - dist;
-                    continue;
+    /// Gravity and the wall contacts, particle by particle in fixed blocks
+    /// (on all threads when `parallel`); what the contacts book is then
+    /// added up on one thread in contact order.
+    fn wall_contacts<const D: bool, const F: bool>(
+        &mut self,
+        dt: f64,
+        parallel: bool,
+    ) -> Result<(), DemError> {
+        let g = self.gravity;
+        let p = &mut self.particles;
+        if self.walls.is_empty() {
+            for (f, (t, m)) in p.force.iter_mut().zip(p.torque.iter_mut().zip(&p.mass)) {
+                *f = g * *m;
+                *t = DVec3::ZERO;
+            }
+            return Ok(());
+        }
+        let law = self.pw_law;
+        let walls = WallGeometry {
+            shapes: &self.walls.shapes,
+            offset: self.walls.offset(),
+            v_wall: self.walls.velocity(),
+        };
+        let bodies = bodies!(p);
+        let n_walls = walls.shapes.len();
+        let n_blocks = p.force.len().div_ceil(PARTICLE_BLOCK);
+        let books = &mut self.scratch.wall_books;
+        if books.len() < n_blocks {
+            books.resize_with(n_blocks, Vec::new);
+        }
+        type Block<'b> = (
+            usize,
+            (
+                ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [ContactState]),
+                &'b mut Vec<WallBooked>,
+            ),
+        );
+        let block = |(c, (((f, t), st), bk)): Block<'_>| {
+            wall_block::<D, F>(
+                &law,
+                &walls,
+                &bodies,
+                g,
+                c * PARTICLE_BLOCK,
+                f,
+                t,
+                st,
+                bk,
+                dt,
+            );
+        };
+        let states = &mut self.wall_states;
+        if parallel {
+            p.force
+                .par_chunks_mut(PARTICLE_BLOCK)
+                .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
+                .zip(states.par_chunks_mut(PARTICLE_BLOCK * n_walls))
+                .zip(books[..n_blocks].par_iter_mut())
+                .enumerate()
+                .for_each(block);
+        } else {
+            p.force
+                .chunks_mut(PARTICLE_BLOCK)
+                .zip(p.torque.chunks_mut(PARTICLE_BLOCK))
+                .zip(states.chunks_mut(PARTICLE_BLOCK * n_walls))
+                .zip(books[..n_blocks].iter_mut())
+                .enumerate()
+                .for_each(block);
+        }
+
+        let mut tally = tally!(self);
+        let mut refused = None;
+        'books: for bk in &books[..n_blocks] {
+            for b in bk {
+                let at = ContactAt::Wall(b.particle as usize, b.wall as usize);
+                let booked = if b.escaped {
+                    Err(Refusal::Escaped)
+                } else {
+                    tally.wall(&b.out, dt, b.particle as usize)
+                };
+                if let Err(why) = booked {
+                    refused = Some((at, b.out, why));
+                    break 'books;
                 }
-                if dist <= 0.0 {
-                    return Err(DemError::Escaped {
-                        time_s: self.time_s + dt,
-                        step: self.steps + 1,
-                        particle: i,
-                        wall: self.walls.names[w].to_string(),
-                        dt_s: self.numerics.dt_s,
-                    });
-                }
-                let out = wall_contact(&self.pw_law, p, i, dist, normal, v_wall, dt, st);
-                self.book(ContactAt::Wall(i, w), &out, dt)?;
             }
         }
+        match refused {
+            Some((at, out, why)) => Err(self.refusal(at, &out, why, dt)),
+            None => Ok(()),
+        }
+    }
+
+    /// The pair contacts on one thread, each added to the forces and the
+    /// ledger as soon as it is evaluated, in pair order.
+    fn pair_contacts<const D: bool, const F: bool>(&mut self, dt: f64) -> Result<(), DemError> {
+        let law = self.pp_law;
+        let mut tally = tally!(self);
+        let p = &mut self.particles;
+        let bodies = bodies!(p);
+        let (force, torque) = (&mut p.force, &mut p.torque);
+        let nl = &mut self.neighbours;
+        let mut refused = None;
+        for (&(i, j), st) in nl.pairs.iter().zip(nl.states.iter_mut()) {
+            let (i, j) = (i as usize, j as usize);
+            let Some(out) = pair_contact::<D, F>(&law, &bodies, i, j, dt, st) else {
+                continue;
+            };
+            if let Err(why) = tally.pair(&out, dt, i, j) {
+                refused = Some((ContactAt::Pair(i, j), out, why));
+                break;
+            }
+            force[i] += out.force_i;
+            force[j] -= out.force_i;
+            if F {
+                torque[i] += out.torque_i;
+                torque[j] += out.torque_j;
+            }
+        }
+        match refused {
+            Some((at, out, why)) => Err(self.refusal(at, &out, why, dt)),
+            None => Ok(()),
+        }
+    }
+
+    /// The pair contacts on all threads: pairs in fixed blocks (each writes
+    /// its own states and forces), then each particle gathers its pair forces
+    /// in pair order, then the ledger is added up on one thread in pair
+    /// order. The same bits as [`Self::pair_contacts`].
+    fn pair_contacts_parallel<const D: bool, const F: bool>(
+        &mut self,
+        dt: f64,
+    ) -> Result<(), DemError> {
+        let law = self.pp_law;
+        let p = &mut self.particles;
+        let bodies = bodies!(p);
+        let nl = &mut self.neighbours;
+        let sc = &mut self.scratch;
+        let n_pairs = nl.pairs.len();
+        sc.pair_force.resize(n_pairs, PairForce::default());
+        let n_blocks = n_pairs.div_ceil(PAIR_BLOCK);
+        if sc.pair_books.len() < n_blocks {
+            sc.pair_books.resize_with(n_blocks, Vec::new);
+        }
+        nl.pairs
+            .par_chunks(PAIR_BLOCK)
+            .zip(nl.states.par_chunks_mut(PAIR_BLOCK))
+            .zip(sc.pair_force.par_chunks_mut(PAIR_BLOCK))
+            .zip(sc.pair_books[..n_blocks].par_iter_mut())
+            .enumerate()
+            .for_each(|(c, (((pairs, states), forces), books))| {
+                pair_block::<D, F>(
+                    &law,
+                    &bodies,
+                    c * PAIR_BLOCK,
+                    pairs,
+                    states,
+                    forces,
+                    books,
+                    dt,
+                );
+            });
+        let list = &*nl;
+        let pair_force = &sc.pair_force;
+        p.force
+            .par_chunks_mut(PARTICLE_BLOCK)
+            .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
+            .enumerate()
+            .for_each(|(c, (f, t))| {
+                gather_block::<F>(list, pair_force, c * PARTICLE_BLOCK, f, t);
+            });
+
+        let mut tally = tally!(self);
+        let mut refused = None;
+        'books: for bk in &sc.pair_books[..n_blocks] {
+            for (k, out) in bk {
+                let (i, j) = list.pairs[*k as usize];
+                if let Err(why) = tally.pair(out, dt, i as usize, j as usize) {
+                    refused = Some((ContactAt::Pair(i as usize, j as usize), *out, why));
+                    break 'books;
+                }
+            }
+        }
+        match refused {
+            Some((at, out, why)) => Err(self.refusal(at, &out, why, dt)),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The particle state a contact reads, borrowed apart from the forces and
+/// torques it writes.
+#[derive(Clone, Copy)]
+struct Bodies<'a> {
+    position: &'a [DVec3],
+    velocity: &'a [DVec3],
+    angular_velocity: &'a [DVec3],
+    radius: &'a [f64],
+    mass: &'a [f64],
+}
+
+/// Where the walls are this step.
+#[derive(Clone, Copy)]
+struct WallGeometry<'a> {
+    shapes: &'a [WallShape],
+    offset: DVec3,
+    v_wall: DVec3,
+}
+
+/// Why a contact stops the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Refusal {
+    /// Resolved in fewer steps than `min_steps_per_collision`.
+    Unresolved,
+    /// Deeper than `max_overlap_ratio`.
+    Overlap,
+    /// The particle's centre is past the wall.
+    Escaped,
+}
+
+/// What a pair contributes to the forces, kept for the gather of the
+/// parallel step.
+#[derive(Debug, Clone, Copy, Default)]
+struct PairForce {
+    force_i: DVec3,
+    torque_i: DVec3,
+    torque_j: DVec3,
+}
+
+/// A touching wall contact of the step, for the books.
+#[derive(Debug, Clone, Copy)]
+struct WallBooked {
+    particle: u32,
+    wall: u32,
+    /// The particle's centre is past the wall (and `out` is empty).
+    escaped: bool,
+    out: ContactResult,
+}
+
+/// Buffers of the step, kept from step to step so that the step allocates
+/// nothing once they have grown.
+#[derive(Debug, Clone, Default)]
+struct StepScratch {
+    /// Per particle block: its share of the contact power and its first
+    /// non-finite particle.
+    block_sums: Vec<(f64, Option<usize>)>,
+    /// Per particle block: its touching wall contacts.
+    wall_books: Vec<Vec<WallBooked>>,
+    /// Per pair: its forces (parallel step).
+    pair_force: Vec<PairForce>,
+    /// Per pair block: its touching pairs (parallel step).
+    pair_books: Vec<Vec<(u32, ContactResult)>>,
+}
+
+/// The state a step borrows to book contacts, apart from the particles.
+struct Tally<'a> {
+    numerics: &'a Numerics,
+    ledger: &'a mut Ledger,
+    impact_speeds: &'a mut ImpactSpeeds,
+    fewest_steps_per_contact: &'a mut f64,
+    step_stored_change_j: &'a mut f64,
+    wall_force: &'a mut DVec3,
+    /// Opt-in dissipation per particle (a pair's split evenly).
+    particle_dissipation_j: Option<&'a mut [f64]>,
+}
+
+impl Tally<'_> {
+    /// Checks a contact's result: a collision resolved in too few steps or an
+    /// excessive overlap stops the run.
+    #[inline(always)]
+    fn check(&self, out: &ContactResult) -> Result<(), Refusal> {
+        if out.steps_per_collision < self.numerics.min_steps_per_collision {
+            Err(Refusal::Unresolved)
+        } else if out.overlap_ratio > self.numerics.max_overlap_ratio {
+            Err(Refusal::Overlap)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Books what every contact books: the fewest steps and the energies.
+    #[inline(always)]
+    fn common(&mut self, out: &ContactResult, dt: f64) {
+        *self.fewest_steps_per_contact = self.fewest_steps_per_contact.min(out.steps_per_collision);
+        if dt > 0.0 {
+            self.ledger.stiffness_work_j += out.stiffness_work_j;
+            self.ledger.integrator_j += out.integrator_j;
+            *self.step_stored_change_j += out.stored_change_j;
+        }
+    }
+
+    /// Checks and books a pair contact (its forces are added by the caller).
+    #[inline(always)]
+    fn pair(&mut self, out: &ContactResult, dt: f64, i: usize, j: usize) -> Result<(), Refusal> {
+        self.check(out)?;
+        if let (Some(per), true) = (self.particle_dissipation_j.as_deref_mut(), dt > 0.0) {
+            let e = out.dissipated_normal_j + out.dissipated_tangential_j;
+            per[i] += 0.5 * e;
+            per[j] += 0.5 * e;
+        }
+        let fastest = &mut self.impact_speeds.particle_particle_mps;
+        *fastest = fastest.max(out.onset_speed_mps);
+        if dt > 0.0 {
+            let d = &mut self.ledger.dissipated;
+            d.pp_normal += out.dissipated_normal_j;
+            d.pp_tangential += out.dissipated_tangential_j;
+        }
+        self.common(out, dt);
         Ok(())
     }
 
-    fn pair_contacts(&mut self, dt: f64) -> Result<(), DemError> {
-        let n_pairs = self.neighbours.pairs.len();
-        self.pair_out.resize(n_pairs, ContactResult::default());
-        let law = self.pp_law;
-        let p = &self.particles;
-        let work =
-            |(&(i, j), (st, out)): (&(u32, u32), (&mut ContactState, &mut ContactResult))| {
-                *out = pair_contact(&law, p, i as usize, j as usize, dt, st);
-            };
-        let pairs = &self.neighbours.pairs;
-        let states = &mut self.neighbours.states;
-        if rayon::current_num_threads() > 1 && n_pairs >= self.numerics.parallel_min_pairs {
-            pairs
-                .par_iter()
-                .zip(states.par_iter_mut().zip(self.pair_out.par_iter_mut()))
-                .with_min_len(256)
-                .for_each(work);
-        } else {
-            pairs
-                .iter()
-                .zip(states.iter_mut().zip(self.pair_out.iter_mut()))
-                .for_each(work);
+    /// Checks and books a wall contact, and adds its force to the force of
+    /// the walls (its forces on the particle are added by the caller).
+    #[inline(always)]
+    fn wall(&mut self, out: &ContactResult, dt: f64, i: usize) -> Result<(), Refusal> {
+        self.check(out)?;
+        if let (Some(per), true) = (self.particle_dissipation_j.as_deref_mut(), dt > 0.0) {
+            per[i] += out.dissipated_normal_j + out.dissipated_tangential_j;
         }
+        *self.wall_force += out.force_i;
+        let fastest = &mut self.impact_speeds.particle_wall_mps;
+        *fastest = fastest.max(out.onset_speed_mps);
+        if dt > 0.0 {
+            let d = &mut self.ledger.dissipated;
+            d.pw_normal += out.dissipated_normal_j;
+            d.pw_tangential += out.dissipated_tangential_j;
+        }
+        self.common(out, dt);
+        Ok(())
+    }
+}
 
-        // Fixed-order accumulation: identical sums for any thread count.
-        let results = std::mem::take(&mut self.pair_out);
-        let booked = results.iter().enumerate().try_for_each(|(k, out)| {
-            if !out.touching {
-                return Ok(());
+/// Which instance of the force loops a law needs: (damped, frictional).
+fn law_kind(law: &ContactLaw) -> (bool, bool) {
+    (
+        matches!(law.damping, NormalDamping::Restitution { .. }),
+        matches!(law.tangential, Tangential::MindlinCoulomb { .. }),
+    )
+}
+
+/// Which half of velocity Verlet a particle pass is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    /// Half kick, then drift; the power is read after the drift.
+    KickDrift,
+    /// The power is read, then the second half kick.
+    Kick,
+}
+
+/// One particle pass of velocity Verlet.
+#[derive(Debug, Clone, Copy)]
+struct Kick {
+    pass: Pass,
+    dt: f64,
+    gravity: DVec3,
+    /// Integrate the spin too (some law has friction).
+    rotation: bool,
+}
+
+/// The loads and inertia of a block of particles.
+struct Loads<'a> {
+    force: &'a [DVec3],
+    torque: &'a [DVec3],
+    mass: &'a [f64],
+    inv_mass: &'a [f64],
+    inv_inertia: &'a [f64],
+}
+
+impl Kick {
+    /// The pass over one block of positions `x`, velocities `v` and spins `w`:
+    /// returns `carry` plus the contact power `(F - m g)·v + τ·ω` summed over
+    /// the block in order, and the first particle of the block whose position
+    /// is not finite (first pass only).
+    #[inline]
+    fn block(
+        &self,
+        l: &Loads,
+        x: &mut [DVec3],
+        v: &mut [DVec3],
+        w: &mut [DVec3],
+        carry: f64,
+    ) -> (f64, Option<usize>) {
+        let half = 0.5 * self.dt;
+        let g = self.gravity;
+        let mut work = carry;
+        for k in 0..x.len() {
+            let contact = l.force[k] - g * l.mass[k];
+            match self.pass {
+                Pass::KickDrift => {
+                    v[k] += l.force[k] * (l.inv_mass[k] * half);
+                    x[k] += v[k] * self.dt;
+                    if self.rotation {
+                        w[k] += l.torque[k] * (l.inv_inertia[k] * half);
+                        work += contact.dot(v[k]) + l.torque[k].dot(w[k]);
+                    } else {
+                        work += contact.dot(v[k]);
+                    }
+                }
+                Pass::Kick => {
+                    if self.rotation {
+                        work += contact.dot(v[k]) + l.torque[k].dot(w[k]);
+                        w[k] += l.torque[k] * (l.inv_inertia[k] * half);
+                    } else {
+                        work += contact.dot(v[k]);
+                    }
+                    v[k] += l.force[k] * (l.inv_mass[k] * half);
+                }
             }
-            let (i, j) = self.neighbours.pairs[k];
-            self.book(ContactAt::Pair(i as usize, j as usize), out, dt)
-        });
-        self.pair_out = results;
-        booked
+        }
+        let bad = match self.pass {
+            Pass::KickDrift => x.iter().position(|p| !p.is_finite()),
+            Pass::Kick => None,
+        };
+        (work, bad)
+    }
+}
+
+/// Gravity and the wall contacts of the particles `start..` of one block:
+/// their forces and torques are set, the wall states advanced, and the
+/// touching contacts listed in `books` for the ledger, in (particle, wall)
+/// order; an escaped particle ends the block.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn wall_block<const D: bool, const F: bool>(
+    law: &ContactLaw,
+    walls: &WallGeometry,
+    bodies: &Bodies,
+    g: DVec3,
+    start: usize,
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+    states: &mut [ContactState],
+    books: &mut Vec<WallBooked>,
+    dt: f64,
+) {
+    books.clear();
+    let n_walls = walls.shapes.len();
+    for (m, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
+        let i = start + m;
+        *f = g * bodies.mass[i];
+        *t = DVec3::ZERO;
+        let r = bodies.radius[i];
+        for (w, shape) in walls.shapes.iter().enumerate() {
+            let st = &mut states[m * n_walls + w];
+            let (dist, normal) = shape.distance_and_normal(bodies.position[i], walls.offset);
+            if r - dist <= 0.0 && st.delta_prev <= 0.0 {
+                st.delta_prev = r - dist;
+                continue;
+            }
+            let (particle, wall) = (i as u32, w as u32);
+            if dist <= 0.0 {
+                books.push(WallBooked {
+                    particle,
+                    wall,
+                    escaped: true,
+                    out: ContactResult::default(),
+                });
+                return;
+            }
+            let out = wall_contact::<D, F>(law, bodies, i, dist, normal, walls.v_wall, dt, st);
+            *f += out.force_i;
+            if F {
+                *t += out.torque_i;
+            }
+            books.push(WallBooked {
+                particle,
+                wall,
+                escaped: false,
+                out,
+            });
+        }
+    }
+}
+
+/// The pair contacts `start..` of one block: states advanced, each pair's
+/// forces written (zero when apart), the touching ones listed in `books`.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn pair_block<const D: bool, const F: bool>(
+    law: &ContactLaw,
+    bodies: &Bodies,
+    start: usize,
+    pairs: &[(u32, u32)],
+    states: &mut [ContactState],
+    forces: &mut [PairForce],
+    books: &mut Vec<(u32, ContactResult)>,
+    dt: f64,
+) {
+    books.clear();
+    for (m, ((&(i, j), st), f)) in pairs.iter().zip(states).zip(forces).enumerate() {
+        match pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, st) {
+            None => *f = PairForce::default(),
+            Some(out) => {
+                *f = PairForce {
+                    force_i: out.force_i,
+                    torque_i: out.torque_i,
+                    torque_j: out.torque_j,
+                };
+                books.push(((start + m) as u32, out));
+            }
+        }
+    }
+}
+
+/// Adds to the forces and torques of the particles `start..` of one block
+/// their pair forces, each particle's in pair order: the order, and so the
+/// rounding, of the serial loop that adds each pair to both its particles.
+#[inline]
+fn gather_block<const F: bool>(
+    list: &NeighbourList,
+    pair_force: &[PairForce],
+    start: usize,
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+) {
+    for (m, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
+        let (mut fa, mut ta) = (*f, *t);
+        for &e in list.pairs_of(start + m) {
+            let c = &pair_force[(e >> 1) as usize];
+            if e & 1 == 0 {
+                fa += c.force_i;
+                if F {
+                    ta += c.torque_i;
+                }
+            } else {
+                fa -= c.force_i;
+                if F {
+                    ta += c.torque_j;
+                }
+            }
+        }
+        *f = fa;
+        *t = ta;
     }
 }
 
@@ -675,12 +1244,12 @@ fn onset(
 }
 
 /// Evaluates a touching contact and what the checks need: the contact
-/// point's lever `arms` on bodies i and j (zero for a wall), and the smaller
-/// radius the overlap is measured against. Always inlined: the result is
-/// then written straight into the caller's slot instead of being copied (a
-/// 10 % cost per step when it was not).
+/// point's lever `arms` on bodies i and j (zero for a wall; unused without
+/// friction), and the smaller radius the overlap is measured against. Always
+/// inlined: the result is then written straight into the caller's slot
+/// instead of being copied (a 10 % cost per step when it was not).
 #[inline(always)]
-fn resolve_contact(
+fn resolve_contact<const D: bool, const F: bool>(
     law: &ContactLaw,
     geometry: &ContactGeometry,
     (arm_i, arm_j): (DVec3, DVec3),
@@ -689,12 +1258,19 @@ fn resolve_contact(
     st: &mut ContactState,
 ) -> ContactResult {
     let (steps_per_collision, onset_speed_mps) = onset(law, geometry, dt, st);
-    let out = evaluate_contact(law, geometry, dt, st);
+    let out = evaluate_contact_with::<D, F>(law, geometry, dt, st);
+    let (torque_i, torque_j) = if F {
+        (
+            arm_i.cross(out.tangential_on_i),
+            arm_j.cross(-out.tangential_on_i),
+        )
+    } else {
+        (DVec3::ZERO, DVec3::ZERO)
+    };
     ContactResult {
-        touching: true,
         force_i: out.force_on_i,
-        torque_i: arm_i.cross(out.tangential_on_i),
-        torque_j: arm_j.cross(-out.tangential_on_i),
+        torque_i,
+        torque_j,
         dissipated_normal_j: out.dissipated_normal_j,
         dissipated_tangential_j: out.dissipated_tangential_j,
         stiffness_work_j: out.stiffness_work_j,
@@ -709,12 +1285,14 @@ fn resolve_contact(
 
 /// One particle-wall contact (thesis Section 3.3: overlap eq. 3.12, normal eq.
 /// 3.14; a flat wall, R* = R and m* = m). `dist` is the centre's distance to
-/// the wall and `normal` points from the centre to the wall.
+/// the wall and `normal` points from the centre to the wall. Without
+/// friction the spin is left out of the contact velocity: only its normal
+/// part acts, and the spin has none.
 #[allow(clippy::too_many_arguments)]
-#[inline]
-fn wall_contact(
+#[inline(always)]
+fn wall_contact<const D: bool, const F: bool>(
     law: &ContactLaw,
-    p: &Particles,
+    b: &Bodies,
     i: usize,
     dist: f64,
     normal: DVec3,
@@ -722,54 +1300,74 @@ fn wall_contact(
     dt: f64,
     st: &mut ContactState,
 ) -> ContactResult {
-    let r = p.radius[i];
+    let r = b.radius[i];
     let delta = r - dist;
-    let arm = normal * (r - 0.5 * delta.max(0.0));
-    let v_rel = p.velocity[i] + p.angular_velocity[i].cross(arm) - v_wall;
+    let (arm, v_rel) = if F {
+        let arm = normal * (r - 0.5 * delta.max(0.0));
+        (
+            arm,
+            b.velocity[i] + b.angular_velocity[i].cross(arm) - v_wall,
+        )
+    } else {
+        (DVec3::ZERO, b.velocity[i] - v_wall)
+    };
     let geometry = ContactGeometry {
         r_star_m: r,
-        m_star_kg: p.mass[i],
+        m_star_kg: b.mass[i],
         delta_m: delta,
         normal,
         v_rel,
     };
-    resolve_contact(law, &geometry, (arm, DVec3::ZERO), r, dt, st)
+    resolve_contact::<D, F>(law, &geometry, (arm, DVec3::ZERO), r, dt, st)
 }
 
-/// One particle-particle contact (thesis eq. 3.1–3.8, 3.26–3.27).
-#[inline]
-fn pair_contact(
+/// One particle-particle contact (thesis eq. 3.1–3.8, 3.26–3.27); `None`
+/// when the particles are apart and were apart (the gap is remembered for
+/// the trapezoid at contact onset).
+#[inline(always)]
+fn pair_contact<const D: bool, const F: bool>(
     law: &ContactLaw,
-    p: &Particles,
+    b: &Bodies,
     i: usize,
     j: usize,
     dt: f64,
     st: &mut ContactState,
-) -> ContactResult {
-    let d = p.position[j] - p.position[i];
-    let (ri, rj) = (p.radius[i], p.radius[j]);
+) -> Option<ContactResult> {
+    let d = b.position[j] - b.position[i];
+    let (ri, rj) = (b.radius[i], b.radius[j]);
     let dist_sq = d.length_squared();
     let reach = ri + rj;
     if dist_sq >= reach * reach && st.delta_prev <= 0.0 {
-        // Apart now and before: remember the gap for the trapezoid at contact onset.
         st.delta_prev = reach - dist_sq.sqrt();
-        return ContactResult::default();
+        return None;
     }
     let dist = dist_sq.sqrt();
     let n = d / dist;
     let delta = reach - dist;
-    let half_overlap = 0.5 * delta.max(0.0);
-    let arm_i = n * (ri - half_overlap);
-    let arm_j = -n * (rj - half_overlap);
-    let v_rel = p.velocity[i] + p.angular_velocity[i].cross(arm_i)
-        - p.velocity[j]
-        - p.angular_velocity[j].cross(arm_j);
+    let (arms, v_rel) = if F {
+        let half_overlap = 0.5 * delta.max(0.0);
+        let arm_i = n * (ri - half_overlap);
+        let arm_j = -n * (rj - half_overlap);
+        let v_rel = b.velocity[i] + b.angular_velocity[i].cross(arm_i)
+            - b.velocity[j]
+            - b.angular_velocity[j].cross(arm_j);
+        ((arm_i, arm_j), v_rel)
+    } else {
+        ((DVec3::ZERO, DVec3::ZERO), b.velocity[i] - b.velocity[j])
+    };
     let geometry = ContactGeometry {
         r_star_m: effective_radius_m(ri, rj),
-        m_star_kg: effective_mass_kg(p.mass[i], p.mass[j]),
+        m_star_kg: effective_mass_kg(b.mass[i], b.mass[j]),
         delta_m: delta,
         normal: n,
         v_rel,
     };
-    resolve_contact(law, &geometry, (arm_i, arm_j), ri.min(rj), dt, st)
+    Some(resolve_contact::<D, F>(
+        law,
+        &geometry,
+        arms,
+        ri.min(rj),
+        dt,
+        st,
+    ))
 }

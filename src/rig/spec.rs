@@ -427,6 +427,14 @@ impl RigSpec {
             skew_s: self.force.sample_skew_s - self.accelerometer.sample_skew_s,
         }
     }
+
+    /// True when the two channels read with no phase error at `freq_hz` and
+    /// no noise (the `ideal` rig): an empty-enclosure calibration could only
+    /// measure rounding, so none is run and the correction is zero.
+    pub fn needs_no_calibration(&self, freq_hz: f64) -> bool {
+        let (f, a) = (self.force_channel(), self.accel_channel());
+        self.expected_phase_error_rad(freq_hz) == 0.0 && f.noise_rms == 0.0 && a.noise_rms == 0.0
+    }
 }
 
 impl RigFile for RigSpec {
@@ -630,5 +638,13 @@ mod tests {
         }
         let ideal = RigSpec::builtin("ideal").expect("built in");
         assert_eq!(ideal.expected_phase_error_rad(40.0), 0.0);
+    }
+
+    #[test]
+    fn only_a_rig_that_reads_exactly_skips_its_calibration() {
+        let ideal = RigSpec::builtin("ideal").expect("built in");
+        assert!(ideal.needs_no_calibration(40.0));
+        let thesis = RigSpec::builtin("thesis-shaker").expect("built in");
+        assert!(!thesis.needs_no_calibration(40.0));
     }
 }

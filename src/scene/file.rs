@@ -233,9 +233,14 @@ pub struct SimulationSpec {
     pub settle_s: f64,
     pub gravity_mps2: f64,
     pub seed: u64,
-    /// The pair loop is split across threads from this many listed pairs on
-    /// (results are bit-identical either way; below it one core is faster).
-    #[serde(default = "default_parallel_min_pairs")]
+    /// Deprecated, and left out of printed scenes: vlab chooses when to use
+    /// threads itself. Still read, so that older scene files load; a value
+    /// below vlab's own threshold makes the step go parallel earlier (the
+    /// results are the same bits either way).
+    #[serde(
+        default = "default_parallel_min_pairs",
+        skip_serializing_if = "is_default_parallel_min_pairs"
+    )]
     pub parallel_min_pairs: usize,
 }
 
@@ -244,7 +249,11 @@ fn default_steps_per_contact() -> f64 {
 }
 
 fn default_parallel_min_pairs() -> usize {
-    crate::dem::Numerics::with_dt(1.0).parallel_min_pairs
+    crate::dem::AUTO_PARALLEL_MIN_PAIRS
+}
+
+fn is_default_parallel_min_pairs(n: &usize) -> bool {
+    *n >= crate::dem::AUTO_PARALLEL_MIN_PAIRS
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

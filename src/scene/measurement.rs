@@ -236,8 +236,10 @@ pub fn run_measured_shake_observed(
     let steady_cycles = outcome.cycles - outcome.steady_first_cycle;
 
     let cal_freqs = calibration_freqs_hz(setup.freq_hz, rig.daq.sample_rate_hz);
+    let exact = rig.needs_no_calibration(setup.freq_hz);
     let calibration = match &setup.calibration {
         CalibrationSource::Given(table, _) => table.clone(),
+        CalibrationSource::OnTheFly if exact => exact_calibration(rig, setup.freq_hz)?,
         CalibrationSource::OnTheFly => {
             let gammas = [0.5 * setup.gamma, setup.gamma];
             calibrate_rig(
@@ -256,6 +258,10 @@ pub fn run_measured_shake_observed(
     };
     let source = match &setup.calibration {
         CalibrationSource::Given(_, s) => s.clone(),
+        CalibrationSource::OnTheFly if exact => format!(
+            "none needed: rig {} reads without phase error or noise",
+            rig.name
+        ),
         CalibrationSource::OnTheFly => format!(
             "measured on the fly: empty enclosure of rig {} at {} Hz, Gamma {} and {}, averaged{}",
             rig.name,
@@ -437,6 +443,19 @@ fn trace_metadata(
         extra,
         ..Default::default()
     }
+}
+
+/// The calibration of a rig that reads exactly (see
+/// [`RigSpec::needs_no_calibration`]): zero phase error at `freq_hz`.
+fn exact_calibration(rig: &RigSpec, freq_hz: f64) -> Result<PhaseCalibration, SceneError> {
+    let point = crate::signals::PhaseErrorPoint {
+        freq_hz,
+        accel_amplitude_mps2: 0.0,
+        force_amplitude_n: 0.0,
+        phase_error_rad: 0.0,
+        force_polarity_reversed: false,
+    };
+    Ok(PhaseCalibration::from_points(rig.name.clone(), &[point])?)
 }
 
 /// Runs the empty enclosure of `rig` at every frequency and amplitude for

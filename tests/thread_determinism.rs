@@ -1,0 +1,81 @@
+//! The same scene and seed give the same bits whatever the number of threads
+//! (issue 10, item 4): a bed large enough for vlab to split the step across
+//! threads, run on a pool of one thread (the serial path) and of two (the
+//! parallel path), and a small bed forced onto the parallel path.
+
+use vlab::dem::testbed::lattice_bed;
+use vlab::dem::{AUTO_PARALLEL_MIN_PAIRS, World};
+
+/// `steps` steps of the lattice bed of `n` spheres on `threads` threads, the
+/// walls moving a little so that they do work.
+fn run(threads: usize, n: usize, friction: f64, steps: u32, force_parallel: bool) -> World {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool");
+    pool.install(|| {
+        let mut w = lattice_bed(n, friction, 7).expect("bed");
+        if force_parallel {
+            w.numerics.parallel_min_pairs = 0;
+        }
+        for k in 0..steps {
+            w.step(2e-6 * (f64::from(k) * 0.02).sin()).expect("step");
+        }
+        w
+    })
+}
+
+/// Every number the state and the books hold, as bits.
+fn fingerprint(w: &World) -> (Vec<u64>, String) {
+    let p = &w.particles;
+    let bits = [
+        &p.position,
+        &p.velocity,
+        &p.angular_velocity,
+        &p.force,
+        &p.torque,
+    ]
+    .iter()
+    .flat_map(|v| v.iter().flat_map(|x| x.to_array().map(f64::to_bits)))
+    .collect();
+    let books = format!(
+        "{:?} {:?} {:?} {:?}",
+        w.ledger,
+        w.energy_state(),
+        w.wall_force(),
+        w.impact_speeds
+    );
+    (bits, books)
+}
+
+fn assert_same(a: &World, b: &World) {
+    let (fa, ba) = fingerprint(a);
+    let (fb, bb) = fingerprint(b);
+    let differ = fa.iter().zip(&fb).filter(|(x, y)| x != y).count();
+    assert_eq!(differ, 0, "{differ} numbers differ");
+    assert_eq!(ba, bb);
+}
+
+#[test]
+fn one_and_two_threads_give_the_same_bits_on_a_bed_that_goes_parallel() {
+    for friction in [0.52, 0.0] {
+        let one = run(1, 3000, friction, 300, false);
+        assert!(
+            one.listed_pairs() >= AUTO_PARALLEL_MIN_PAIRS,
+            "{} pairs: too few to go parallel",
+            one.listed_pairs()
+        );
+        let two = run(2, 3000, friction, 300, false);
+        assert_same(&one, &two);
+        assert!(one.ledger.dissipated.total() > 0.0);
+    }
+}
+
+#[test]
+fn the_parallel_path_gives_the_serial_bits_on_a_small_bed() {
+    let serial = run(1, 400, 0.52, 400, false);
+    let parallel = run(2, 400, 0.52, 400, true);
+    assert_same(&serial, &parallel);
+    let three = run(3, 400, 0.52, 400, true);
+    assert_same(&serial, &three);
+}
