@@ -368,7 +368,7 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         100.0 * m.predicted_leak_per_cycle_j / d.energy_per_cycle_j
     );
     println!(
-        "  speed {:.2} M particle-steps/s ({} thread{}); wall time: {} {:.1} s, drive {:.1} s, rig and measurement {:.1} s",
+        "  speed {:.2} M particle-steps/s ({} thread{}); wall time: {} {:.1} s, drive {:.1} s, rig and measurement {:.2} s",
         s.particle_steps_per_s / 1e6,
         s.threads,
         if s.threads == 1 { "" } else { "s" },
