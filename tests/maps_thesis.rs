@@ -61,6 +61,7 @@ fn the_thesis_damper_has_its_efficiency_peaks_where_the_thesis_has_them() {
         seeds: vec![1],
         fill_ratios: vec![],
         orientations: vec![],
+        beds: vlab::scene::bed_cache::BedSource::Settle,
     };
     let dir = std::env::temp_dir().join(format!("vlab-maps-thesis-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch folder");

@@ -11,9 +11,9 @@ use vlab::atomic_write::OutputDir;
 use vlab::scene::lammps::{
     ContactTranslation, DATA_FILE, INPUT_FILE, LammpsExport, RECORD_FILE, lammps_deck,
 };
-use vlab::scene::settle::settle_bed;
 
 use super::args;
+use super::cache_cmd::NoCacheArg;
 use super::progress::ProgressLine;
 use super::shake::SceneArgs;
 
@@ -48,6 +48,8 @@ struct LammpsArgs {
     /// Output folder for in.damper, packing.data and export.json.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    #[command(flatten)]
+    cache: NoCacheArg,
 }
 
 /// Runs the command.
@@ -69,7 +71,9 @@ fn run_lammps(a: LammpsArgs, quiet: bool) -> Result<()> {
     let made = OutputDir::prepare(&a.out)
         .with_context(|| format!("cannot create output folder {}", a.out.display()))?;
     let mut progress = ProgressLine::new("export", quiet);
-    let result = settle_bed(&scene, &mut |p| progress.update(p))
+    let beds = a.cache.source(&mut |n| progress.note(n));
+    let result = beds
+        .settle(&scene, &mut |p| progress.update(p))
         .context("settling the packing")
         .and_then(|bed| {
             lammps_deck(&scene, &bed, &export)

@@ -7,6 +7,7 @@ mod accuracy;
 mod analyze;
 mod args;
 mod bench;
+mod cache_cmd;
 mod calibrate;
 mod cor;
 mod drop;
@@ -79,6 +80,8 @@ enum Command {
     /// Write the damper for another DEM code: `vlab export lammps` writes a LAMMPS
     /// deck and the settled packing.
     Export(export::ExportArgs),
+    /// The settled beds kept between runs: list, clear, or show the folder.
+    Cache(cache_cmd::CacheArgs),
 }
 
 /// Name of a shaker kind, as on the command line.
@@ -138,6 +141,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Rig(a) => rig_cmd::run(a),
         Command::Sweep(a) => sweep::run(a, quiet),
         Command::Predict(a) => predict::run(a),
+        Command::Cache(a) => cache_cmd::run(a),
         Command::Plot(a) => plot::run(a),
         Command::Bench(a) => bench::run(a, quiet),
         Command::Drop(a) => drop::run(a),

@@ -13,14 +13,14 @@ use vlab::scene::damper::{Kinematics, NoObserver, StepObserver};
 use vlab::scene::dump::VtkDump;
 use vlab::scene::file::{Orientation, Scene, SceneOverrides};
 use vlab::scene::measurement::{CalibrationSource, ShakeSetup};
-use vlab::scene::settle::settle_bed;
 use vlab::scene::shake::{
-    ShakeSummary, check_drive, default_out_dir, resolve_rig, run_shake, run_shake_on_bed,
+    ShakeSummary, check_drive, default_out_dir, resolve_rig, run_shake_from, run_shake_on_bed,
 };
 use vlab::scene::snapshots::PhaseSnapshots;
 use vlab::signals::PhaseCalibration;
 
 use super::args;
+use super::cache_cmd::NoCacheArg;
 use super::progress::ProgressLine;
 
 #[derive(Debug, Clone, Args)]
@@ -69,6 +69,8 @@ pub struct ShakeArgs {
     /// last cycle, coloured by speed.
     #[arg(long)]
     pub snapshots: bool,
+    #[command(flatten)]
+    pub cache: NoCacheArg,
 }
 
 /// Two observers of one drive.
@@ -193,12 +195,15 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         None => None,
     };
     let mut snaps = a.snapshots.then(|| PhaseSnapshots::new(a.freq_hz, 0.0));
+    let beds = a.cache.source(&mut |n| progress.note(n));
     let result = (|| {
         if dump.is_none() && snaps.is_none() {
-            return run_shake(&scene, &setup, &mut |p| progress.update(p));
+            return run_shake_from(&scene, &setup, &beds, &mut NoObserver, &mut |p| {
+                progress.update(p)
+            });
         }
         check_drive(&scene, a.freq_hz, a.gamma)?;
-        let mut bed = settle_bed(&scene, &mut |p| progress.update(p))?;
+        let mut bed = beds.settle(&scene, &mut |p| progress.update(p))?;
         if dump.is_some() {
             bed.world.track_particle_dissipation(true);
         }
@@ -363,12 +368,18 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         100.0 * m.predicted_leak_per_cycle_j / d.energy_per_cycle_j
     );
     println!(
-        "  speed {:.2} M particle-steps/s ({} thread{}), drive {:.1} s, settling {:.1} s",
+        "  speed {:.2} M particle-steps/s ({} thread{}); wall time: {} {:.1} s, drive {:.1} s, rig and measurement {:.2} s",
         s.particle_steps_per_s / 1e6,
         s.threads,
         if s.threads == 1 { "" } else { "s" },
+        if s.bed_from_cache {
+            "bed read from the cache"
+        } else {
+            "settling"
+        },
+        s.settle_wall_time_s,
         s.wall_time_s,
-        s.settle_wall_time_s
+        s.rig_wall_time_s
     );
     println!("  wrote {}", dir.display());
 }

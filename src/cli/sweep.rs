@@ -20,6 +20,7 @@ use vlab::scene::sweep::{
 use vlab::scene::sweep_plot::plot_sweep;
 
 use super::args;
+use super::cache_cmd::NoCacheArg;
 use super::progress::ProgressLine;
 
 #[derive(Debug, Clone, Args)]
@@ -82,6 +83,8 @@ pub struct SweepArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    cache: NoCacheArg,
 }
 
 #[derive(Debug, Clone, Subcommand)]
@@ -154,6 +157,7 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
         seeds: a.seeds.clone(),
         fill_ratios: a.fill_ratios.clone(),
         orientations: a.orientation.clone(),
+        beds: a.cache.source(&mut |n| eprintln!("{n}")),
     };
     plan.validate()
         .map_err(|e| flags.name_flags(e.into()))
@@ -190,9 +194,21 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
             },
             if beds == 1 { "" } else { "s" }
         )),
-        SweepEvent::BedSettled { seed, wall_time_s } => note(format!(
-            "sweep: bed of seed {seed} settled ({wall_time_s:.0} s)"
-        )),
+        SweepEvent::BedSettled {
+            seed,
+            wall_time_s,
+            from_cache,
+            warnings,
+        } => {
+            for w in warnings {
+                note(format!("sweep: warning: {w}"));
+            }
+            note(if from_cache {
+                format!("sweep: bed of seed {seed} read from the cache ({wall_time_s:.1} s)")
+            } else {
+                format!("sweep: bed of seed {seed} settled ({wall_time_s:.0} s)")
+            })
+        }
         SweepEvent::ConditionDone {
             row,
             done,

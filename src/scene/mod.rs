@@ -4,6 +4,7 @@
 //! the drop rig; a replay has a record from another DEM code and the rig).
 
 pub mod accuracy;
+pub mod bed_cache;
 pub mod damper;
 pub mod drop;
 pub mod dump;

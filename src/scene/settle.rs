@@ -117,6 +117,9 @@ pub struct SettledBed {
     pub bed_height_m: f64,
     /// True when the bed came from the cache.
     pub from_cache: bool,
+    /// What went wrong on the way that the run should report (a cache entry
+    /// that could not be read and was rebuilt, say).
+    pub warnings: Vec<String>,
 }
 
 /// The settling law between two materials, at `stiffness_factor` of their
@@ -274,7 +277,35 @@ pub fn settle_bed(
         packing_fraction,
         bed_height_m,
         from_cache: false,
+        warnings: Vec::new(),
     })
+}
+
+/// The world of a settled bed rebuilt from its particles' state (a bed read
+/// back from the cache): the closed enclosure, the stiff settling law, the
+/// test orientation's gravity and time step `dt_s`. Every contact is
+/// re-detected, as [`prepare_drive`] does anyway, so a drive from this world
+/// is the same, bit for bit, as one from the world the bed settled in.
+pub fn rebuild_settled_world(
+    scene: &Scene,
+    particles: Particles,
+    dt_s: f64,
+) -> Result<World, SceneError> {
+    let (pp, pw) = settling_laws(scene, 1.0);
+    let mut numerics = Numerics::with_dt(dt_s);
+    numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
+    let world = World::new(
+        particles,
+        Walls::closed_cylinder(
+            0.5 * scene.enclosure.inner_diameter_m,
+            scene.enclosure.inner_length_m,
+        ),
+        pp,
+        pw,
+        gravity_vector(scene.enclosure.orientation, scene.simulation.gravity_mps2),
+        numerics,
+    )?;
+    Ok(world)
 }
 
 /// Random positions in a pouring column of the enclosure's diameter, and the

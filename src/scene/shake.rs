@@ -26,19 +26,21 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use serde::Serialize;
 
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
+use crate::scene::bed_cache::BedSource;
 use crate::scene::damper::{DriveOutcome, NoObserver, Progress, Steadiness, StepObserver};
 use crate::scene::file::{Scene, SceneError};
 use crate::scene::measurement::{
     Measured, ShakeExperiment, ShakeSetup, run_measured_shake_observed,
 };
 use crate::scene::record::TruthSamples;
-use crate::scene::settle::{SettledBed, prepare_drive, settle_bed};
+use crate::scene::settle::{SettledBed, prepare_drive};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
 use crate::validation::{InvalidParameter, positive};
 
@@ -287,8 +289,14 @@ pub struct ShakeSummary {
     pub wall_time_s: f64,
     /// Particles × drive steps / `wall_time_s`.
     pub particle_steps_per_s: f64,
-    /// Wall-clock time of pouring and settling (s).
+    /// Wall-clock time of pouring and settling (s); of reading the bed when
+    /// it came from the cache.
     pub settle_wall_time_s: f64,
+    /// True when the settled bed was read from the bed cache.
+    pub bed_from_cache: bool,
+    /// Wall-clock time of the rig and the measurement beyond the drive's
+    /// stepping loop: the channels, the calibration, Yang's analysis (s).
+    pub rig_wall_time_s: f64,
     pub threads: usize,
     pub dem: DemTruth,
     pub measured: Measured,
@@ -320,8 +328,20 @@ pub fn run_shake_observed(
     observer: &mut dyn StepObserver,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
+    run_shake_from(scene, setup, &BedSource::Settle, observer, progress)
+}
+
+/// [`run_shake_observed`] with the bed taken from `beds` (the bed cache:
+/// settling is paid once per scene and seed).
+pub fn run_shake_from(
+    scene: &Scene,
+    setup: &ShakeSetup,
+    beds: &BedSource,
+    observer: &mut dyn StepObserver,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<ShakeRun, SceneError> {
     check_drive(scene, setup.freq_hz, setup.gamma)?;
-    let bed = settle_bed(scene, progress)?;
+    let bed = beds.settle(scene, progress)?;
     run_shake_on_bed(scene, &bed, setup, observer, progress)
 }
 
@@ -338,13 +358,15 @@ pub fn run_shake_on_bed(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
     check_drive(scene, setup.freq_hz, setup.gamma)?;
+    let started = Instant::now();
     let dt = scene.drive_dt_s(setup.freq_hz, setup.gamma);
     let mut world = prepare_drive(bed, scene, dt)?;
     let experiment = run_measured_shake_observed(scene, &mut world, setup, observer, progress)?;
     let outcome = &experiment.outcome;
     let n = world.particles.len();
     let dem = DemTruth::new(outcome, scene);
-    let mut warnings = experiment.measured.clipping.clone();
+    let mut warnings = bed.warnings.clone();
+    warnings.extend(experiment.measured.clipping.iter().cloned());
     warnings.extend(dem.warnings(setup.freq_hz, scene.simulation.steps_per_contact));
     let summary = ShakeSummary {
         vlab_version: env!("CARGO_PKG_VERSION"),
@@ -369,6 +391,8 @@ pub fn run_shake_on_bed(
         wall_time_s: outcome.wall_time_s,
         particle_steps_per_s: (n as u64 * outcome.steps) as f64 / outcome.wall_time_s,
         settle_wall_time_s: bed.wall_time_s,
+        bed_from_cache: bed.from_cache,
+        rig_wall_time_s: (started.elapsed().as_secs_f64() - outcome.wall_time_s).max(0.0),
         threads: rayon::current_num_threads(),
         dem,
         measured: experiment.measured.clone(),

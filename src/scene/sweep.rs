@@ -38,13 +38,14 @@ use serde::Serialize;
 
 use crate::atomic_write::write_atomic;
 use crate::rig::{RigFile, RigSpec, ShakerKind};
+use crate::scene::bed_cache::BedSource;
 use crate::scene::file::{CyclesSpec, Orientation, Scene, SceneError};
 use crate::scene::measurement::{CalibrationSource, ShakeSetup, shaker_name};
 use crate::scene::phases::{
     PhaseIndicators, PhaseObserver, PhaseThresholds, classify, collective_impacts,
 };
 use crate::scene::predict::{CLOSE_PACKING, effective_clearance_m};
-use crate::scene::settle::{SettledBed, settle_bed};
+use crate::scene::settle::SettledBed;
 use crate::scene::shake::{check_drive, resolve_rig, run_shake_on_bed};
 use crate::validation::InvalidParameter;
 
@@ -170,6 +171,8 @@ pub struct SweepPlan {
     pub fill_ratios: Vec<f64>,
     /// Empty: the scene's own.
     pub orientations: Vec<Orientation>,
+    /// Where the settled beds come from (the bed cache, or settle each).
+    pub beds: BedSource,
 }
 
 impl SweepPlan {
@@ -585,7 +588,14 @@ pub enum SweepEvent<'a> {
         beds: usize,
     },
     /// A bed was settled.
-    BedSettled { seed: u64, wall_time_s: f64 },
+    BedSettled {
+        seed: u64,
+        wall_time_s: f64,
+        /// Read from the bed cache rather than settled.
+        from_cache: bool,
+        /// What the bed's source had to say (a cache entry rebuilt, say).
+        warnings: &'a [String],
+    },
     /// A condition finished and its row is in the file.
     ConditionDone {
         row: &'a SweepRow,
@@ -1145,10 +1155,12 @@ pub fn run_sweep(
         .with_max_len(1)
         .map(|c| {
             let scene = plan.scene_for(c)?;
-            let bed = settle_bed(&scene, &mut |_| {})?;
+            let bed = plan.beds.settle(&scene, &mut |_| {})?;
             on_event(SweepEvent::BedSettled {
                 seed: c.seed,
                 wall_time_s: bed.wall_time_s,
+                from_cache: bed.from_cache,
+                warnings: &bed.warnings,
             });
             Ok(bed)
         })
@@ -1418,6 +1430,7 @@ mod tests {
             seeds: vec![1, 2],
             fill_ratios: vec![],
             orientations: vec![],
+            beds: BedSource::Settle,
         }
     }
 

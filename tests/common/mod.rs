@@ -41,6 +41,8 @@ pub fn vlab(cwd: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_vlab"))
         .args(args)
         .current_dir(cwd)
+        // Settled beds go to the test's own scratch folder, never the user's cache.
+        .env("VLAB_CACHE_DIR", cwd.join(".vlab-cache"))
         .output()
         .expect("run vlab")
 }

@@ -1,0 +1,599 @@
+//! Settled beds kept between runs, so that settling is paid once.
+//!
+//! Settling is three quarters of a default shake's wall time, and its result
+//! depends only on what shapes the bed: the particles, the enclosure, the
+//! settling law ([`SETTLING_VERSION`](crate::scene::settle::SETTLING_VERSION)),
+//! gravity, the orientation and the seed — not on the contacts under test or
+//! the drive (the settling law is fixed, see [`crate::scene::settle`]). A bed
+//! is stored under a key made of exactly those, plus the bed-file format and
+//! vlab's version (a new engine may settle differently).
+//!
+//! # The bed file
+//!
+//! `bed-<hash>.vbed` in the cache folder, where `<hash>` is the FNV-1a 64-bit
+//! hash of the key text:
+//!
+//! | bytes | what |
+//! |---|---|
+//! | 8 | magic `VLABBED\0` |
+//! | 4 | format version [`BED_FORMAT_VERSION`], little-endian u32 |
+//! | 4 | length `h` of the header, little-endian u32 |
+//! | h | header, JSON ([`BedHeader`]): the full key text and the bed's figures |
+//! | 80 n | per particle: position, velocity, angular velocity (3 f64 each), radius (f64), little-endian |
+//! | 8 | FNV-1a 64 of everything before, little-endian |
+//!
+//! Floats are stored as their bits, so a bed read back drives to the same
+//! numbers as the bed that was settled (tested). A file that is truncated,
+//! fails its checksum, has another format version or holds another key (a
+//! hash collision, a file copied in by hand) is ignored with a warning and
+//! the bed is settled anew and stored over it. Writes go to a temporary file
+//! that is renamed into place, so two runs settling the same bed at once both
+//! leave a whole file.
+
+use std::fs;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::atomic_write::write_bytes_atomic;
+use crate::dem::Particles;
+use crate::scene::damper::Progress;
+use crate::scene::file::{Scene, SceneError};
+use crate::scene::settle::{SETTLING_VERSION, SettledBed, rebuild_settled_world, settle_bed};
+
+/// Version of the bed-file layout.
+pub const BED_FORMAT_VERSION: u32 = 1;
+/// Environment variable that moves the cache folder (tests, shared clusters).
+pub const CACHE_DIR_ENV: &str = "VLAB_CACHE_DIR";
+
+const MAGIC: &[u8; 8] = b"VLABBED\0";
+const EXTENSION: &str = "vbed";
+const F64_PER_PARTICLE: usize = 10;
+
+/// Errors of the cache folder itself (not of one entry: those are warnings).
+#[derive(Debug, thiserror::Error)]
+pub enum BedCacheError {
+    #[error("no cache folder: the platform names none and {CACHE_DIR_ENV} is not set")]
+    NoFolder,
+    #[error("cannot read the bed cache folder {path}")]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: io::Error,
+    },
+    #[error("cannot remove {path}")]
+    Remove {
+        path: PathBuf,
+        #[source]
+        source: io::Error,
+    },
+}
+
+/// What makes one bed differ from another; its JSON text is the cache key.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+struct BedKey<'a> {
+    bed_format: u32,
+    settling_version: u32,
+    vlab_version: &'static str,
+    particles: &'a crate::scene::file::ParticlesSpec,
+    particle_material: crate::dem::material::Material,
+    inner_diameter_m: f64,
+    inner_length_m: f64,
+    orientation: &'static str,
+    wall_material: crate::dem::material::Material,
+    gravity_mps2: f64,
+    seed: u64,
+    /// Longest a settling stage may run (s): a bed that needs it is shaped by it.
+    settle_s: f64,
+}
+
+/// The cache key of the bed `scene` settles to (JSON text).
+pub fn bed_key(scene: &Scene) -> String {
+    let key = BedKey {
+        bed_format: BED_FORMAT_VERSION,
+        settling_version: SETTLING_VERSION,
+        vlab_version: env!("CARGO_PKG_VERSION"),
+        particles: &scene.particles,
+        particle_material: scene.particle_material(),
+        inner_diameter_m: scene.enclosure.inner_diameter_m,
+        inner_length_m: scene.enclosure.inner_length_m,
+        orientation: scene.enclosure.orientation.as_str(),
+        wall_material: scene.wall_material(),
+        gravity_mps2: scene.simulation.gravity_mps2,
+        seed: scene.simulation.seed,
+        settle_s: scene.simulation.settle_s,
+    };
+    // Plain data with string keys: serialising cannot fail.
+    serde_json::to_string(&key).unwrap_or_else(|e| panic!("bed key: {e}"))
+}
+
+/// FNV-1a, 64 bits: a hash whose value does not change between Rust versions.
+fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}
+
+/// The header of a bed file: the key and the figures of the bed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BedHeader {
+    /// The full key text ([`bed_key`]).
+    pub key: String,
+    /// Name of the scene that first settled it (for `vlab cache list`).
+    pub scene: String,
+    pub n_particles: usize,
+    pub settle_time_s: f64,
+    pub settle_steps: u64,
+    /// Wall time the settling took when it was done (s).
+    pub settle_wall_time_s: f64,
+    pub packing_fraction: f64,
+    pub bed_height_m: f64,
+    /// Time step the bed settled at last (s).
+    pub dt_s: f64,
+}
+
+/// Encodes `bed` of `scene` as a bed file.
+pub fn encode_bed(scene: &Scene, bed: &SettledBed) -> Vec<u8> {
+    let p = &bed.world.particles;
+    let header = BedHeader {
+        key: bed_key(scene),
+        scene: scene.name.clone(),
+        n_particles: p.len(),
+        settle_time_s: bed.settle_time_s,
+        settle_steps: bed.settle_steps,
+        settle_wall_time_s: bed.wall_time_s,
+        packing_fraction: bed.packing_fraction,
+        bed_height_m: bed.bed_height_m,
+        dt_s: bed.world.dt_s(),
+    };
+    let header = serde_json::to_vec(&header).unwrap_or_else(|e| panic!("bed header: {e}"));
+    let mut out = Vec::with_capacity(24 + header.len() + 8 * F64_PER_PARTICLE * p.len());
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&BED_FORMAT_VERSION.to_le_bytes());
+    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    out.extend_from_slice(&header);
+    for i in 0..p.len() {
+        for v in [p.position[i], p.velocity[i], p.angular_velocity[i]] {
+            for x in v.to_array() {
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        out.extend_from_slice(&p.radius[i].to_le_bytes());
+    }
+    let sum = fnv1a64(&out);
+    out.extend_from_slice(&sum.to_le_bytes());
+    out
+}
+
+/// Why a bed file was not used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BadBed {
+    #[error("it is not a vlab bed file")]
+    NotABed,
+    #[error("it is cut short or its checksum does not match (a corrupt file)")]
+    Corrupt,
+    #[error("it has bed format {0}, this vlab reads {BED_FORMAT_VERSION}")]
+    OtherFormat(u32),
+    #[error("its header cannot be read: {0}")]
+    Header(String),
+    #[error("it holds another bed (scene {0:?})")]
+    OtherKey(String),
+}
+
+/// A decoded bed file: its header and particles' state.
+#[derive(Debug, Clone)]
+pub struct DecodedBed {
+    pub header: BedHeader,
+    /// Position, velocity, angular velocity and radius of each particle.
+    pub state: Vec<(DVec3, DVec3, DVec3, f64)>,
+}
+
+/// Reads a bed file's bytes; `expect_key` (when given) must be its key.
+pub fn decode_bed(bytes: &[u8], expect_key: Option<&str>) -> Result<DecodedBed, BadBed> {
+    if bytes.len() < 16 || &bytes[..8] != MAGIC {
+        return Err(BadBed::NotABed);
+    }
+    let u32_at =
+        |k: usize| u32::from_le_bytes([bytes[k], bytes[k + 1], bytes[k + 2], bytes[k + 3]]);
+    let version = u32_at(8);
+    if version != BED_FORMAT_VERSION {
+        return Err(BadBed::OtherFormat(version));
+    }
+    if bytes.len() < 24 {
+        return Err(BadBed::Corrupt);
+    }
+    let (body, sum) = bytes.split_at(bytes.len() - 8);
+    let mut sum_bytes = [0u8; 8];
+    sum_bytes.copy_from_slice(sum);
+    if fnv1a64(body) != u64::from_le_bytes(sum_bytes) {
+        return Err(BadBed::Corrupt);
+    }
+    let h = u32_at(12) as usize;
+    let Some(header_bytes) = body.get(16..16 + h) else {
+        return Err(BadBed::Corrupt);
+    };
+    let header: BedHeader =
+        serde_json::from_slice(header_bytes).map_err(|e| BadBed::Header(e.to_string()))?;
+    if let Some(key) = expect_key
+        && header.key != key
+    {
+        return Err(BadBed::OtherKey(header.scene));
+    }
+    let data = &body[16 + h..];
+    if data.len() != 8 * F64_PER_PARTICLE * header.n_particles {
+        return Err(BadBed::Corrupt);
+    }
+    let f = |k: usize| {
+        let mut b = [0u8; 8];
+        b.copy_from_slice(&data[8 * k..8 * k + 8]);
+        f64::from_le_bytes(b)
+    };
+    let state = (0..header.n_particles)
+        .map(|i| {
+            let o = F64_PER_PARTICLE * i;
+            let v = |k: usize| DVec3::new(f(o + k), f(o + k + 1), f(o + k + 2));
+            (v(0), v(3), v(6), f(o + 9))
+        })
+        .collect();
+    Ok(DecodedBed { header, state })
+}
+
+/// One entry of the cache, for `vlab cache list`.
+#[derive(Debug, Clone)]
+pub struct CachedBedInfo {
+    pub path: PathBuf,
+    pub bytes: u64,
+    /// The header, or why the file cannot be read.
+    pub header: Result<BedHeader, BadBed>,
+}
+
+/// A folder of settled beds.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BedCache {
+    dir: PathBuf,
+}
+
+impl BedCache {
+    /// A cache in `dir` (made when the first bed is stored).
+    pub fn new(dir: impl Into<PathBuf>) -> Self {
+        BedCache { dir: dir.into() }
+    }
+
+    /// The user's cache: `$VLAB_CACHE_DIR`, else the platform's cache folder
+    /// (`~/.cache/vlab/beds` on Linux, `~/Library/Caches/vlab/beds` on macOS,
+    /// `%LOCALAPPDATA%\vlab\beds` on Windows).
+    pub fn user() -> Result<Self, BedCacheError> {
+        if let Some(dir) = std::env::var_os(CACHE_DIR_ENV).filter(|d| !d.is_empty()) {
+            return Ok(BedCache::new(dir));
+        }
+        dirs::cache_dir()
+            .map(|d| BedCache::new(d.join("vlab").join("beds")))
+            .ok_or(BedCacheError::NoFolder)
+    }
+
+    /// The cache folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Where the bed of `scene` is kept.
+    pub fn path_for(&self, scene: &Scene) -> PathBuf {
+        let hash = fnv1a64(bed_key(scene).as_bytes());
+        self.dir.join(format!("bed-{hash:016x}.{EXTENSION}"))
+    }
+
+    /// The bed of `scene` from the cache: `Ok(None)` when there is none,
+    /// `Err` (a warning's text) when there is one that cannot be used.
+    pub fn load(&self, scene: &Scene) -> Result<Option<SettledBed>, String> {
+        let path = self.path_for(scene);
+        let started = Instant::now();
+        let bytes = match fs::read(&path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(format!("cannot read cached bed {}: {e}", path.display())),
+        };
+        let key = bed_key(scene);
+        let decoded = decode_bed(&bytes, Some(&key)).map_err(|why| {
+            format!(
+                "cached bed {} was not used: {why}; settled anew",
+                path.display()
+            )
+        })?;
+        let density = scene.particle_material().density_kgm3;
+        let mut particles = Particles::default();
+        for (x, v, w, r) in decoded.state {
+            particles.push(x, v, w, r, density);
+        }
+        let h = decoded.header;
+        let mut world = rebuild_settled_world(scene, particles, h.dt_s).map_err(|e| {
+            format!(
+                "cached bed {} was not used: {e}; settled anew",
+                path.display()
+            )
+        })?;
+        world.time_s = h.settle_time_s;
+        world.steps = h.settle_steps;
+        Ok(Some(SettledBed {
+            world,
+            settle_time_s: h.settle_time_s,
+            settle_steps: h.settle_steps,
+            wall_time_s: started.elapsed().as_secs_f64(),
+            packing_fraction: h.packing_fraction,
+            bed_height_m: h.bed_height_m,
+            from_cache: true,
+            warnings: Vec::new(),
+        }))
+    }
+
+    /// Stores `bed` of `scene`, atomically.
+    pub fn store(&self, scene: &Scene, bed: &SettledBed) -> io::Result<PathBuf> {
+        fs::create_dir_all(&self.dir)?;
+        let path = self.path_for(scene);
+        write_bytes_atomic(&path, &encode_bed(scene, bed))?;
+        Ok(path)
+    }
+
+    /// Every bed file in the cache, by name.
+    pub fn list(&self) -> Result<Vec<CachedBedInfo>, BedCacheError> {
+        let mut out = Vec::new();
+        for path in self.bed_files()? {
+            let bytes = fs::read(&path).map_err(|source| BedCacheError::Read {
+                path: path.clone(),
+                source,
+            })?;
+            out.push(CachedBedInfo {
+                bytes: bytes.len() as u64,
+                header: decode_bed(&bytes, None).map(|d| d.header),
+                path,
+            });
+        }
+        Ok(out)
+    }
+
+    /// Removes every bed file (and nothing else); returns how many.
+    pub fn clear(&self) -> Result<usize, BedCacheError> {
+        let files = self.bed_files()?;
+        for path in &files {
+            fs::remove_file(path).map_err(|source| BedCacheError::Remove {
+                path: path.clone(),
+                source,
+            })?;
+        }
+        Ok(files.len())
+    }
+
+    fn bed_files(&self) -> Result<Vec<PathBuf>, BedCacheError> {
+        let entries = match fs::read_dir(&self.dir) {
+            Ok(e) => e,
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Vec::new()),
+            Err(source) => {
+                return Err(BedCacheError::Read {
+                    path: self.dir.clone(),
+                    source,
+                });
+            }
+        };
+        let mut files: Vec<PathBuf> = entries
+            .filter_map(Result::ok)
+            .map(|e| e.path())
+            .filter(|p| {
+                p.extension().is_some_and(|x| x == EXTENSION)
+                    && p.file_name()
+                        .is_some_and(|n| n.to_string_lossy().starts_with("bed-"))
+            })
+            .collect();
+        files.sort();
+        Ok(files)
+    }
+}
+
+/// Where the settled beds of a run come from.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum BedSource {
+    /// Settle every bed (a library's default: nothing is read or written
+    /// outside the run).
+    #[default]
+    Settle,
+    /// Read beds from this cache, settling and storing those it lacks.
+    Cache(BedCache),
+}
+
+impl BedSource {
+    /// The bed of `scene`: from the cache when it holds it, else settled (and
+    /// stored when there is a cache). A cache entry that cannot be read, or a
+    /// bed that cannot be stored, is a warning on the bed, never an error.
+    pub fn settle(
+        &self,
+        scene: &Scene,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<SettledBed, SceneError> {
+        let BedSource::Cache(cache) = self else {
+            return settle_bed(scene, progress);
+        };
+        let mut warnings = Vec::new();
+        match cache.load(scene) {
+            Ok(Some(bed)) => return Ok(bed),
+            Ok(None) => {}
+            Err(w) => warnings.push(w),
+        }
+        let mut bed = settle_bed(scene, progress)?;
+        if let Err(e) = cache.store(scene, &bed) {
+            warnings.push(format!(
+                "the settled bed could not be kept in the cache {}: {e}",
+                cache.dir().display()
+            ));
+        }
+        warnings.append(&mut bed.warnings);
+        bed.warnings = warnings;
+        Ok(bed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small_scene() -> Scene {
+        let mut s = Scene::thesis();
+        s.particles.count = 40;
+        s
+    }
+
+    #[test]
+    fn fnv1a_matches_published_vectors() {
+        // Test vectors of the FNV reference (Fowler, Noll, Vo).
+        assert_eq!(fnv1a64(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a64(b"a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fnv1a64(b"foobar"), 0x8594_4171_f739_67e8);
+    }
+
+    #[test]
+    fn the_key_holds_what_shapes_the_bed_and_not_what_does_not() {
+        let base = small_scene();
+        let k = bed_key(&base);
+        let mut contacts = base.clone();
+        contacts.contact.particle_particle.restitution = 0.3;
+        contacts.contact.particle_wall.friction = 0.9;
+        contacts.name = "renamed".into();
+        assert_eq!(
+            bed_key(&contacts),
+            k,
+            "contacts and name do not shape the bed"
+        );
+        let mut seed = base.clone();
+        seed.simulation.seed += 1;
+        let mut count = base.clone();
+        count.particles.count += 1;
+        let mut length = base.clone();
+        length.enclosure.inner_length_m *= 1.01;
+        let mut turned = base.clone();
+        turned.enclosure.orientation = crate::scene::file::Orientation::Horizontal;
+        let mut g = base.clone();
+        g.simulation.gravity_mps2 = 1.62;
+        for other in [seed, count, length, turned, g] {
+            assert_ne!(bed_key(&other), k);
+        }
+    }
+
+    #[test]
+    fn a_bed_file_reads_back_to_the_same_bits_and_refuses_damage() {
+        let scene = small_scene();
+        let bed = settle_bed(&scene, &mut |_| {}).expect("settles");
+        let bytes = encode_bed(&scene, &bed);
+        let key = bed_key(&scene);
+        let back = decode_bed(&bytes, Some(&key)).expect("reads back");
+        assert_eq!(back.state.len(), 40);
+        let p = &bed.world.particles;
+        for (i, (x, v, w, r)) in back.state.iter().enumerate() {
+            assert_eq!(
+                x.to_array().map(f64::to_bits),
+                p.position[i].to_array().map(f64::to_bits)
+            );
+            assert_eq!(
+                v.to_array().map(f64::to_bits),
+                p.velocity[i].to_array().map(f64::to_bits)
+            );
+            assert_eq!(
+                w.to_array().map(f64::to_bits),
+                p.angular_velocity[i].to_array().map(f64::to_bits)
+            );
+            assert_eq!(r.to_bits(), p.radius[i].to_bits());
+        }
+        // A flipped byte, a cut file, another key, another format, not a bed.
+        let mut flipped = bytes.clone();
+        let mid = bytes.len() / 2;
+        flipped[mid] ^= 0x10;
+        assert_eq!(
+            decode_bed(&flipped, Some(&key)).unwrap_err(),
+            BadBed::Corrupt
+        );
+        assert_eq!(
+            decode_bed(&bytes[..bytes.len() - 100], Some(&key)).unwrap_err(),
+            BadBed::Corrupt
+        );
+        assert!(matches!(
+            decode_bed(&bytes, Some("another key")).unwrap_err(),
+            BadBed::OtherKey(_)
+        ));
+        let mut newer = bytes.clone();
+        newer[8..12].copy_from_slice(&(BED_FORMAT_VERSION + 1).to_le_bytes());
+        assert_eq!(
+            decode_bed(&newer, Some(&key)).unwrap_err(),
+            BadBed::OtherFormat(BED_FORMAT_VERSION + 1)
+        );
+        assert_eq!(
+            decode_bed(b"id,t\n1,2\n", None).unwrap_err(),
+            BadBed::NotABed
+        );
+    }
+
+    #[test]
+    fn a_cached_bed_drives_to_the_same_bits_as_a_fresh_one() {
+        use crate::scene::settle::prepare_drive;
+        let scene = small_scene();
+        let dir = std::env::temp_dir().join(format!("vlab-bed-cache-test-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let source = BedSource::Cache(BedCache::new(&dir));
+        let fresh = source.settle(&scene, &mut |_| {}).expect("settles");
+        assert!(
+            !fresh.from_cache && fresh.warnings.is_empty(),
+            "{:?}",
+            fresh.warnings
+        );
+        let cached = source.settle(&scene, &mut |_| {}).expect("reads");
+        assert!(cached.from_cache);
+        assert_eq!(cached.settle_steps, fresh.settle_steps);
+        let dt = scene.drive_dt_s(40.0, 20.0);
+        let mut a = prepare_drive(&fresh, &scene, dt).expect("drive");
+        let mut b = prepare_drive(&cached, &scene, dt).expect("drive");
+        let (amp, w) = (
+            20.0 * 9.81 / (2.0 * std::f64::consts::PI * 40.0).powi(2),
+            2.0 * std::f64::consts::PI * 40.0,
+        );
+        for k in 1..=3000u32 {
+            let t = f64::from(k) * dt;
+            let d = amp * (w * t).sin();
+            a.step(d).expect("steps");
+            b.step(d).expect("steps");
+        }
+        for i in 0..a.particles.len() {
+            assert_eq!(
+                a.particles.position[i].to_array().map(f64::to_bits),
+                b.particles.position[i].to_array().map(f64::to_bits),
+                "particle {i}"
+            );
+        }
+        assert_eq!(
+            a.ledger.dissipated.total().to_bits(),
+            b.ledger.dissipated.total().to_bits()
+        );
+
+        // A damaged entry is a warning, and is settled anew and replaced.
+        let path = BedCache::new(&dir).path_for(&scene);
+        fs::write(&path, b"VLABBED\0garbage").expect("write");
+        let again = source.settle(&scene, &mut |_| {}).expect("settles");
+        assert!(!again.from_cache);
+        assert!(
+            again.warnings[0].contains("not used"),
+            "{:?}",
+            again.warnings
+        );
+        assert!(
+            source
+                .settle(&scene, &mut |_| {})
+                .expect("reads")
+                .from_cache
+        );
+        let cache = BedCache::new(&dir);
+        assert_eq!(cache.list().expect("lists").len(), 1);
+        assert_eq!(cache.clear().expect("clears"), 1);
+        assert!(cache.list().expect("lists").is_empty());
+        let _ = fs::remove_dir_all(&dir);
+    }
+}
