@@ -108,26 +108,64 @@ pub struct Analysis {
 /// Samples sitting at a channel's extreme value: a clipped ADC leaves flat tops.
 fn clipping_warning(trace: &Trace, channel: &str) -> Option<String> {
     let x = &trace.channel(channel).ok()?.samples;
-    let peak = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    if peak == 0.0 {
+    clipping(x).map(|c| {
+        format!(
+            "channel '{channel}' looks clipped: {} samples sit at its extreme value {} (runs of up to {}), {:.0} times as many as at the level just below: the power is distorted",
+            c.at_peak, c.peak, c.longest_run, c.excess
+        )
+    })
+}
+
+/// Flat tops found by [`clipping`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Clipping {
+    peak: f64,
+    at_peak: usize,
+    longest_run: usize,
+    /// Samples at the extreme over samples at the next level in.
+    excess: f64,
+}
+
+/// Flat tops at a record's extreme values. A smooth wave that the ADC
+/// quantised also repeats its top code a few samples running (a 40 Hz sine at
+/// 40 kHz and 16 bits stays within one code of its peak for 3-4 samples), but
+/// no more often than the codes just below it; a clipped one piles everything
+/// beyond full scale onto the extreme code. So: runs of at least 3 at the
+/// extreme, and at least 4 times as many samples there as at the next level in.
+fn clipping(x: &[f64]) -> Option<Clipping> {
+    // An ADC's codes are not symmetric (-2^15 ..= 2^15 - 1): each end separately.
+    flat_top(x, 1.0).or_else(|| flat_top(x, -1.0))
+}
+
+/// [`clipping`] at the top of `sign * x`.
+fn flat_top(x: &[f64], sign: f64) -> Option<Clipping> {
+    const CLIP_EXCESS: f64 = 4.0;
+    let top = x.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(sign * v));
+    if top <= 0.0 || !top.is_finite() {
         return None;
     }
-    let mut longest = 0;
-    let mut run = 0;
-    let mut at_peak = 0;
-    for v in x {
-        if v.abs() == peak {
-            at_peak += 1;
+    let next = x
+        .iter()
+        .map(|&v| sign * v)
+        .filter(|&a| a < top)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let at_next = x.iter().filter(|&&v| sign * v == next).count();
+    let (mut longest, mut run, mut at_top) = (0, 0, 0);
+    for &v in x {
+        if sign * v == top {
+            at_top += 1;
             run += 1;
             longest = longest.max(run);
         } else {
             run = 0;
         }
     }
-    (longest >= 3).then(|| {
-        format!(
-            "channel '{channel}' looks clipped: {at_peak} samples sit at its extreme value {peak} (runs of up to {longest}): the power is distorted"
-        )
+    let excess = at_top as f64 / at_next.max(1) as f64;
+    (longest >= 3 && excess >= CLIP_EXCESS).then_some(Clipping {
+        peak: sign * top,
+        at_peak: at_top,
+        longest_run: longest,
+        excess,
     })
 }
 
@@ -266,4 +304,39 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A sine of `amplitude` (in full scales) at 40 Hz, 40 kHz, through a
+    /// 16-bit ADC that clips at its extreme codes.
+    fn adc_sine(amplitude: f64) -> Vec<f64> {
+        let lsb = 2.0 / 65536.0;
+        (0..40_000)
+            .map(|i| {
+                let v = amplitude * (2.0 * std::f64::consts::PI * 40.0 * i as f64 / 40_000.0).sin();
+                ((v / lsb).round() * lsb).clamp(-1.0, 1.0 - lsb)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_quantised_sine_is_not_called_clipped_and_a_clipped_one_is() {
+        // Within one code of its peak for several samples, yet not clipped.
+        for amplitude in [0.05, 0.5, 0.99] {
+            assert_eq!(
+                clipping(&adc_sine(amplitude)),
+                None,
+                "amplitude {amplitude}"
+            );
+        }
+        // Unquantised floats: a single sample at the top.
+        let smooth: Vec<f64> = (0..4000).map(|i| (i as f64 * 0.0063).sin()).collect();
+        assert_eq!(clipping(&smooth), None);
+        // 2 % over full scale: about 12 % of each period flat at the limits.
+        let c = clipping(&adc_sine(1.02)).expect("clipped");
+        assert!(c.longest_run > 50 && c.excess > 10.0, "{c:?}");
+    }
 }
