@@ -335,9 +335,9 @@ fn replay_of_a_shake_gives_its_measurement_back() {
             "--gamma",
             "20",
             "--cycles",
-            "6",
+            "7",
             "--steady-cycles",
-            "3",
+            "4",
             "--shaker",
             "prescribed",
             "--out",
@@ -351,7 +351,7 @@ fn replay_of_a_shake_gives_its_measurement_back() {
     let r = json(&dir.path("rep/summary.json"));
     // The kinematics' metadata carries the drive, the particles and the window.
     assert_eq!(r["freq_source"], "record");
-    assert_eq!(r["periods"], 3);
+    assert_eq!(r["periods"], 4);
     assert_eq!(r["particle_mass_source"], "record");
     let (w0, s0) = (
         r["window_start_s"].as_f64().expect("window"),
@@ -395,5 +395,13 @@ fn replay_of_a_shake_gives_its_measurement_back() {
     assert!(
         (m - chain).abs() < 2e-3,
         "replay measures its record to {m:+.4}, the shake the DEM's work to {chain:+.4}"
+    );
+    // The replay's standard error is the shake's: the same blocks of the
+    // same record (within 10 %: the recorded rows are not the DEM's steps).
+    let se_r = r["measured"]["power_stderr_w"].as_f64().expect("replay stderr");
+    let se_s = s["measured"]["power_stderr_w"].as_f64().expect("shake stderr");
+    assert!(
+        se_r > 0.0 && (se_r / se_s - 1.0).abs() < 0.1,
+        "replay stderr {se_r} vs shake {se_s}"
     );
 }

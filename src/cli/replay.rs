@@ -198,14 +198,24 @@ fn print_summary(s: &ReplaySummary, dir: &Path) {
         "  measured by rig {} (recorded motion), Yang's method over {} periods:",
         s.rig, m.n_periods
     );
+    let pm = |x: Option<f64>| x.map_or(String::new(), |x| format!(" +- {x:.1e}"));
     println!(
-        "    power {:.5} W, energy per cycle {:.4e} J ({:+.3} % vs the record){}",
+        "    power {:.5}{} W, energy per cycle {:.4e}{} J ({:+.3} % vs the record){}",
         m.power_w,
+        pm(m.power_stderr_w),
         m.energy_per_cycle_j,
+        pm(m.energy_per_cycle_stderr_j),
         100.0 * m.error_vs_record_rel,
         m.efficiency
-            .map(|e| format!(", efficiency {e:.4}"))
+            .map(|e| format!(
+                ", efficiency {e:.4}{}",
+                m.efficiency_stderr
+                    .map_or(String::new(), |x| format!(" +- {x:.4}"))
+            ))
             .unwrap_or_default()
+    );
+    println!(
+        "    (+- : standard error from the spread over blocks of two periods, the statistical part)"
     );
     println!(
         "    phase correction {:.3} mrad ({})",

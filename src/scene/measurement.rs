@@ -347,7 +347,7 @@ fn join_hz(freqs: &[f64]) -> String {
 /// Yang's power of successive blocks of two periods of `trace`, corrected with
 /// `calibration` and `polarity`, as a mean with its standard error; `None`
 /// below two blocks.
-fn block_power(
+pub fn block_power(
     trace: &Trace,
     freq_hz: f64,
     calibration: &PhaseCalibration,

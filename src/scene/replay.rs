@@ -60,12 +60,12 @@ use crate::rig::{
     transducer_force_n,
 };
 use crate::scene::file::{Orientation, Scene, SceneError};
-use crate::scene::measurement::{CalibrationSource, analyse, calibrate_rig};
+use crate::scene::measurement::{CalibrationSource, analyse, block_power, calibrate_rig};
 use crate::scene::shake::write_rig_record;
 use crate::signals::lammps::strip_lammps_prefix;
 use crate::signals::{
-    Channel, PhaseCalibration, PhaseCorrection, Table, Trace, TraceMetadata, efficiency,
-    max_energy_per_cycle_j, read_table,
+    Channel, ForcePolarity, PhaseCalibration, PhaseCorrection, Table, Trace, TraceMetadata,
+    efficiency, max_energy_per_cycle_j, read_table,
 };
 use crate::validation::{InvalidParameter, positive};
 
@@ -360,6 +360,11 @@ pub struct ReplayMeasured {
     pub power_w: f64,
     pub energy_per_cycle_j: f64,
     pub efficiency: Option<f64>,
+    /// Standard errors from the spread of Yang's power over blocks of two
+    /// periods (as a shake reports them); `None` below two blocks.
+    pub power_stderr_w: Option<f64>,
+    pub energy_per_cycle_stderr_j: Option<f64>,
+    pub efficiency_stderr: Option<f64>,
     /// Phase error subtracted at the drive frequency (rad).
     pub phase_correction_rad: f64,
     /// (measured − record truth) / record truth.
@@ -704,10 +709,21 @@ pub fn replay_record(
         .transpose()?;
     let v_amp = gamma * g / omega;
     let phi = rig.expected_phase_error_rad(freq_hz);
+    let polarity = if corrected.force_polarity.reversed {
+        ForcePolarity::Reversed
+    } else {
+        ForcePolarity::AsRecorded
+    };
+    let blocks = block_power(&trace, freq_hz, &calibration, polarity)?;
     let measured = ReplayMeasured {
         power_w: corrected.power_w,
         energy_per_cycle_j: corrected.energy_per_cycle_j,
         efficiency: measured_efficiency,
+        power_stderr_w: blocks.map(|b| b.stderr),
+        energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / freq_hz),
+        efficiency_stderr: blocks
+            .zip(e_max_j)
+            .map(|(b, e)| b.stderr / freq_hz / e),
         phase_correction_rad: corrected.phase_correction_rad,
         error_vs_record_rel: corrected.energy_per_cycle_j / truth_energy - 1.0,
         uncorrected_energy_per_cycle_j: raw.energy_per_cycle_j,
