@@ -104,9 +104,11 @@ fn thesis_scene_ledger_closes_and_record_agrees() {
         "record work {work:.5} J vs ledger {ledger_work:.5} J"
     );
 
-    // The record replayed through the same rig (`vlab replay`, issue 12)
-    // measures what the shake measured, within 0.1 % (measured on this VM
-    // after the until-steady drive: -0.048 %).
+    // The record replayed through the same rig (`vlab replay`, issue 12),
+    // calibrated and measured by the same functions, measures what the shake
+    // measured, within 0.1 % (measured on the 2-core VM at fc23db4: -0.048 %,
+    // of which -0.041 % is the 40 kHz rows' loss of the DEM's work, the rest
+    // the two chains' errors, -0.021 % vs the record and -0.014 % vs the DEM).
     let out = vlab(&dir.0, &["replay", "run/kinematics.csv", "--out", "replay"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let r = json(&dir.path("replay/summary.json"));

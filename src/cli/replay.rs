@@ -54,7 +54,8 @@ pub struct ReplayArgs {
     #[arg(long = "column", value_name = "ROLE=NAME")]
     columns: Vec<String>,
     /// Phase-error table of the rig (from `vlab calibrate`) [default: measure one now
-    /// on the empty enclosure at the drive frequency].
+    /// on the empty enclosure as `vlab shake` does: at the drive frequency and its 4th
+    /// and 16th harmonics; none on a rig that reads exactly].
     #[arg(long, value_name = "FILE")]
     calibration: Option<PathBuf>,
     /// Seed of the rig's noise.
@@ -207,20 +208,26 @@ fn print_summary(s: &ReplaySummary, dir: &Path) {
         pm(m.energy_per_cycle_stderr_j),
         100.0 * m.error_vs_record_rel,
         m.efficiency
-            .map(|e| format!(
-                ", efficiency {e:.4}{}",
-                m.efficiency_stderr
-                    .map_or(String::new(), |x| format!(" +- {x:.4}"))
-            ))
+            .map(|e| format!(", efficiency {e:.4}{}", pm(m.efficiency_stderr)))
             .unwrap_or_default()
     );
-    println!(
-        "    (+- : standard error from the spread over blocks of two periods, the statistical part)"
-    );
+    if m.power_stderr_w.is_some() {
+        println!(
+            "    (+- : standard error from the spread over blocks of two periods, the statistical part)"
+        );
+    }
     println!(
         "    phase correction {:.3} mrad ({})",
         1e3 * m.phase_correction_rad,
         m.calibration
+    );
+    println!(
+        "    force polarity {}",
+        if m.force_polarity_reversed {
+            "reversed (the force read as the gauge's reaction and was negated)"
+        } else {
+            "as recorded"
+        }
     );
     println!(
         "    without the correction {:.4e} J ({:+.2} % vs the record; predicted leak {:+.2} %)",

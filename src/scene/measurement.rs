@@ -235,53 +235,25 @@ pub fn run_measured_shake_observed(
     let trace = record.from_time(steady_start_s - record_start);
     let steady_cycles = outcome.cycles - outcome.steady_first_cycle;
 
-    let cal_freqs = calibration_freqs_hz(setup.freq_hz, rig.daq.sample_rate_hz);
-    let exact = rig.needs_no_calibration(setup.freq_hz);
-    let calibration = match &setup.calibration {
-        CalibrationSource::Given(table, _) => table.clone(),
-        CalibrationSource::OnTheFly if exact => exact_calibration(rig, setup.freq_hz)?,
-        CalibrationSource::OnTheFly => {
-            let gammas = [0.5 * setup.gamma, setup.gamma];
-            calibrate_rig(
-                rig,
-                setup.shaker,
-                &cal_freqs,
-                &gammas,
-                g,
-                dt,
-                outcome.cycles,
-                steady_cycles,
-                scene.simulation.seed,
-            )?
-            .0
-        }
-    };
-    let source = match &setup.calibration {
-        CalibrationSource::Given(_, s) => s.clone(),
-        CalibrationSource::OnTheFly if exact => format!(
-            "none needed: rig {} reads without phase error or noise",
-            rig.name
-        ),
-        CalibrationSource::OnTheFly => format!(
-            "measured on the fly: empty enclosure of rig {} at {} Hz, Gamma {} and {}, averaged{}",
-            rig.name,
-            join_hz(&cal_freqs),
-            0.5 * setup.gamma,
-            setup.gamma,
-            if calibration.model.is_some() {
-                "; harmonics by the fitted high-pass + skew model"
-            } else {
-                ""
-            }
-        ),
-    };
-    let corrected = analyse(&trace, setup.freq_hz, PhaseCorrection::Table(&calibration))?;
-    let polarity = if corrected.force_polarity.reversed {
-        ForcePolarity::Reversed
-    } else {
-        ForcePolarity::AsRecorded
-    };
-    let raw = analyse_with(&trace, setup.freq_hz, PhaseCorrection::None, polarity)?;
+    let (calibration, source) = phase_calibration(
+        rig,
+        &setup.calibration,
+        &CalibrationRun {
+            shaker: setup.shaker,
+            freq_hz: setup.freq_hz,
+            gamma: setup.gamma,
+            gravity_mps2: g,
+            dt_s: dt,
+            cycles: outcome.cycles,
+            record_cycles: steady_cycles,
+            seed: scene.simulation.seed,
+        },
+    )?;
+    let YangMeasurement {
+        corrected,
+        uncorrected: raw,
+        blocks,
+    } = measure_trace(&trace, setup.freq_hz, &calibration)?;
     let truth = outcome.energy_per_cycle_j;
     let work_truth = outcome.work_in_per_cycle_j;
     let omega = 2.0 * PI * setup.freq_hz;
@@ -289,7 +261,6 @@ pub fn run_measured_shake_observed(
     let phi = rig.expected_phase_error_rad(setup.freq_hz);
     let shaker_report = shaker.report();
     let e_max = max_energy_per_cycle_j(particle_mass, setup.gamma, setup.freq_hz, g)?;
-    let blocks = block_power(&trace, setup.freq_hz, &calibration, polarity)?;
     let measured = Measured {
         power_w: corrected.power_w,
         energy_per_cycle_j: corrected.energy_per_cycle_j,
@@ -322,6 +293,109 @@ pub fn run_measured_shake_observed(
         shaker: shaker_report,
         measured,
         calibration,
+    })
+}
+
+/// How the empty enclosure runs for an on-the-fly calibration: as the run
+/// it calibrates (the same shaker, drive, step, length and record window).
+#[derive(Debug, Clone, Copy)]
+pub struct CalibrationRun {
+    pub shaker: ShakerKind,
+    pub freq_hz: f64,
+    pub gamma: f64,
+    pub gravity_mps2: f64,
+    /// The rig's step (s): the DEM's in a shake, the push step in a replay.
+    pub dt_s: f64,
+    /// Cycles run, and the last of them recorded.
+    pub cycles: u32,
+    pub record_cycles: u32,
+    pub seed: u64,
+}
+
+/// The phase-error table a measured run is corrected with, and where it came
+/// from, as `vlab shake` and `vlab replay` both take it: the table given;
+/// none (zero phase error) when the rig reads exactly
+/// ([`RigSpec::needs_no_calibration`]); else the empty enclosure run as
+/// `run` at [`calibration_freqs_hz`] and Γ/2 and Γ, averaged over the
+/// amplitudes, with the fitted high-pass + skew model for the harmonics.
+pub fn phase_calibration(
+    rig: &RigSpec,
+    source: &CalibrationSource,
+    run: &CalibrationRun,
+) -> Result<(PhaseCalibration, String), SceneError> {
+    if let CalibrationSource::Given(table, description) = source {
+        return Ok((table.clone(), description.clone()));
+    }
+    if rig.needs_no_calibration(run.freq_hz) {
+        return Ok((
+            exact_calibration(rig, run.freq_hz)?,
+            format!(
+                "none needed: rig {} reads without phase error or noise",
+                rig.name
+            ),
+        ));
+    }
+    let freqs = calibration_freqs_hz(run.freq_hz, rig.daq.sample_rate_hz);
+    let gammas = [0.5 * run.gamma, run.gamma];
+    let (table, _) = calibrate_rig(
+        rig,
+        run.shaker,
+        &freqs,
+        &gammas,
+        run.gravity_mps2,
+        run.dt_s,
+        run.cycles,
+        run.record_cycles,
+        run.seed,
+    )?;
+    let description = format!(
+        "measured on the fly: empty enclosure of rig {} at {} Hz, Gamma {} and {}, averaged{}",
+        rig.name,
+        join_hz(&freqs),
+        gammas[0],
+        gammas[1],
+        if table.model.is_some() {
+            "; harmonics by the fitted high-pass + skew model"
+        } else {
+            ""
+        }
+    );
+    Ok((table, description))
+}
+
+/// Yang's measurement of a rig trace, as `vlab shake` and `vlab replay`
+/// both make it.
+#[derive(Debug, Clone)]
+pub struct YangMeasurement {
+    /// Corrected with the calibration, the force polarity detected.
+    pub corrected: PowerResult,
+    /// Without the phase correction, with the polarity `corrected` found.
+    pub uncorrected: PowerResult,
+    /// Mean and standard error over blocks of two periods, with the same
+    /// correction and polarity ([`block_power`]); `None` below two blocks.
+    pub blocks: Option<MeanStderr>,
+}
+
+/// Yang's power of `trace` over all its whole periods, corrected with
+/// `calibration`; the uncorrected power and the blocks use the whole
+/// record's polarity verdict.
+pub fn measure_trace(
+    trace: &Trace,
+    freq_hz: f64,
+    calibration: &PhaseCalibration,
+) -> Result<YangMeasurement, SceneError> {
+    let corrected = analyse(trace, freq_hz, PhaseCorrection::Table(calibration))?;
+    let polarity = if corrected.force_polarity.reversed {
+        ForcePolarity::Reversed
+    } else {
+        ForcePolarity::AsRecorded
+    };
+    let uncorrected = analyse_with(trace, freq_hz, PhaseCorrection::None, polarity)?;
+    let blocks = block_power(trace, freq_hz, calibration, polarity)?;
+    Ok(YangMeasurement {
+        corrected,
+        uncorrected,
+        blocks,
     })
 }
 

@@ -14,9 +14,13 @@
 //! reads `m_enc a - F_p + W` ([`transducer_force_n`], the enclosure and
 //! transducer masses adding their inertia), the accelerometer reads `a`, and
 //! both channels go through conditioner, anti-alias filters, sampling, noise
-//! and ADC at the DAQ rate ([`Daq`]). The rig's phase error is calibrated on
-//! its empty enclosure as in a shake ([`calibrate_rig`]) and Yang's method
-//! (eq. 7.8-7.12) measures the power.
+//! and ADC at the DAQ rate ([`Daq`]). The rig's phase error is calibrated
+//! and Yang's method (eq. 7.8-7.12) measures the power with the functions a
+//! shake uses ([`phase_calibration`], [`measure_trace`]): the empty enclosure
+//! at the drive and its 4th and 16th harmonics, the fitted high-pass + skew
+//! model at the harmonics, no calibration on a rig that reads exactly, and
+//! the uncorrected power and the blocks with the polarity the corrected
+//! power found.
 //!
 //! **Resampling without aliasing.** Each record value stands for its sample
 //! interval `[t_i - h/2, t_i + h/2]`: the force is held over it (exact for a
@@ -60,12 +64,14 @@ use crate::rig::{
     transducer_force_n,
 };
 use crate::scene::file::{Orientation, Scene, SceneError};
-use crate::scene::measurement::{CalibrationSource, analyse, block_power, calibrate_rig};
+use crate::scene::measurement::{
+    CalibrationRun, CalibrationSource, YangMeasurement, measure_trace, phase_calibration,
+};
 use crate::scene::shake::write_rig_record;
 use crate::signals::lammps::strip_lammps_prefix;
 use crate::signals::{
-    Channel, ForcePolarity, PhaseCalibration, PhaseCorrection, Table, Trace, TraceMetadata,
-    efficiency, max_energy_per_cycle_j, read_table,
+    Channel, PhaseCalibration, Table, Trace, TraceMetadata, efficiency, max_energy_per_cycle_j,
+    read_table,
 };
 use crate::validation::{InvalidParameter, positive};
 
@@ -367,6 +373,9 @@ pub struct ReplayMeasured {
     pub efficiency_stderr: Option<f64>,
     /// Phase error subtracted at the drive frequency (rad).
     pub phase_correction_rad: f64,
+    /// True when the rig's force read as the gauge reaction and was negated
+    /// (`signals::power`, "Force polarity"), as in a shake.
+    pub force_polarity_reversed: bool,
     /// (measured − record truth) / record truth.
     pub error_vs_record_rel: f64,
     pub uncorrected_energy_per_cycle_j: f64,
@@ -656,33 +665,27 @@ pub fn replay_record(
     );
     let (trace, daq_report) = daq.finish(metadata)?;
 
-    let calibration = match &options.calibration {
-        CalibrationSource::Given(table, _) => table.clone(),
-        CalibrationSource::OnTheFly => {
-            calibrate_rig(
-                rig,
-                ShakerKind::Prescribed,
-                &[freq_hz],
-                &[0.5 * gamma, gamma],
-                g,
-                dt,
-                transient + periods,
-                periods,
-                options.seed,
-            )?
-            .0
-        }
-    };
-    let calibration_source = match &options.calibration {
-        CalibrationSource::Given(_, s) => s.clone(),
-        CalibrationSource::OnTheFly => format!(
-            "measured on the fly: empty enclosure of rig {} at {freq_hz} Hz, Gamma {} and {gamma}, averaged",
-            rig.name,
-            0.5 * gamma
-        ),
-    };
-    let corrected = analyse(&trace, freq_hz, PhaseCorrection::Table(&calibration))?;
-    let raw = analyse(&trace, freq_hz, PhaseCorrection::None)?;
+    // Calibrated as a shake calibrates (the recorded motion is a prescribed
+    // drive): the same helper, frequencies, amplitudes and window.
+    let (calibration, calibration_source) = phase_calibration(
+        rig,
+        &options.calibration,
+        &CalibrationRun {
+            shaker: ShakerKind::Prescribed,
+            freq_hz,
+            gamma,
+            gravity_mps2: g,
+            dt_s: dt,
+            cycles: transient + periods,
+            record_cycles: periods,
+            seed: options.seed,
+        },
+    )?;
+    let YangMeasurement {
+        corrected,
+        uncorrected: raw,
+        blocks,
+    } = measure_trace(&trace, freq_hz, &calibration)?;
     if corrected.n_periods != periods as usize {
         return Err(SceneError::Record {
             path: table.path.clone(),
@@ -709,22 +712,15 @@ pub fn replay_record(
         .transpose()?;
     let v_amp = gamma * g / omega;
     let phi = rig.expected_phase_error_rad(freq_hz);
-    let polarity = if corrected.force_polarity.reversed {
-        ForcePolarity::Reversed
-    } else {
-        ForcePolarity::AsRecorded
-    };
-    let blocks = block_power(&trace, freq_hz, &calibration, polarity)?;
     let measured = ReplayMeasured {
         power_w: corrected.power_w,
         energy_per_cycle_j: corrected.energy_per_cycle_j,
         efficiency: measured_efficiency,
         power_stderr_w: blocks.map(|b| b.stderr),
         energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / freq_hz),
-        efficiency_stderr: blocks
-            .zip(e_max_j)
-            .map(|(b, e)| b.stderr / freq_hz / e),
+        efficiency_stderr: blocks.zip(e_max_j).map(|(b, e)| b.stderr / freq_hz / e),
         phase_correction_rad: corrected.phase_correction_rad,
+        force_polarity_reversed: corrected.force_polarity.reversed,
         error_vs_record_rel: corrected.energy_per_cycle_j / truth_energy - 1.0,
         uncorrected_energy_per_cycle_j: raw.energy_per_cycle_j,
         uncorrected_error_vs_record_rel: raw.energy_per_cycle_j / truth_energy - 1.0,
