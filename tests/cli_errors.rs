@@ -162,6 +162,40 @@ fn failed_run_leaves_no_folders() {
     );
 }
 
+/// The same through the flag, to the default output folder: `--dt-s 8e-6`
+/// (below the Rayleigh limit of 8.3e-6 s, so it is accepted) leaves a
+/// sphere-sphere collision of under 5 steps in the settled thesis bed. The
+/// run stops with a diagnosis that names the collision, the step and the step
+/// to use instead, exits non-zero, prints no JSON, and writes nothing but the
+/// settled bed in its cache (the folder `signals/` is never made).
+#[test]
+fn unresolved_collision_through_the_flag_stops_with_a_diagnosis() {
+    let dir = Scratch::new("unresolved");
+    let out = vlab(&dir.0, &["shake", "--dt-s", "8e-6", "--json"]);
+    assert!(!out.status.success(), "the run should fail");
+    assert!(out.stdout.is_empty(), "printed a summary");
+    let err = stderr(&out);
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_else(|| panic!("no error line: {err}"));
+    for part in [
+        "numerical instability",
+        "collision",
+        "time steps of 8.000e-6 s",
+        "use a time step of at most",
+    ] {
+        assert!(line.contains(part), "'{line}' lacks '{part}'");
+    }
+    assert!(!dir.path("signals").exists(), "left signals/ behind");
+    let cache = dir.path(".vlab-cache");
+    let written: Vec<_> = common::files_below(&dir.0)
+        .into_iter()
+        .filter(|p| !p.starts_with(&cache))
+        .collect();
+    assert!(written.is_empty(), "wrote {written:?}");
+}
+
 /// A bad value reads the same wherever it was given: `<key> = <value>
 /// <unit>: must be <valid>`, with the scene key, the rig key or the flag.
 #[test]

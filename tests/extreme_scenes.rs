@@ -194,6 +194,28 @@ fn fill_055_vertical_and_horizontal() {
     }
 }
 
+/// Fill 0.57 (438 spheres, 0.5703), the densest fill the lid closes on in
+/// the thesis cylinder (README, "Filling the damper"; 0.58 and denser are
+/// refused): it settles, closes and drives soundly at 40 Hz, Γ 20.
+#[test]
+#[ignore = "long: about a minute on 2 cores"]
+fn fill_057_the_densest_that_closes_settles_and_drives() {
+    let s = scene("[particles]\ncount = 438\n");
+    let fill = s.fill_ratio();
+    assert!((fill - 0.57).abs() < 5e-4, "fill {fill}");
+    let bed = settle_bed(&s, &mut |_| {}).expect("the lid closes on fill 0.57");
+    let (world, out) = drive(&bed, &s, 40.0, 20.0, 4, 2).expect("completes");
+    assert_sound("fill 0.57", &world, &out);
+    eprintln!(
+        "fill {fill:.4}: packing {:.3}, efficiency {:.3}, fewest steps per contact {:.1}, ledger residual {:.1e}, integration error {:.1e}",
+        bed.packing_fraction,
+        out.efficiency,
+        out.fewest_steps_per_contact,
+        out.whole.residual_relative(),
+        out.whole.integrator_relative()
+    );
+}
+
 /// Fill 0.6 is past what pouring and closing pack in this cylinder: refused
 /// with the packing it needs and the one it reached.
 #[test]

@@ -175,6 +175,10 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
     }
     let made = OutputDir::prepare(&out_dir)
         .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
+    // Name the fill and the orientation in progress lines only when the
+    // sweep has several (else four beds' conditions read alike).
+    let with_fill = plan.fill_ratios.len() > 1;
+    let with_orientation = plan.orientations.len() > 1;
     let progress = Mutex::new(ProgressLine::new("sweep", quiet));
     let note = |text: String| {
         let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
@@ -235,10 +239,8 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
                 RowStatus::Failed => format!("FAILED: {}", row.note),
             };
             note(format!(
-                "sweep: {done}/{total}  {} Hz Gamma {} seed {}: {what}; ETA {}",
-                c.freq_hz,
-                c.gamma,
-                c.seed,
+                "sweep: {done}/{total}  {}: {what}; ETA {}",
+                c.describe(with_fill, with_orientation),
                 eta(eta_s)
             ))
         }

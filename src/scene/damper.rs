@@ -368,3 +368,83 @@ pub fn run_drive(
         fewest_steps_per_contact: world.fewest_steps_per_contact,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::{Numerics, Particles, RestitutionMode, Walls};
+
+    /// Three acrylic spheres of 5 mm on the floor of a small closed cylinder
+    /// (20 mm across, 20 mm long), every contact of restitution `e` and
+    /// friction `mu`, ledger started.
+    fn three_spheres(e: f64, mu: f64) -> World {
+        let m = crate::dem::Material::ACRYLIC;
+        let r = 0.0025;
+        let mut p = Particles::default();
+        for x in [-0.006, 0.0, 0.006] {
+            p.push(
+                DVec3::new(x, 0.0, r),
+                DVec3::ZERO,
+                DVec3::ZERO,
+                r,
+                m.density_kgm3,
+            );
+        }
+        let law = ContactLaw::new(&m, &m, e, mu, RestitutionMode::Exact);
+        let mut w = World::new(
+            p,
+            Walls::closed_cylinder(0.01, 0.02),
+            law,
+            law,
+            gravity_vector(Orientation::Vertical, 9.81),
+            Numerics::with_dt(1e-6),
+        )
+        .expect("a valid world");
+        w.start_ledger();
+        w
+    }
+
+    /// A drive at 160 Hz, Γ 3 run until steady with criteria no bed meets,
+    /// from 4 cycles on, at most `max_cycles`.
+    fn drive_until_steady(world: &mut World, max_cycles: u32) -> DriveOutcome {
+        let plan = DrivePlan {
+            freq_hz: 160.0,
+            gamma: 3.0,
+            gravity_mps2: 9.81,
+            length: DriveLength::UntilSteady {
+                min_cycles: 4,
+                max_cycles,
+                criteria: SteadyCriteria {
+                    balance_rel: 1e-12,
+                    stderr_rel: 1e-12,
+                },
+            },
+        };
+        let mut motion = SineMotion::new(plan.freq_hz, plan.gamma, plan.gravity_mps2);
+        run_drive(world, &plan, &mut motion, &mut NoObserver, &mut |_| {}).expect("drives")
+    }
+
+    /// A dissipating bed that does not meet the criteria stops at the cap and
+    /// says so (`capped`), never `reached`.
+    #[test]
+    fn a_drive_that_never_settles_stops_at_its_cap() {
+        let mut w = three_spheres(0.5, 0.3);
+        let out = drive_until_steady(&mut w, 5);
+        assert_eq!(out.cycles, 5);
+        assert!(out.whole.dissipated_j > 0.0);
+        let s = out.steadiness;
+        assert!(s.capped && !s.reached && !s.lossless, "{s:?}");
+    }
+
+    /// An elastic, frictionless bed dissipates exactly nothing: `lossless`,
+    /// and the drive stops at its fewest cycles rather than at the cap.
+    #[test]
+    fn a_lossless_bed_is_flagged_and_stops_at_its_fewest_cycles() {
+        let mut w = three_spheres(1.0, 0.0);
+        let out = drive_until_steady(&mut w, 40);
+        assert_eq!(out.whole.dissipated_j, 0.0);
+        let s = out.steadiness;
+        assert!(s.lossless && !s.capped && !s.reached, "{s:?}");
+        assert_eq!(out.cycles, 4);
+    }
+}

@@ -788,4 +788,54 @@ mod tests {
         .expect("valid");
         assert!((s.drive_dt_s(40.0, 20.0) - 0.1 * s.rayleigh_limit_s()).abs() < 1e-18);
     }
+
+    /// The contact rule resolves the stiffer pair. In the acrylic thesis
+    /// cylinder the particle-particle contact is the shorter one (half the
+    /// mass and radius of the wall contact at the same modulus); in a steel
+    /// cylinder the acrylic sphere meets a wall of about twice the acrylic
+    /// pair's E*, the wall contact is the shortest and the step follows it.
+    /// Both steps equal their contact's Hertz duration (eq. 5.10) over 25
+    /// steps to 1e-12.
+    #[test]
+    fn the_time_step_follows_the_stiffer_particle_wall_pair() {
+        let acrylic = Scene::thesis();
+        let steel_walls = Scene::merge_over_preset("[enclosure]\nmaterial = \"steel\"\n", "t")
+            .expect("valid scene");
+        let (f, gamma) = (40.0, 20.0);
+        let dt_acrylic = acrylic.drive_dt_s(f, gamma);
+        let dt_steel = steel_walls.drive_dt_s(f, gamma);
+        assert!(
+            dt_steel < 0.95 * dt_acrylic,
+            "steel walls {dt_steel:e} s, acrylic walls {dt_acrylic:e} s"
+        );
+
+        let pm = acrylic.particle_material();
+        let r = acrylic.radius_m();
+        let m = sphere_mass_kg(r, pm.density_kgm3);
+        let v = acrylic.expected_impact_speed_mps(f, gamma);
+        assert_eq!(v, steel_walls.expected_impact_speed_mps(f, gamma));
+        let steps = acrylic.simulation.steps_per_contact;
+        let pair_s = hertz_theory::contact_duration_s(
+            effective_mass_kg(m, m),
+            effective_youngs_pa(&pm, &pm),
+            effective_radius_m(r, r),
+            v,
+        );
+        let wall_s = |walls: &Scene| {
+            hertz_theory::contact_duration_s(
+                m,
+                effective_youngs_pa(&pm, &walls.wall_material()),
+                r,
+                v,
+            )
+        };
+        assert!(pair_s < wall_s(&acrylic), "acrylic: the pair is shorter");
+        assert!(wall_s(&steel_walls) < pair_s, "steel: the wall is shorter");
+        let rel = |a: f64, b: f64| (a / b - 1.0).abs();
+        assert!(rel(dt_acrylic, pair_s / steps) < 1e-12, "{dt_acrylic:e}");
+        assert!(
+            rel(dt_steel, wall_s(&steel_walls) / steps) < 1e-12,
+            "{dt_steel:e}"
+        );
+    }
 }

@@ -612,4 +612,69 @@ mod tests {
             / shortest_contact_s(&stiff, &stiff, r, rho, 1.0);
         assert!((ratio - 0.01f64.powf(-0.4)).abs() < 1e-9, "{ratio}");
     }
+
+    /// Two elastic, frictionless spheres bouncing in a weightless cylinder
+    /// never come to rest: after the allowed time the run stops with
+    /// `NotAtRest`, naming the phase, the time, the bed's RMS speed (that of
+    /// the world it left, to 1e-12) and the rest threshold (sqrt(1e-4 x 2 x
+    /// 1 m/s^2 x 5 mm) = 1 mm/s; gravity below 1 m/s^2 counts as 1).
+    #[test]
+    fn a_bed_that_keeps_moving_is_not_at_rest() {
+        let m = Material::ACRYLIC;
+        let r = 0.0025;
+        let mut p = Particles::default();
+        for (x, v) in [(-0.004, 0.5), (0.004, -0.5)] {
+            p.push(
+                DVec3::new(x, 0.0, 0.01),
+                DVec3::new(v, 0.0, 0.0),
+                DVec3::ZERO,
+                r,
+                m.density_kgm3,
+            );
+        }
+        let law = ContactLaw::new(&m, &m, 1.0, 0.0, RestitutionMode::Exact);
+        let mut world = World::new(
+            p,
+            Walls::closed_cylinder(0.01, 0.02),
+            law,
+            law,
+            DVec3::ZERO,
+            Numerics::with_dt(1e-6),
+        )
+        .expect("a valid world");
+        let err = run_until_rest(
+            &mut world,
+            0.0,
+            0.01,
+            "pouring",
+            Instant::now(),
+            &mut |_| {},
+        )
+        .expect_err("elastic spheres never rest");
+        let msg = err.to_string();
+        let SceneError::NotAtRest {
+            phase,
+            time_s,
+            rms_speed_mps,
+            rest_mps,
+        } = &err
+        else {
+            panic!("another error: {msg}");
+        };
+        assert_eq!(*phase, "pouring");
+        assert_eq!(*time_s, 0.01);
+        let (kt, kr) = world.particles.kinetic_energy_j();
+        let rms = (2.0 * (kt + kr) / world.particles.total_mass_kg()).sqrt();
+        assert!((rms_speed_mps / rms - 1.0).abs() < 1e-12, "{rms_speed_mps}");
+        assert!(*rms_speed_mps > 0.4, "the spheres keep their speed");
+        assert!((rest_mps - 1e-3).abs() < 1e-12, "{rest_mps}");
+        for part in [
+            "did not come to rest while pouring",
+            "after 0.01 s of settling",
+            "m/s RMS",
+            "below 0.0010 m/s",
+        ] {
+            assert!(msg.contains(part), "'{msg}' lacks '{part}'");
+        }
+    }
 }

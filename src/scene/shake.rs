@@ -567,3 +567,140 @@ pub fn plot_record(
     )?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The truth of a healthy drive: steady, every collision resolved with
+    /// the thesis bed's 24 steps, no impact near yield.
+    fn healthy() -> DemTruth {
+        DemTruth {
+            energy_per_cycle_j: 0.056,
+            energy_per_cycle_stderr_j: 5e-4,
+            e_max_j: 0.068,
+            efficiency: 0.83,
+            efficiency_stderr: 0.008,
+            steadiness: Steadiness {
+                balance_rel: 0.0015,
+                stderr_rel: 0.009,
+                reached: true,
+                capped: false,
+                lossless: false,
+            },
+            cycles: 10,
+            steady_first_cycle: 3,
+            fewest_steps_per_contact: 24.0,
+            dissipated_j: Dissipation::default(),
+            dissipated_per_cycle_j: Dissipation::default(),
+            work_in_per_cycle_j: 0.056,
+            steadiness_rel: 0.0015,
+            ledger_residual_rel: 1e-14,
+            integrator_rel: 6e-4,
+            ledger: LedgerBalance::default(),
+            steady_ledger: LedgerBalance::default(),
+            largest_particle_speed_mps: 1.5,
+            largest_impact_speed_mps: YieldVelocities {
+                particle_particle_mps: 1.0,
+                particle_wall_mps: 1.0,
+            },
+            yield_velocity_mps: Some(YieldVelocities {
+                particle_particle_mps: 3.5,
+                particle_wall_mps: 2.5,
+            }),
+        }
+    }
+
+    #[test]
+    fn a_healthy_drive_warns_of_nothing() {
+        assert!(healthy().warnings(40.0, 25.0).is_empty());
+    }
+
+    /// The rule asks for 25 steps at an estimated impact speed; the warning
+    /// comes below 0.8 x 25 = 20 (exactly: at 20 steps it is silent).
+    #[test]
+    fn a_collision_below_four_fifths_of_the_asked_steps_warns() {
+        assert_eq!(STEPS_PER_CONTACT_SLACK * 25.0, 20.0);
+        let mut t = healthy();
+        t.fewest_steps_per_contact = 20.0;
+        assert!(t.warnings(40.0, 25.0).is_empty());
+        t.fewest_steps_per_contact = 19.9;
+        let w = t.warnings(40.0, 25.0);
+        assert_eq!(w.len(), 1, "{w:?}");
+        for part in [
+            "only 19.9 time steps",
+            "asks for 25",
+            "warned below 20",
+            "simulation.dt_s",
+        ] {
+            assert!(w[0].contains(part), "'{}' lacks '{part}'", w[0]);
+        }
+    }
+
+    #[test]
+    fn a_drive_stopped_at_its_cap_says_so() {
+        let mut t = healthy();
+        t.steadiness = Steadiness {
+            balance_rel: 0.034,
+            stderr_rel: 0.021,
+            reached: false,
+            capped: true,
+            lossless: false,
+        };
+        t.cycles = 400;
+        t.steady_first_cycle = 150;
+        t.steadiness_rel = 0.034;
+        let w = t.warnings(160.0, 25.0);
+        assert_eq!(w.len(), 1, "{w:?}");
+        for part in [
+            "stopped at its cap of 400 cycles",
+            "last 250 cycles",
+            "+3.40 %",
+            "2.10 %",
+            "unsteady bed",
+        ] {
+            assert!(w[0].contains(part), "'{}' lacks '{part}'", w[0]);
+        }
+    }
+
+    #[test]
+    fn a_lossless_bed_says_it_has_no_steady_state() {
+        let mut t = healthy();
+        t.steadiness = Steadiness {
+            balance_rel: 100.0,
+            stderr_rel: 0.0,
+            reached: false,
+            capped: false,
+            lossless: true,
+        };
+        t.cycles = 8;
+        t.energy_per_cycle_j = 0.0;
+        t.work_in_per_cycle_j = 1.234e-3;
+        t.steadiness_rel = f64::INFINITY;
+        let w = t.warnings(40.0, 25.0);
+        // One warning: not also "not in a steady state".
+        assert_eq!(w.len(), 1, "{w:?}");
+        for part in [
+            "dissipated no energy",
+            "1.234e-3 J per cycle",
+            "no steady state and no efficiency",
+            "after 8 cycles",
+        ] {
+            assert!(w[0].contains(part), "'{}' lacks '{part}'", w[0]);
+        }
+    }
+
+    #[test]
+    fn impacts_above_the_yield_velocity_warn() {
+        let mut t = healthy();
+        t.largest_impact_speed_mps.particle_wall_mps = 2.6;
+        let w = t.warnings(40.0, 25.0);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("particle-wall impacts reached 2.60 m/s")
+                && w[0].contains("yield velocity 2.50 m/s"),
+            "{}",
+            w[0]
+        );
+    }
+}

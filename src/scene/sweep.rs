@@ -117,6 +117,25 @@ impl Condition {
     fn cost(&self) -> f64 {
         1.0 / self.freq_hz
     }
+
+    /// The condition in words for progress lines: `40 Hz Gamma 3 seed 1`,
+    /// preceded by the fill ratio (3 decimals) and the orientation when the
+    /// sweep has several of them (else conditions of different beds read
+    /// alike).
+    pub fn describe(&self, with_fill: bool, with_orientation: bool) -> String {
+        let mut out = String::new();
+        if with_fill {
+            out += &format!("fill {:.3} ", self.fill_ratio);
+        }
+        if with_orientation {
+            out += self.orientation.as_str();
+            out.push(' ');
+        }
+        out + &format!(
+            "{} Hz Gamma {} seed {}",
+            self.freq_hz, self.gamma, self.seed
+        )
+    }
 }
 
 /// A deterministic slice of a sweep: conditions `k` with `k mod count = index − 1`.
@@ -1451,6 +1470,30 @@ mod tests {
         for bad in ["0/4", "5/4", "x", "1/0", "1/"] {
             assert!(Shard::parse(bad).is_err(), "{bad}");
         }
+    }
+
+    /// Four conditions that differ only in fill and orientation read apart
+    /// when the sweep has several of each, and as before when it has one.
+    #[test]
+    fn conditions_of_different_beds_are_described_apart() {
+        let mut p = plan();
+        p.fill_ratios = vec![0.4, 0.466];
+        p.orientations = vec![Orientation::Vertical, Orientation::Horizontal];
+        let same: Vec<Condition> = p
+            .conditions()
+            .into_iter()
+            .filter(|c| c.freq_hz == 40.0 && c.gamma == 1.0 && c.seed == 1)
+            .collect();
+        assert_eq!(same.len(), 4);
+        let mut words: Vec<String> = same.iter().map(|c| c.describe(true, true)).collect();
+        assert!(
+            words.contains(&"fill 0.400 horizontal 40 Hz Gamma 1 seed 1".to_string()),
+            "{words:?}"
+        );
+        words.sort();
+        words.dedup();
+        assert_eq!(words.len(), 4, "{words:?}");
+        assert_eq!(same[0].describe(false, false), "40 Hz Gamma 1 seed 1");
     }
 
     #[test]

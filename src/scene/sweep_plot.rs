@@ -4,7 +4,9 @@
 //! rig's measurement, with the bouncing-bed onsets predicted by eq.
 //! 6.11–6.13 (thesis Fig. 6.8, 6.12, 7.10); and the efficiency map over
 //! frequency × Γ with the heuristic's motional phase in each cell and the
-//! close-packing onset drawn across it (Fig. 6.2, 6.4).
+//! onsets drawn across it (Fig. 6.2, 6.4). Close-packing onsets are long
+//! dashes, loose-packing ones short dashes, in both plots; the legends sit
+//! outside the data (right of the curves, under the map).
 
 use std::path::{Path, PathBuf};
 
@@ -13,8 +15,8 @@ use crate::scene::phases::MotionalPhase;
 use crate::scene::predict::predict_bouncing_bed;
 use crate::scene::sweep::{ConditionSummary, SweepFile, summarise};
 use crate::signals::{
-    ErrorSeries, HeatCell, HeatMap, HeatOverlay, LogXPlot, MarkerLine, RgbColor, SignalsError,
-    plot_heat_map, plot_log_x,
+    ErrorSeries, HeatCell, HeatMap, HeatOverlay, LineDash, LogXPlot, MarkerLine, RgbColor,
+    SignalsError, plot_heat_map, plot_log_x,
 };
 
 /// Draws `efficiency.{svg,png}` and `map.{svg,png}` of `file` into `dir`
@@ -100,11 +102,13 @@ fn efficiency_curves(
                 name: format!("CP onset {f} Hz: {:.1}", p.close_packing_gamma[k]),
                 x: p.close_packing_gamma[k],
                 color: k,
+                dash: LineDash::Long,
             });
             markers.push(MarkerLine {
                 name: format!("LP onset {f} Hz: {:.1}", p.loose_packing_gamma[k]),
                 x: p.loose_packing_gamma[k],
                 color: k,
+                dash: LineDash::Short,
             });
         }
     }
@@ -183,13 +187,27 @@ fn efficiency_map(
                 })
                 .collect()
         };
-        let cp = segments(&p.close_packing_gamma);
-        if !cp.is_empty() {
-            overlays.push(HeatOverlay {
-                name: "bouncing-bed onset, close packing (eq. 6.11-6.13)".into(),
-                segments: cp,
-                color: RgbColor(230, 30, 30),
-            });
+        for (name, gammas, dash) in [
+            (
+                "bouncing-bed onset, close packing (eq. 6.11-6.13)",
+                &p.close_packing_gamma,
+                LineDash::Long,
+            ),
+            (
+                "bouncing-bed onset, loose packing",
+                &p.loose_packing_gamma,
+                LineDash::Short,
+            ),
+        ] {
+            let segments = segments(gammas);
+            if !segments.is_empty() {
+                overlays.push(HeatOverlay {
+                    name: name.into(),
+                    segments,
+                    color: RgbColor(230, 30, 30),
+                    dash,
+                });
+            }
         }
     }
     HeatMap {

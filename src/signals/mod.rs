@@ -57,8 +57,9 @@ pub use lammps::read_lammps_text;
 pub use phase_model::PhaseErrorModel;
 #[cfg(feature = "plot")]
 pub use plot::{
-    CirclePanel, ErrorSeries, HeatCell, HeatMap, HeatOverlay, LogXPlot, MarkerLine, PanelStrip,
-    RgbColor, Series, SeriesStyle, plot_heat_map, plot_log_x, plot_panel_strip, plot_xy_svg,
+    CirclePanel, ErrorSeries, HeatCell, HeatMap, HeatOverlay, LineDash, LogXPlot, MarkerLine,
+    PanelStrip, RgbColor, Series, SeriesStyle, plot_heat_map, plot_log_x, plot_panel_strip,
+    plot_xy_svg,
 };
 pub use power::{
     BinSelection, ForcePolarity, HarmonicPower, PhaseCorrection, PolarityVerdict, PowerOptions,

@@ -256,12 +256,34 @@ pub struct ErrorSeries {
     pub line: bool,
 }
 
+/// How a [`MarkerLine`] or a [`HeatOverlay`] is dashed, so that two kinds of
+/// line in one colour (close- and loose-packing predictions) stay apart.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LineDash {
+    /// Long dashes: 10 px drawn, 5 px gap.
+    #[default]
+    Long,
+    /// Short dashes, nearly dots: 3 px drawn, 4 px gap.
+    Short,
+}
+
+impl LineDash {
+    /// (drawn, gap) in pixels.
+    fn pattern(self) -> (u32, u32) {
+        match self {
+            LineDash::Long => (10, 5),
+            LineDash::Short => (3, 4),
+        }
+    }
+}
+
 /// A labelled vertical line at `x` (dashed), e.g. a predicted optimum.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MarkerLine {
     pub name: String,
     pub x: f64,
     pub color: usize,
+    pub dash: LineDash,
 }
 
 /// A plot with a logarithmic x axis.
@@ -276,8 +298,15 @@ pub struct LogXPlot {
     pub reference_y: Option<f64>,
 }
 
+/// Width of the legend panel right of a [`LogXPlot`]'s data area (px).
+pub const LOG_X_LEGEND_WIDTH_PX: u32 = 200;
+
+/// Size of a [`LogXPlot`] (px): [`PLOT_SIZE_PX`] and the legend panel.
+pub const LOG_X_SIZE_PX: (u32, u32) = (PLOT_SIZE_PX.0 + LOG_X_LEGEND_WIDTH_PX, PLOT_SIZE_PX.1);
+
 /// Writes a [`LogXPlot`] (SVG or PNG by the extension). x must be positive;
-/// non-finite points are left out; at least one point is needed.
+/// non-finite points are left out; at least one point is needed. The legend
+/// is drawn in a panel right of the data area, so it never hides a point.
 pub fn plot_log_x(path: &Path, plot: &LogXPlot) -> Result<()> {
     let pts = || {
         plot.series
@@ -312,7 +341,7 @@ pub fn plot_log_x(path: &Path, plot: &LogXPlot) -> Result<()> {
     let x_range = (xmin / 1.25)..(xmax * 1.25);
     write_figure(
         path,
-        PLOT_SIZE_PX,
+        LOG_X_SIZE_PX,
         &LogXFigure {
             plot,
             x_range,
@@ -327,6 +356,62 @@ struct LogXFigure<'a> {
     y_range: Range,
 }
 
+/// What a legend entry's sample looks like.
+#[derive(Debug, Clone, Copy)]
+enum LegendSample {
+    /// A line through points (circles), width 2.
+    LineWithPoints(RGBAColor),
+    /// A filled triangle.
+    Triangle(RGBAColor),
+    /// A dashed line.
+    Dashed(RGBAColor, LineDash, u32),
+    /// A thin solid line.
+    Thin(RGBAColor),
+}
+
+/// Draws `sample` over `x0..x0 + LEGEND_SAMPLE_PX` at height `y` of `area`.
+fn draw_legend_sample<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    sample: LegendSample,
+    x0: i32,
+    y: i32,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let x1 = x0 + LEGEND_SAMPLE_PX;
+    match sample {
+        LegendSample::LineWithPoints(c) => {
+            area.draw(&PathElement::new(vec![(x0, y), (x1, y)], c.stroke_width(2)))?;
+            area.draw(&Circle::new(((x0 + x1) / 2, y), 3, c.filled()))?;
+        }
+        LegendSample::Triangle(c) => {
+            area.draw(&TriangleMarker::new(((x0 + x1) / 2, y), 5, c.filled()))?;
+        }
+        LegendSample::Dashed(c, dash, width) => {
+            let (on, off) = dash.pattern();
+            let mut x = x0;
+            while x < x1 {
+                let end = (x + on as i32).min(x1);
+                area.draw(&PathElement::new(
+                    vec![(x, y), (end, y)],
+                    c.stroke_width(width),
+                ))?;
+                x += (on + off) as i32;
+            }
+        }
+        LegendSample::Thin(c) => {
+            area.draw(&PathElement::new(vec![(x0, y), (x1, y)], c.stroke_width(1)))?;
+        }
+    }
+    Ok(())
+}
+
+/// Length of a legend entry's sample (px).
+const LEGEND_SAMPLE_PX: i32 = 30;
+/// Height of a legend line (px).
+const LEGEND_LINE_PX: i32 = 19;
+
 impl Figure for LogXFigure<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
@@ -334,8 +419,10 @@ impl Figure for LogXFigure<'_> {
     {
         let p = self.plot;
         root.fill(&WHITE)?;
-        let mut chart = ChartBuilder::on(root)
-            .caption(p.title.as_str(), ("sans-serif", 22))
+        let (w, _) = root.dim_in_pixel();
+        let body = root.titled(p.title.as_str(), ("sans-serif", 22))?;
+        let (main, side) = body.split_horizontally(w - LOG_X_LEGEND_WIDTH_PX);
+        let mut chart = ChartBuilder::on(&main)
             .margin(12)
             .x_label_area_size(48)
             .y_label_area_size(64)
@@ -347,28 +434,7 @@ impl Figure for LogXFigure<'_> {
             .x_label_formatter(&|x| format!("{x}"))
             .draw()?;
         let (y0, y1) = (self.y_range.start, self.y_range.end);
-        if let Some(r) = p.reference_y {
-            let grey = RGBColor(150, 150, 150);
-            chart
-                .draw_series(LineSeries::new(
-                    [(self.x_range.start, r), (self.x_range.end, r)],
-                    grey.stroke_width(1),
-                ))?
-                .label(format!("efficiency {r}"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
-        }
-        for m in &p.markers {
-            let color = Palette99::pick(m.color).to_rgba();
-            chart
-                .draw_series(DashedLineSeries::new(
-                    [(m.x, y0), (m.x, y1)],
-                    6,
-                    4,
-                    color.stroke_width(2),
-                ))?
-                .label(m.name.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 8, y)], color));
-        }
+        let mut legend: Vec<(String, LegendSample)> = Vec::new();
         for s in &p.series {
             let color = Palette99::pick(s.color).to_rgba();
             let ok: Vec<(f64, f64, f64)> = s
@@ -380,42 +446,69 @@ impl Figure for LogXFigure<'_> {
             if ok.is_empty() {
                 continue;
             }
-            let anno = if s.line {
+            if s.line {
                 chart.draw_series(LineSeries::new(
                     ok.iter().map(|q| (q.0, q.1)),
                     color.stroke_width(2),
-                ))?
-            } else {
-                chart.draw_series(
-                    ok.iter()
-                        .map(|q| TriangleMarker::new((q.0, q.1), 5, color.filled())),
-                )?
-            };
-            let line = s.line;
-            anno.label(s.name.as_str()).legend(move |(x, y)| {
-                if line {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                } else {
-                    PathElement::new(vec![(x + 8, y), (x + 12, y)], color.stroke_width(5))
-                }
-            });
-            if s.line {
+                ))?;
                 chart.draw_series(
                     ok.iter()
                         .map(|q| Circle::new((q.0, q.1), 3, color.filled())),
                 )?;
+                legend.push((s.name.clone(), LegendSample::LineWithPoints(color)));
+            } else {
+                chart.draw_series(
+                    ok.iter()
+                        .map(|q| TriangleMarker::new((q.0, q.1), 5, color.filled())),
+                )?;
+                legend.push((s.name.clone(), LegendSample::Triangle(color)));
             }
             chart.draw_series(ok.iter().filter(|q| q.2.is_finite() && q.2 > 0.0).map(|q| {
                 ErrorBar::new_vertical(q.0, q.1 - q.2, q.1, q.1 + q.2, color.stroke_width(1), 8)
             }))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 13))
-            .draw()?;
+        for m in &p.markers {
+            let color = Palette99::pick(m.color).to_rgba();
+            let (on, off) = m.dash.pattern();
+            chart.draw_series(DashedLineSeries::new(
+                [(m.x, y0), (m.x, y1)],
+                on,
+                off,
+                color.stroke_width(2),
+            ))?;
+            legend.push((m.name.clone(), LegendSample::Dashed(color, m.dash, 2)));
+        }
+        if let Some(r) = p.reference_y {
+            // Darker than the grid, so the level reads as a line of its own.
+            let grey = RGBColor(90, 90, 90).to_rgba();
+            chart.draw_series(LineSeries::new(
+                [(self.x_range.start, r), (self.x_range.end, r)],
+                grey.stroke_width(1),
+            ))?;
+            legend.push((format!("efficiency {r}"), LegendSample::Thin(grey)));
+        }
+        // The legend, in its own panel right of the data area.
+        if !legend.is_empty() {
+            let (x0, top) = (8, 14);
+            let bottom = top + LEGEND_LINE_PX * legend.len() as i32 + 6;
+            side.draw(&Rectangle::new(
+                [(2, top - 10), (LOG_X_LEGEND_WIDTH_PX as i32 - 6, bottom)],
+                BLACK.stroke_width(1),
+            ))?;
+            let font = ("sans-serif", 13)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Left, VPos::Center));
+            for (k, (name, sample)) in legend.iter().enumerate() {
+                let y = top + LEGEND_LINE_PX * k as i32;
+                draw_legend_sample(&side, *sample, x0, y)?;
+                side.draw(&Text::new(
+                    name.clone(),
+                    (x0 + LEGEND_SAMPLE_PX + 6, y),
+                    font.clone(),
+                ))?;
+            }
+        }
         root.present()?;
         Ok(())
     }
@@ -441,6 +534,7 @@ pub struct HeatOverlay {
     pub name: String,
     pub segments: Vec<[(f64, f64); 2]>,
     pub color: RgbColor,
+    pub dash: LineDash,
 }
 
 /// A colour, for callers that do not use plotters.
@@ -465,7 +559,11 @@ pub struct HeatMap {
     pub footnote: String,
 }
 
-/// Writes a [`HeatMap`] (SVG or PNG by the extension).
+/// Size of a [`HeatMap`] (px).
+pub const HEAT_MAP_SIZE_PX: (u32, u32) = (900, 730);
+
+/// Writes a [`HeatMap`] (SVG or PNG by the extension). The overlays' legend
+/// is drawn under the map, above the footnote, so it never hides a cell.
 pub fn plot_heat_map(path: &Path, map: &HeatMap) -> Result<()> {
     if map.columns.is_empty() || map.rows.is_empty() {
         return Err(SignalsError::Plot {
@@ -473,10 +571,16 @@ pub fn plot_heat_map(path: &Path, map: &HeatMap) -> Result<()> {
             message: "a heat map needs at least one column and one row".into(),
         });
     }
-    write_figure(path, (900, 700), &HeatFigure(map))
+    write_figure(path, HEAT_MAP_SIZE_PX, &HeatFigure(map))
 }
 
 struct HeatFigure<'a>(&'a HeatMap);
+
+/// Room under a heat map's axis label for the legend and the footnote (px).
+const HEAT_MAP_BOTTOM_PX: u32 = 64;
+/// Height of the legend line above the figure's bottom edge (px); the
+/// footnote is at 20.
+const HEAT_MAP_LEGEND_FROM_BOTTOM_PX: i32 = 46;
 
 /// Viridis, sampled at 6 stops and interpolated linearly; `t` in 0..1.
 fn viridis(t: f64) -> RGBColor {
@@ -514,7 +618,7 @@ impl Figure for HeatFigure<'_> {
         let mut chart = ChartBuilder::on(&main)
             .caption(m.title.as_str(), ("sans-serif", 22))
             .margin(12)
-            .margin_bottom(40)
+            .margin_bottom(HEAT_MAP_BOTTOM_PX)
             .x_label_area_size(56)
             .y_label_area_size(72)
             .build_cartesian_2d(0f64..nc, 0f64..nr)?;
@@ -555,6 +659,19 @@ impl Figure for HeatFigure<'_> {
                 ))?;
             }
         }
+        // The overlays under the cell texts, so a line never hides a label.
+        for o in &m.overlays {
+            let color = RGBColor(o.color.0, o.color.1, o.color.2);
+            let (on, off) = o.dash.pattern();
+            for seg in &o.segments {
+                chart.draw_series(DashedLineSeries::new(
+                    seg.iter().copied(),
+                    on,
+                    off,
+                    color.stroke_width(3),
+                ))?;
+            }
+        }
         for c in &m.cells {
             let dark = c.value.is_some_and(|v| v.is_finite() && scale(v) < 0.6);
             let color = if dark { WHITE } else { BLACK };
@@ -573,30 +690,20 @@ impl Figure for HeatFigure<'_> {
                 )))?;
             }
         }
-        for o in &m.overlays {
-            let color = RGBColor(o.color.0, o.color.1, o.color.2);
-            for (k, seg) in o.segments.iter().enumerate() {
-                let drawn = chart.draw_series(DashedLineSeries::new(
-                    seg.iter().copied(),
-                    8,
-                    4,
-                    color.stroke_width(3),
-                ))?;
-                if k == 0 {
-                    drawn.label(o.name.as_str()).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
-                    });
-                }
-            }
-        }
-        if !m.overlays.is_empty() {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 13))
-                .draw()?;
+        // The overlays' legend, one line under the map, above the footnote.
+        let legend_y = h as i32 - HEAT_MAP_LEGEND_FROM_BOTTOM_PX;
+        let mut x = 12;
+        let font = ("sans-serif", 13)
+            .into_font()
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Left, VPos::Center));
+        for o in m.overlays.iter().filter(|o| !o.segments.is_empty()) {
+            let color = RGBColor(o.color.0, o.color.1, o.color.2).to_rgba();
+            draw_legend_sample(root, LegendSample::Dashed(color, o.dash, 3), x, legend_y)?;
+            x += LEGEND_SAMPLE_PX + 6;
+            root.draw(&Text::new(o.name.clone(), (x, legend_y), font.clone()))?;
+            let (tw, _) = root.estimate_text_size(&o.name, &font)?;
+            x += tw as i32 + 24;
         }
         // Column and row names at the cell centres.
         let tick = ("sans-serif", 14).into_font();
@@ -869,6 +976,7 @@ mod tests {
                 name: "CP onset".into(),
                 x: 22.3,
                 color: 0,
+                dash: LineDash::Long,
             }],
             reference_y: Some(0.3),
         };
@@ -898,6 +1006,7 @@ mod tests {
                 name: "CP".into(),
                 segments: vec![[(0.0, 1.2), (1.0, 1.2)]],
                 color: RgbColor(255, 0, 0),
+                dash: LineDash::Long,
             }],
             footnote: "S solid-like".into(),
         };
@@ -921,6 +1030,124 @@ mod tests {
             .collect();
         assert!(leftovers.is_empty(), "temporary files left");
         assert!(plot_log_x(&dir.join("x.pdf"), &plot).is_err());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// The x and y of every `<text>` element of `svg` whose content is `name`.
+    fn text_positions(svg: &str, name: &str) -> Vec<(f64, f64)> {
+        let mut out = Vec::new();
+        for chunk in svg.split("<text").skip(1) {
+            let Some((attrs, rest)) = chunk.split_once('>') else {
+                continue;
+            };
+            // plotters writes the text on a line of its own.
+            if rest.split('<').next().map(str::trim) != Some(name) {
+                continue;
+            }
+            let attr = |key: &str| -> Option<f64> {
+                let at = attrs.find(&format!(" {key}=\""))? + key.len() + 3;
+                attrs[at..].split('"').next()?.parse().ok()
+            };
+            if let (Some(x), Some(y)) = (attr("x"), attr("y")) {
+                out.push((x, y));
+            }
+        }
+        out
+    }
+
+    /// The legends stay out of the data: a log plot's entries start right of
+    /// its data area (the legend panel is the last
+    /// `LOG_X_LEGEND_WIDTH_PX`), a heat map's below its cells (the
+    /// bottom `HEAT_MAP_BOTTOM_PX` hold the legend and the footnote); exact
+    /// pixel bounds.
+    #[test]
+    fn legends_are_drawn_outside_the_data_area() {
+        let dir = std::env::temp_dir().join(format!("vlab-plot-legend-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let plot = LogXPlot {
+            title: "efficiency".into(),
+            x_label: "Gamma".into(),
+            y_label: "eta".into(),
+            series: vec![ErrorSeries {
+                name: "DEM 40 Hz".into(),
+                points: vec![(1.0, 0.01, f64::NAN), (30.0, 0.6, 0.01), (40.0, 0.45, 0.01)],
+                color: 0,
+                line: true,
+            }],
+            markers: vec![
+                MarkerLine {
+                    name: "CP onset 40 Hz".into(),
+                    x: 22.3,
+                    color: 0,
+                    dash: LineDash::Long,
+                },
+                MarkerLine {
+                    name: "LP onset 40 Hz".into(),
+                    x: 12.5,
+                    color: 0,
+                    dash: LineDash::Short,
+                },
+            ],
+            reference_y: Some(0.3),
+        };
+        let path = dir.join("eff.svg");
+        plot_log_x(&path, &plot).expect("log plot");
+        let svg = std::fs::read_to_string(&path).expect("read");
+        let data_right = f64::from(LOG_X_SIZE_PX.0 - LOG_X_LEGEND_WIDTH_PX);
+        for name in [
+            "DEM 40 Hz",
+            "CP onset 40 Hz",
+            "LP onset 40 Hz",
+            "efficiency 0.3",
+        ] {
+            let at = text_positions(&svg, name);
+            assert_eq!(at.len(), 1, "{name}: {at:?}");
+            assert!(at[0].0 > data_right, "{name} at x = {} px", at[0].0);
+        }
+        // The two kinds of onset are dashed differently.
+        assert_ne!(LineDash::Long.pattern(), LineDash::Short.pattern());
+
+        let map = HeatMap {
+            title: "map".into(),
+            x_label: "f".into(),
+            y_label: "Gamma".into(),
+            columns: vec!["20".into(), "40".into()],
+            rows: vec!["1".into(), "40".into()],
+            cells: vec![HeatCell {
+                col: 1,
+                row: 1,
+                value: Some(0.45),
+                text: "BB".into(),
+            }],
+            value_label: "eta".into(),
+            value_range: (0.0, 1.0),
+            overlays: vec![
+                HeatOverlay {
+                    name: "close packing".into(),
+                    segments: vec![[(1.0, 1.5), (2.0, 1.5)]],
+                    color: RgbColor(255, 0, 0),
+                    dash: LineDash::Long,
+                },
+                HeatOverlay {
+                    name: "loose packing".into(),
+                    segments: vec![[(0.0, 0.8), (1.0, 0.8)]],
+                    color: RgbColor(255, 0, 0),
+                    dash: LineDash::Short,
+                },
+            ],
+            footnote: "note".into(),
+        };
+        let path = dir.join("map.svg");
+        plot_heat_map(&path, &map).expect("heat map");
+        let svg = std::fs::read_to_string(&path).expect("read");
+        let cells_bottom = f64::from(HEAT_MAP_SIZE_PX.1 - HEAT_MAP_BOTTOM_PX);
+        let legend = ["close packing", "loose packing"].map(|name| {
+            let at = text_positions(&svg, name);
+            assert_eq!(at.len(), 1, "{name}: {at:?}");
+            assert!(at[0].1 > cells_bottom, "{name} at y = {} px", at[0].1);
+            at[0]
+        });
+        assert!(legend[1].0 > legend[0].0, "side by side: {legend:?}");
         std::fs::remove_dir_all(dir).ok();
     }
 
