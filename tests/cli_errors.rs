@@ -41,6 +41,23 @@ fn bad_drive_parameters() {
     );
 }
 
+/// The record's two whole periods: refused by the key when a scene file set
+/// the window, by the flag when the flag did.
+#[test]
+fn steady_window_too_short_for_yangs_method() {
+    let from_file = refuses(
+        &["shake", "--scene", "scene.toml"],
+        Some("[drive]\nsteady_cycles = 1\n"),
+        &["drive.steady_cycles = 1: must be at least 2", "Yang's method"],
+    );
+    assert!(!from_file.contains("--steady-cycles"), "{from_file}");
+    refuses(
+        &["shake", "--steady-cycles", "1"],
+        None,
+        &["--steady-cycles = 1: must be at least 2", "Yang's method"],
+    );
+}
+
 #[test]
 fn time_step_above_stability_limit() {
     refuses(

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
@@ -14,7 +14,7 @@ use vlab::scene::dump::VtkDump;
 use vlab::scene::file::{Orientation, Scene, SceneOverrides};
 use vlab::scene::measurement::{CalibrationSource, ShakeSetup};
 use vlab::scene::shake::{
-    ShakeSummary, check_drive, default_out_dir, resolve_rig, run_shake_from, run_shake_on_bed,
+    ShakeSummary, check_drive, check_record_window, default_out_dir, resolve_rig, run_shake_from, run_shake_on_bed,
 };
 use vlab::scene::snapshots::PhaseSnapshots;
 use vlab::signals::PhaseCalibration;
@@ -148,12 +148,7 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         scene.set_record_length(d, a.freq_hz);
     }
     check_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
-    if scene.drive.steady_cycles < 2 {
-        bail!(
-            "--steady-cycles = {}: must be at least 2: the rig's record needs 2 whole periods for Yang's method",
-            scene.drive.steady_cycles
-        );
-    }
+    check_record_window(&scene).map_err(|e| flags.name_flags(e.into()))?;
     let g = scene.simulation.gravity_mps2;
     let (rig, kind) = resolve_rig(&a.rig, a.shaker, a.freq_hz, a.gamma, g)
         .with_context(|| format!("--rig {}", a.rig))?;

@@ -42,7 +42,7 @@ use crate::scene::measurement::{
 use crate::scene::record::TruthSamples;
 use crate::scene::settle::{SettledBed, prepare_drive};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
-use crate::validation::{InvalidParameter, positive};
+use crate::validation::{InvalidParameter, positive, require};
 
 /// Sample rate of the truth record (Hz), the thesis DAQ's.
 pub const TRUTH_SAMPLE_RATE_HZ: f64 = 40_000.0;
@@ -95,6 +95,25 @@ pub fn check_drive(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<(), SceneE
         return Err(InvalidParameter::new("freq_hz", freq_hz, "Hz", why).into());
     }
     Ok(())
+}
+
+/// Whole drive periods Yang's method needs in the rig's record.
+pub const MIN_RECORD_PERIODS: u32 = 2;
+
+/// Checks that the scene's steady window, `drive.steady_cycles`, holds the
+/// [`MIN_RECORD_PERIODS`] whole periods Yang's method needs in the rig's
+/// record.
+pub fn check_record_window(scene: &Scene) -> Result<(), InvalidParameter> {
+    let n = scene.drive.steady_cycles;
+    require(
+        n >= MIN_RECORD_PERIODS,
+        "drive.steady_cycles",
+        n,
+        "",
+        format!(
+            "at least {MIN_RECORD_PERIODS}: the rig's record needs {MIN_RECORD_PERIODS} whole periods for Yang's method"
+        ),
+    )
 }
 
 /// Default output folder of a shake: `signals/<scene>-<freq>Hz-G<gamma>`.

@@ -46,7 +46,7 @@ use crate::scene::phases::{
 };
 use crate::scene::predict::{CLOSE_PACKING, effective_clearance_m};
 use crate::scene::settle::SettledBed;
-use crate::scene::shake::{check_drive, resolve_rig, run_shake_on_bed};
+use crate::scene::shake::{check_drive, check_record_window, resolve_rig, run_shake_on_bed};
 use crate::validation::InvalidParameter;
 
 /// First line of every sweep file.
@@ -270,16 +270,8 @@ impl SweepPlan {
             )?;
         }
         // A drive run until steady keeps at least 5/8 of 4 cycles.
-        if matches!(self.scene.drive.cycles, CyclesSpec::Count(_))
-            && self.scene.drive.steady_cycles < 2
-        {
-            return Err(InvalidParameter::new(
-                "drive.steady_cycles",
-                self.scene.drive.steady_cycles,
-                "",
-                "at least 2: the rig's record needs 2 whole periods for Yang's method",
-            )
-            .into());
+        if matches!(self.scene.drive.cycles, CyclesSpec::Count(_)) {
+            check_record_window(&self.scene)?;
         }
         for &f in &self.freqs_hz {
             for &g in &self.gammas {
