@@ -48,7 +48,10 @@ fn steady_window_too_short_for_yangs_method() {
     let from_file = refuses(
         &["shake", "--scene", "scene.toml"],
         Some("[drive]\nsteady_cycles = 1\n"),
-        &["drive.steady_cycles = 1: must be at least 2", "Yang's method"],
+        &[
+            "drive.steady_cycles = 1: must be at least 2",
+            "Yang's method",
+        ],
     );
     assert!(!from_file.contains("--steady-cycles"), "{from_file}");
     refuses(

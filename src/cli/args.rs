@@ -170,6 +170,11 @@ impl FlagKeys {
         self
     }
 
+    /// What to call `key`: the flag that set it, else the key itself.
+    pub fn name<'a>(&'a self, key: &'a str) -> &'a str {
+        self.flag(key).unwrap_or(key)
+    }
+
     /// The flag that set `key`, if any.
     fn flag(&self, key: &str) -> Option<&str> {
         self.0

@@ -178,6 +178,19 @@ fn height_flag(a: &DropArgs) -> &'static str {
     }
 }
 
+/// The set-up keys these flags set.
+fn flag_keys(a: &DropArgs) -> args::FlagKeys {
+    args::FlagKeys::new()
+        .set(true, "diameter_m", "--diameter-m")
+        .set(a.cor.is_some(), "restitution", "--cor")
+        .set(true, "height_m", height_flag(a))
+        .set(
+            a.sample_rate_hz.is_some(),
+            "daq.sample_rate_hz",
+            "--sample-rate-hz",
+        )
+}
+
 fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
     let preset = a.particle.preset();
     let mut rig = match &a.rig {
@@ -202,15 +215,7 @@ fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
         }
         seen.push(millimetres(h));
     }
-    let flags = args::FlagKeys::new()
-        .set(true, "diameter_m", "--diameter-m")
-        .set(a.cor.is_some(), "restitution", "--cor")
-        .set(true, "height_m", height_flag(a))
-        .set(
-            a.sample_rate_hz.is_some(),
-            "daq.sample_rate_hz",
-            "--sample-rate-hz",
-        );
+    let flags = flag_keys(a);
     heights
         .iter()
         .map(|&height_m| {
@@ -242,7 +247,7 @@ pub fn run(a: DropArgs) -> Result<()> {
         .iter()
         .max_by(|x, y| x.height_m.total_cmp(&y.height_m))
         .unwrap_or(first);
-    if let Some(w) = fastest.sampling_warning()? {
+    if let Some(w) = fastest.sampling_warning_naming(flag_keys(&a).name("daq.sample_rate_hz"))? {
         warnings.push(w);
     }
     let out_dir = a

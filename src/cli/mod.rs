@@ -12,6 +12,7 @@ mod calibrate;
 mod cor;
 mod drop;
 mod export;
+mod hints;
 mod impact;
 mod plot;
 mod predict;
@@ -98,7 +99,7 @@ pub fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {}", one_line(&err));
+            eprintln!("error: {}", hints::with_flag_hint(one_line(&err), &err));
             ExitCode::FAILURE
         }
     }

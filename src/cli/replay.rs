@@ -18,7 +18,7 @@ use vlab::scene::replay::{
 };
 use vlab::signals::PhaseCalibration;
 
-use super::args;
+use super::{args, hints};
 
 #[derive(Debug, Clone, Args)]
 #[command(allow_negative_numbers = true)]
@@ -131,7 +131,10 @@ pub fn run(a: ReplayArgs) -> Result<()> {
     let mut run = made.keep_if_ok(result)?;
     run.write(&out_dir, &rig)?;
     for w in &run.summary.warnings {
-        eprintln!("warning: {w}");
+        match w.option {
+            Some(o) => eprintln!("warning: {w} ({})", hints::replay_option_flag(o)),
+            None => eprintln!("warning: {w}"),
+        }
     }
     if a.json {
         print!("{}", run.summary_json());

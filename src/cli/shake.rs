@@ -14,7 +14,8 @@ use vlab::scene::dump::VtkDump;
 use vlab::scene::file::{Orientation, Scene, SceneOverrides};
 use vlab::scene::measurement::{CalibrationSource, ShakeSetup};
 use vlab::scene::shake::{
-    ShakeSummary, check_drive, check_record_window, default_out_dir, resolve_rig, run_shake_from, run_shake_on_bed,
+    ShakeSummary, check_drive, check_record_window, default_out_dir, resolve_rig, run_shake_from,
+    run_shake_on_bed,
 };
 use vlab::scene::snapshots::PhaseSnapshots;
 use vlab::signals::PhaseCalibration;

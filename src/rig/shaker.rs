@@ -568,7 +568,7 @@ mod tests {
             "{stroke}"
         );
         assert!(
-            stroke.ends_with("lower --gamma or use --rig ideal"),
+            stroke.ends_with("lower gamma or use the ideal rig"),
             "{stroke}"
         );
         let msg = check_limits(&rig, 20.0, 15.0, G)
@@ -582,7 +582,7 @@ mod tests {
             accel.starts_with("Gamma 41 at 40 Hz needs 402.2 m/s^2 peak acceleration; the thesis-shaker rig allows 392.4 m/s^2 (acceleration limit"),
             "{accel}"
         );
-        assert!(accel.contains("--rig ideal"), "{accel}");
+        assert!(accel.contains("the ideal rig"), "{accel}");
         for (f, gamma) in [(20.0, 12.0), (40.0, 40.0), (160.0, 40.0), (1024.0, 40.0)] {
             check_limits(&rig, f, gamma, G).unwrap_or_else(|e| panic!("{f} Hz Gamma {gamma}: {e}"));
         }

@@ -310,8 +310,15 @@ impl DropSetup {
     /// than two samples per first pulse, or the plate's ring above the Nyquist
     /// frequency (it aliases). Point-sampled, an impact can then be caught near
     /// its zero crossings, timed a ring period late or missed altogether; the
-    /// estimate shows a missed impact as a triple with `e > 1`.
+    /// estimate shows a missed impact as a triple with `e > 1`. The sample
+    /// rate is named by its rig key, `daq.sample_rate_hz`.
     pub fn sampling_warning(&self) -> Result<Option<String>, DropError> {
+        self.sampling_warning_naming("daq.sample_rate_hz")
+    }
+
+    /// [`DropSetup::sampling_warning`] with the sample rate named `name` (a
+    /// caller's own name for the value: the flag that set it).
+    pub fn sampling_warning_naming(&self, name: &str) -> Result<Option<String>, DropError> {
         let fs = self.rig.daq.sample_rate_hz;
         let (pulse, _) = self.min_sample_rate_hz()?;
         let ring_hz = Plate::from_spec(&self.rig)?.ring_freq_hz();
@@ -320,7 +327,7 @@ impl DropSetup {
             return Ok(None);
         }
         Ok(Some(format!(
-            "--sample-rate-hz {fs} Hz barely resolves the impacts: the transducer's first pulse \
+            "{name} {fs} Hz barely resolves the impacts: the transducer's first pulse \
              ({:.1} us) spans {:.1} sample periods and the plate's {:.1} kHz ring is {} the \
              {:.1} kHz Nyquist frequency, so an impact can be sampled near its zero crossings, \
              timed a ring period late or missed (use at least {:.0} Hz, or a lower detection \

@@ -114,6 +114,14 @@ pub enum SceneError {
         path: std::path::PathBuf,
         problem: String,
     },
+    /// A record that cannot be replayed without an option it does not
+    /// declare; `problem` says which.
+    #[error("record {}: {problem}", path.display())]
+    RecordNeeds {
+        path: std::path::PathBuf,
+        problem: String,
+        option: crate::scene::replay::ReplayOption,
+    },
     #[error(transparent)]
     Dem(#[from] DemError),
     #[error(transparent)]

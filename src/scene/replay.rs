@@ -100,6 +100,64 @@ pub struct ColumnMap {
     pub acceleration: Option<String>,
 }
 
+/// A replay option that an error or a warning asks the caller to give,
+/// named as the field of [`ReplayOptions`] that holds it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReplayOption {
+    /// `freq_hz`.
+    FreqHz,
+    /// `particle_mass_kg`.
+    ParticleMassKg,
+    /// `columns.force`.
+    ForceColumn,
+    /// `columns.velocity` (or `displacement`, `acceleration`).
+    MotionColumn,
+}
+
+impl ReplayOption {
+    /// The field's name.
+    pub fn key(self) -> &'static str {
+        match self {
+            ReplayOption::FreqHz => "freq_hz",
+            ReplayOption::ParticleMassKg => "particle_mass_kg",
+            ReplayOption::ForceColumn => "columns.force",
+            ReplayOption::MotionColumn => "columns.velocity",
+        }
+    }
+}
+
+impl std::fmt::Display for ReplayOption {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.key())
+    }
+}
+
+/// A warning of a replay, and the option that would lift it; written out
+/// (`summary.json`) as its text.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplayWarning {
+    pub text: String,
+    pub option: Option<ReplayOption>,
+}
+
+impl From<String> for ReplayWarning {
+    fn from(text: String) -> Self {
+        ReplayWarning { text, option: None }
+    }
+}
+
+impl std::fmt::Display for ReplayWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.text)
+    }
+}
+
+impl Serialize for ReplayWarning {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.text)
+    }
+}
+
 /// How a record is replayed. `None` fields come from the record's
 /// declarations (a vlab CSV's metadata, `# key: value` comments such as those
 /// of a `vlab export lammps` record) or, failing that, from the record itself
@@ -242,14 +300,18 @@ impl EnclosureRecord {
                 known.contains(&bare.as_str())
             }))
         };
-        let force = find(&names.force, "force", &FORCE_NAMES)?.ok_or_else(|| {
-            refuse(format!(
-                "no column of the particles' force on the enclosure among [{}]: name it \
-                 particle_force_axial (N, the particles' force on the enclosure, positive along \
-                 the drive axis), or give its name (vlab replay --column force=NAME)",
-                available()
-            ))
-        })?;
+        let force =
+            find(&names.force, "force", &FORCE_NAMES)?.ok_or_else(|| SceneError::RecordNeeds {
+                path: table.path.clone(),
+                problem: format!(
+                    "no column of the particles' force on the enclosure among [{}]: name it \
+                     particle_force_axial (N, the particles' force on the enclosure, positive \
+                     along the drive axis), or give its name as {}",
+                    available(),
+                    ReplayOption::ForceColumn
+                ),
+                option: ReplayOption::ForceColumn,
+            })?;
         let velocity = find(&names.velocity, "velocity", &VELOCITY_NAMES)?;
         let displacement = find(&names.displacement, "displacement", &DISPLACEMENT_NAMES)?;
         let acceleration = find(&names.acceleration, "acceleration", &ACCELERATION_NAMES)?;
@@ -258,12 +320,17 @@ impl EnclosureRecord {
             (None, Some(x), _) => (x, "displacement"),
             (None, None, Some(a)) => (a, "acceleration"),
             (None, None, None) => {
-                return Err(refuse(format!(
-                    "no column of the enclosure's motion among [{}]: name one enclosure_velocity \
-                     (m/s), enclosure_displacement (m) or enclosure_acceleration (m/s^2), or give \
-                     its name (vlab replay --column velocity=NAME)",
-                    available()
-                )));
+                return Err(SceneError::RecordNeeds {
+                    path: table.path.clone(),
+                    problem: format!(
+                        "no column of the enclosure's motion among [{}]: name one \
+                         enclosure_velocity (m/s), enclosure_displacement (m) or \
+                         enclosure_acceleration (m/s^2), or give its name as {}",
+                        available(),
+                        ReplayOption::MotionColumn
+                    ),
+                    option: ReplayOption::MotionColumn,
+                });
             }
         };
         for (column, unit) in [
@@ -415,7 +482,7 @@ pub struct ReplaySummary {
     pub push_step_s: f64,
     pub truth: RecordTruth,
     pub measured: ReplayMeasured,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<ReplayWarning>,
     pub files: Vec<String>,
 }
 
@@ -463,16 +530,23 @@ pub fn replay_record(
         (None, Some(f)) => (f, Source::Record),
         (None, None) => {
             let f = estimate_freq_hz(record.start_s, h, record.motion.velocity_samples_mps())
-                .ok_or_else(|| SceneError::Record {
+                .ok_or_else(|| SceneError::RecordNeeds {
                     path: table.path.clone(),
-                    problem: "the record does not state its drive frequency and its velocity \
-                              does not oscillate enough to tell it: give it (vlab replay --freq HZ)"
-                        .into(),
+                    problem: format!(
+                        "the record does not state its drive frequency and its velocity does not \
+                         oscillate enough to tell it: give it as {}",
+                        ReplayOption::FreqHz
+                    ),
+                    option: ReplayOption::FreqHz,
                 })?;
-            warnings.push(format!(
-                "the record does not state its drive frequency; {f:.4} Hz was estimated from its \
-                 velocity (give --freq for an exact window of whole periods)"
-            ));
+            warnings.push(ReplayWarning {
+                text: format!(
+                    "the record does not state its drive frequency; {f:.4} Hz was estimated from \
+                     its velocity (give {} for an exact window of whole periods)",
+                    ReplayOption::FreqHz
+                ),
+                option: Some(ReplayOption::FreqHz),
+            });
             (f, Source::Estimated)
         }
     };
@@ -490,13 +564,13 @@ pub fn replay_record(
     }
     let sample_rate_hz = rig.daq.sample_rate_hz;
     if h > 1.0 / sample_rate_hz * (1.0 + 1e-9) {
-        warnings.push(format!(
+        warnings.push(ReplayWarning::from(format!(
             "the record steps {h:.4e} s, coarser than the DAQ's {:.4e} s: each value is held over \
              its interval, so the record's content above {:.0} Hz is that of the hold, not of \
              the damper",
             1.0 / sample_rate_hz,
             0.5 / h
-        ));
+        )));
     }
 
     // The window: the last whole periods the record covers.
@@ -546,10 +620,10 @@ pub fn replay_record(
         }
         Some(n) => n,
         None if available < f64::from(DEFAULT_STEADY_CYCLES) => {
-            warnings.push(format!(
+            warnings.push(ReplayWarning::from(format!(
                 "the record covers {available} whole periods, fewer than the {DEFAULT_STEADY_CYCLES} \
                  the thesis measured; all {available} are used"
-            ));
+            )));
             available as u32
         }
         None => DEFAULT_STEADY_CYCLES,
@@ -597,11 +671,13 @@ pub fn replay_record(
         (Some(m), _) => (Some(m), Some(Source::Given)),
         (None, Some(m)) => (Some(m), Some(Source::Record)),
         (None, None) => {
-            warnings.push(
-                "the record does not state the particle mass: no efficiency (give \
-                     --particle-mass-kg)"
-                    .into(),
-            );
+            warnings.push(ReplayWarning {
+                text: format!(
+                    "the record does not state the particle mass: no efficiency (give {})",
+                    ReplayOption::ParticleMassKg
+                ),
+                option: Some(ReplayOption::ParticleMassKg),
+            });
             (None, None)
         }
     };
@@ -696,10 +772,10 @@ pub fn replay_record(
     }
     let truth_energy = truth_power / freq_hz;
     if truth_power <= 0.0 {
-        warnings.push(format!(
+        warnings.push(ReplayWarning::from(format!(
             "the record's input power is {truth_power:.4e} W, not positive: is the force the \
              enclosure's on the particles rather than the particles' on the enclosure (the sign)?"
-        ));
+        )));
     }
     let e_max_j = particle_mass_kg
         .map(|m| max_energy_per_cycle_j(m, gamma, freq_hz, g))
@@ -721,9 +797,7 @@ pub fn replay_record(
         efficiency: measured_efficiency,
         power_stderr_w: blocks.map(|b| b.stderr),
         energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / freq_hz),
-        efficiency_stderr: blocks
-            .zip(e_max_j)
-            .map(|(b, e)| b.stderr / freq_hz / e),
+        efficiency_stderr: blocks.zip(e_max_j).map(|(b, e)| b.stderr / freq_hz / e),
         phase_correction_rad: corrected.phase_correction_rad,
         error_vs_record_rel: corrected.energy_per_cycle_j / truth_energy - 1.0,
         uncorrected_energy_per_cycle_j: raw.energy_per_cycle_j,
@@ -735,15 +809,15 @@ pub fn replay_record(
         rig: rig.name.clone(),
         clipping: daq_report.clipping_warnings(),
     };
-    warnings.extend(measured.clipping.iter().cloned());
+    warnings.extend(measured.clipping.iter().cloned().map(ReplayWarning::from));
     if table.format == crate::signals::TableFormat::LammpsText
         && !table.comments.contains_key("units")
     {
-        warnings.push(
+        warnings.push(ReplayWarning::from(
             "the record does not state its LAMMPS unit system (a '# units: si' comment); it was \
              read as SI"
-                .into(),
-        );
+                .to_string(),
+        ));
     }
     let summary = ReplaySummary {
         vlab_version: env!("CARGO_PKG_VERSION"),

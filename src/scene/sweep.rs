@@ -71,11 +71,20 @@ pub enum SweepError {
     },
     #[error("{path} is not a sweep file: {reason}")]
     NotASweep { path: PathBuf, reason: String },
-    #[error("{path} holds another sweep ({what} differ{s}): {hint}", s = if what.ends_with('s') { "" } else { "s" })]
-    OtherSweep {
-        path: PathBuf,
-        what: String,
-        hint: String,
+    /// A sweep file is already there and `resume` was not asked for.
+    #[error("{} exists: resume it, or choose another folder", path.display())]
+    Exists { path: PathBuf },
+    /// Resuming a file of another sweep.
+    #[error("{path} holds another sweep ({what} differ{s}): resume it with the plan it was started with, or choose another folder", s = if what.ends_with('s') { "" } else { "s" })]
+    OtherSweep { path: PathBuf, what: String },
+    /// Merging a shard that has not run all its conditions.
+    #[error(
+        "cannot merge: shard {shard} lacks {lacking} of its {of} conditions: finish it by resuming it"
+    )]
+    UnfinishedShard {
+        shard: Shard,
+        lacking: usize,
+        of: usize,
     },
     #[error("cannot merge: {0}")]
     Merge(String),
@@ -1075,12 +1084,7 @@ pub fn run_sweep(
     let header = plan.header(shard);
     let mut file = if path.exists() {
         if !resume {
-            return Err(SweepError::OtherSweep {
-                path: path.clone(),
-                what: "nothing yet, but the file exists".into(),
-                hint: "pass --resume to continue it, or choose another --out".into(),
-            }
-            .into_exists());
+            return Err(SweepError::Exists { path });
         }
         let old = SweepFile::read(&path)?;
         for (what, same) in [
@@ -1098,7 +1102,6 @@ pub fn run_sweep(
                 return Err(SweepError::OtherSweep {
                     path,
                     what: what.into(),
-                    hint: "resume with the same arguments it was started with, or choose another --out".into(),
                 });
             }
         }
@@ -1215,17 +1218,6 @@ pub fn run_sweep(
     Ok(file)
 }
 
-impl SweepError {
-    fn into_exists(self) -> SweepError {
-        match self {
-            SweepError::OtherSweep { path, hint, .. } => {
-                SweepError::Merge(format!("{} exists: {hint}", path.display()))
-            }
-            e => e,
-        }
-    }
-}
-
 /// Joins the shard files of one sweep into the file the unsharded sweep
 /// writes (rows in canonical order, shard `1/1`).
 pub fn merge_shards(files: &[SweepFile]) -> Result<SweepFile, SweepError> {
@@ -1281,11 +1273,11 @@ pub fn merge_shards(files: &[SweepFile]) -> Result<SweepFile, SweepError> {
         let have: std::collections::HashSet<_> = f.rows.iter().map(|r| r.condition.key()).collect();
         let lacking = expected.iter().filter(|k| !have.contains(k)).count();
         if lacking > 0 {
-            return Err(SweepError::Merge(format!(
-                "shard {} lacks {lacking} of its {} conditions: finish it with --resume",
-                f.header.shard,
-                expected.len()
-            )));
+            return Err(SweepError::UnfinishedShard {
+                shard: f.header.shard,
+                lacking,
+                of: expected.len(),
+            });
         }
         rows.extend(f.rows.iter().cloned());
     }

@@ -289,7 +289,7 @@ pub enum CsvErrorKind {
         byte: u8,
     },
     /// The field separator cannot be told from the file.
-    #[error("{problem}; name it with --delimiter (',', ';' or tab)")]
+    #[error("{problem}; name the delimiter: ',', ';' or tab")]
     AmbiguousDelimiter {
         /// What makes it ambiguous.
         problem: String,
