@@ -27,7 +27,7 @@ use super::error::{InvalidParameter, RigError, finite, non_negative, positive};
 use super::file::{RigFile, RigKind, check_header, shaker_kind};
 use super::filter::{MAX_LOW_PASS_ORDER, butterworth_response, high_pass_response};
 use crate::signals::{PhaseErrorModel, wrap_phase_rad};
-use crate::validation::count_in;
+use crate::validation::{Bound, count_in, in_range};
 
 /// Name of the default rig.
 pub const DEFAULT_RIG: &str = "thesis-shaker";
@@ -502,23 +502,20 @@ impl ElectrodynamicSpec {
             self.amplifier_gain_v_per_v,
             "V/V",
         )?;
-        if !(self.loop_gain > 0.0 && self.loop_gain <= 1.0) {
-            return Err(RigError::from(InvalidParameter::new(
-                k("loop_gain"),
-                self.loop_gain,
-                "",
-                "in (0, 1]",
-            )));
-        }
-        let f = self.feedforward_particle_fraction;
-        if !(0.0..=1.0).contains(&f) {
-            return Err(RigError::from(InvalidParameter::new(
-                k("feedforward_particle_fraction"),
-                f,
-                "",
-                "in [0, 1]",
-            )));
-        }
+        in_range(
+            &k("loop_gain"),
+            self.loop_gain,
+            "",
+            Bound::Open(0.0),
+            Bound::Closed(1.0),
+        )?;
+        in_range(
+            &k("feedforward_particle_fraction"),
+            self.feedforward_particle_fraction,
+            "",
+            Bound::Closed(0.0),
+            Bound::Closed(1.0),
+        )?;
         Ok(())
     }
 }

@@ -513,14 +513,6 @@ pub enum WavErrorKind {
         /// What is wrong.
         problem: String,
     },
-    /// The sample rate cannot be stored in a WAV header.
-    #[error(
-        "sample rate {sample_rate_hz} Hz: a WAV header holds a whole number of hertz in 1..=4294967295"
-    )]
-    RateNotWholeHertz {
-        /// The rate.
-        sample_rate_hz: f64,
-    },
     /// Too many channels for a WAV file.
     #[error("{channels} channels: a WAV file holds at most 65535")]
     TooManyChannels {

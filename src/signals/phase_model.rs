@@ -29,6 +29,7 @@ use std::f64::consts::PI;
 use serde::{Deserialize, Serialize};
 
 use super::error::{Result, SignalsError};
+use crate::validation::{InvalidParameter, finite, non_negative, positive};
 
 /// Relative determinant below which a fit's two frequencies count as one.
 const FIT_MIN_SPREAD: f64 = 1e-9;
@@ -58,32 +59,22 @@ impl PhaseErrorModel {
             + skew_lead_rad(self.skew_s, freq_hz)
     }
 
-    /// Checks that corners are finite and non-negative and the skew finite.
-    pub fn validate(&self) -> Result<()> {
-        let corners = [self.force_high_pass_hz, self.accel_high_pass_hz];
-        if corners.iter().all(|c| c.is_finite() && *c >= 0.0) && self.skew_s.is_finite() {
-            return Ok(());
-        }
-        Err(SignalsError::InvalidCalibration {
-            reason: format!(
-                "phase-error model: high-pass corners {} Hz (force) and {} Hz (acceleration) \
-                 must be finite and >= 0, skew {} s finite",
-                self.force_high_pass_hz, self.accel_high_pass_hz, self.skew_s
-            ),
-        })
+    /// Checks that corners are finite and non-negative and the skew finite;
+    /// a refusal names the field.
+    pub fn validate(&self) -> std::result::Result<(), InvalidParameter> {
+        non_negative("force_high_pass_hz", self.force_high_pass_hz, "Hz")?;
+        non_negative("accel_high_pass_hz", self.accel_high_pass_hz, "Hz")?;
+        finite("skew_s", self.skew_s, "s")?;
+        Ok(())
     }
 
     /// Least-squares fit of (M2) to `(freq_hz, phase_error_rad)` points at
     /// two or more distinct positive frequencies (see the module docs).
     pub fn fit(points: &[(f64, f64)]) -> Result<Self> {
         let bad = |reason: String| SignalsError::InvalidCalibration { reason };
-        if let Some((f, phi)) = points
-            .iter()
-            .find(|(f, phi)| !(f.is_finite() && *f > 0.0 && phi.is_finite()))
-        {
-            return Err(bad(format!(
-                "phase-error fit: point ({f} Hz, {phi} rad) must have a positive frequency and a finite phase"
-            )));
+        for (i, &(f, phi)) in points.iter().enumerate() {
+            positive(&format!("points[{i}].freq_hz"), f, "Hz")?;
+            finite(&format!("points[{i}].phase_error_rad"), phi, "rad")?;
         }
         // Normal equations of phi = c x + tau y, x = 1/f, y = 2 pi f.
         let (mut sxx, mut sxy, mut syy, mut sxp, mut syp) = (0.0, 0.0, 0.0, 0.0, 0.0);
