@@ -91,6 +91,10 @@ fn signals_hint(e: &SignalsError) -> Option<&'static str> {
             kind: CsvErrorKind::AmbiguousDelimiter { .. },
             ..
         } => Some("--delimiter"),
+        SignalsError::NotInMetadata {
+            parameter: "freq_hz",
+            ..
+        } => Some("--freq HZ"),
         _ => None,
     }
 }

@@ -68,6 +68,7 @@ use crate::signals::{
     efficiency, max_energy_per_cycle_j, read_table,
 };
 use crate::validation::{InvalidParameter, positive};
+use crate::warning::Warning;
 
 /// The rig is stepped at most this far apart (s): the thesis' DEM step.
 pub const PUSH_STEP_S: f64 = 1e-6;
@@ -132,31 +133,8 @@ impl std::fmt::Display for ReplayOption {
     }
 }
 
-/// A warning of a replay, and the option that would lift it; written out
-/// (`summary.json`) as its text.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ReplayWarning {
-    pub text: String,
-    pub option: Option<ReplayOption>,
-}
-
-impl From<String> for ReplayWarning {
-    fn from(text: String) -> Self {
-        ReplayWarning { text, option: None }
-    }
-}
-
-impl std::fmt::Display for ReplayWarning {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.text)
-    }
-}
-
-impl Serialize for ReplayWarning {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(&self.text)
-    }
-}
+/// A warning of a replay, and the option that would lift it.
+pub type ReplayWarning = Warning<ReplayOption>;
 
 /// How a record is replayed. `None` fields come from the record's
 /// declarations (a vlab CSV's metadata, `# key: value` comments such as those
@@ -539,14 +517,14 @@ pub fn replay_record(
                     ),
                     option: ReplayOption::FreqHz,
                 })?;
-            warnings.push(ReplayWarning {
-                text: format!(
+            warnings.push(ReplayWarning::advising(
+                format!(
                     "the record does not state its drive frequency; {f:.4} Hz was estimated from \
                      its velocity (give {} for an exact window of whole periods)",
                     ReplayOption::FreqHz
                 ),
-                option: Some(ReplayOption::FreqHz),
-            });
+                ReplayOption::FreqHz,
+            ));
             (f, Source::Estimated)
         }
     };
@@ -671,13 +649,13 @@ pub fn replay_record(
         (Some(m), _) => (Some(m), Some(Source::Given)),
         (None, Some(m)) => (Some(m), Some(Source::Record)),
         (None, None) => {
-            warnings.push(ReplayWarning {
-                text: format!(
+            warnings.push(ReplayWarning::advising(
+                format!(
                     "the record does not state the particle mass: no efficiency (give {})",
                     ReplayOption::ParticleMassKg
                 ),
-                option: Some(ReplayOption::ParticleMassKg),
-            });
+                ReplayOption::ParticleMassKg,
+            ));
             (None, None)
         }
     };

@@ -125,6 +125,17 @@ pub enum SignalsError {
         /// Previous value.
         prev_time_s: f64,
     },
+    /// A value the record's metadata does not hold and the caller did not
+    /// give.
+    #[error("unknown {what}: the record's metadata has no {metadata_key}; give {parameter}")]
+    NotInMetadata {
+        /// What it is, in words.
+        what: &'static str,
+        /// The metadata key that would have held it.
+        metadata_key: &'static str,
+        /// The parameter that gives it.
+        parameter: &'static str,
+    },
     /// A phase calibration table is unusable.
     #[error("phase calibration: {reason}")]
     InvalidCalibration {
