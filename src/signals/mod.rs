@@ -54,8 +54,9 @@ pub use calibration::{
 pub use csv::{CsvReadOptions, read_csv, read_csv_table, read_csv_with, write_csv};
 pub use error::{CsvErrorKind, RecordErrorKind, Result, SignalsError, TdmsErrorKind, WavErrorKind};
 pub use impacts::{
-    CorEstimate, DropTestResult, Impact, ImpactDetection, ImpactParams, Polarity, detect_impacts,
-    estimate_cor, restitution_from_impact_times,
+    CorEstimate, CorInput, CorReport, CorWarning, DropTestResult, Impact, ImpactDetection,
+    ImpactParams, ImpactRow, Polarity, cor_report, detect_impacts, estimate_cor,
+    restitution_from_impact_times,
 };
 pub use lammps::read_lammps_text;
 pub use phase_model::PhaseErrorModel;
