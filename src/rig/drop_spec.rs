@@ -86,20 +86,7 @@ pub struct RecordSpec {
 impl DropRigSpec {
     /// The force channel in common terms.
     pub fn force_channel(&self) -> ChannelParams {
-        let f = &self.force;
-        ChannelParams {
-            name: "force",
-            unit: "N",
-            sensitivity_unit: "V/N",
-            section: "force",
-            sensitivity: f.sensitivity_v_per_n,
-            noise_rms: f.noise_rms_n,
-            conditioner_gain: f.conditioner_gain,
-            high_pass_hz: f.high_pass_hz,
-            low_pass: f.low_pass,
-            sample_skew_s: f.sample_skew_s,
-            sampling: f.sampling,
-        }
+        self.force.params()
     }
 
     /// Undamped natural frequency of the plate on its mount, Hz.

@@ -1407,11 +1407,11 @@ fn yang_study(
     };
     for &k in &plan.noise_factors {
         let mut r = rig.clone();
-        r.force.noise_rms_n *= k;
-        r.accelerometer.noise_rms_mps2 *= k;
+        r.force.noise_rms *= k;
+        r.accelerometer.noise_rms *= k;
         let note = format!(
             "noise {:.3e} N and {:.3e} m/s^2 rms",
-            r.force.noise_rms_n, r.accelerometer.noise_rms_mps2
+            r.force.noise_rms, r.accelerometer.noise_rms
         );
         setting("noise_factor", k, &r, note)?;
     }
@@ -1421,7 +1421,7 @@ fn yang_study(
         r.daq.ideal_adc = false;
         let lsb_n = 2.0 * r.daq.full_scale_v
             / 2f64.powi(bits as i32)
-            / (r.force.sensitivity_v_per_n * r.force.conditioner_gain);
+            / (r.force.sensitivity * r.force.conditioner_gain);
         setting(
             "adc_bits",
             f64::from(bits),
