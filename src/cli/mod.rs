@@ -85,11 +85,6 @@ enum Command {
     Cache(cache_cmd::CacheArgs),
 }
 
-/// Name of a shaker kind, as on the command line.
-pub fn shake_name(kind: vlab::rig::ShakerKind) -> &'static str {
-    vlab::scene::measurement::shaker_name(kind)
-}
-
 /// Runs the command line and maps errors to an exit status.
 pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {

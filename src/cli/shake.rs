@@ -92,7 +92,7 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     check_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
     check_record_window(&scene).map_err(|e| flags.name_flags(e.into()))?;
     let g = scene.simulation.gravity_mps2;
-    let (rig, kind) = resolve_rig(&a.rig, a.shaker, a.freq_hz, a.gamma, g)
+    let rig = resolve_rig(&a.rig, a.shaker, a.freq_hz, a.gamma, g)
         .with_context(|| format!("--rig {}", a.rig))?;
     let calibration = args::calibration_source(a.calibration.as_deref())?;
     let out_dir = a
@@ -104,7 +104,6 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     let mut progress = ProgressLine::new("shake", quiet);
     let setup = ShakeSetup {
         rig,
-        shaker: kind,
         freq_hz: a.freq_hz,
         gamma: a.gamma,
         calibration,

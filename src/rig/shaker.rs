@@ -405,17 +405,7 @@ impl Shaker {
         Ok(match kind {
             ShakerKind::Prescribed => Shaker::Prescribed(target),
             ShakerKind::Electrodynamic => {
-                let p = spec
-                    .shaker
-                    .electrodynamic
-                    .ok_or_else(|| RigError::MissingSection {
-                        rig: spec.name.clone(),
-                        section: "shaker.electrodynamic",
-                        hint:
-                            "an electrodynamic drive needs the lumped shaker parameters: use the \
-                           prescribed drive or a rig that has them (thesis-shaker)"
-                                .into(),
-                    })?;
+                let p = spec.electrodynamic()?;
                 let model = Electrodynamic::new(p, moving_mass_kg, particle_mass_kg, &target);
                 let kin = model.kinematics(0.0, 1.0, 0.0);
                 Shaker::Electrodynamic(Box::new(ElectrodynamicShaker {

@@ -47,6 +47,22 @@ pub enum ShakerKind {
     Electrodynamic,
 }
 
+impl ShakerKind {
+    /// Lower-case name, as in rig files and on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ShakerKind::Prescribed => "prescribed",
+            ShakerKind::Electrodynamic => "electrodynamic",
+        }
+    }
+}
+
+impl std::fmt::Display for ShakerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// A complete rig description.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -350,6 +366,26 @@ impl RigSpec {
         }
     }
 
+    /// The same rig driven by `kind` (`shaker.kind`).
+    pub fn with_shaker(mut self, kind: ShakerKind) -> RigSpec {
+        self.shaker.kind = kind;
+        self
+    }
+
+    /// The electrodynamic shaker's lumped parameters: the one refusal of an
+    /// electrodynamic drive on a rig without them.
+    pub fn electrodynamic(&self) -> Result<ElectrodynamicSpec, RigError> {
+        self.shaker
+            .electrodynamic
+            .ok_or_else(|| RigError::MissingSection {
+                rig: self.name.clone(),
+                section: "shaker.electrodynamic",
+                hint: "an electrodynamic drive needs the lumped shaker parameters: use the \
+                       prescribed drive or a rig that has them (thesis-shaker)"
+                    .into(),
+            })
+    }
+
     /// True when the two channels read with no phase error at `freq_hz` and
     /// no noise (the `ideal` rig): an empty-enclosure calibration could only
     /// measure rounding, so none is run and the correction is zero.
@@ -375,12 +411,7 @@ impl RigFile for RigSpec {
         match (&s.electrodynamic, s.kind) {
             (Some(e), _) => e.validate()?,
             (None, ShakerKind::Electrodynamic) => {
-                return Err(RigError::MissingSection {
-                    rig: self.name.clone(),
-                    section: "shaker.electrodynamic",
-                    hint: "shaker.kind = \"electrodynamic\" needs the lumped shaker parameters"
-                        .into(),
-                });
+                self.electrodynamic()?;
             }
             (None, ShakerKind::Prescribed) => {}
         }

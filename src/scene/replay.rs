@@ -724,7 +724,7 @@ pub fn replay_record(
                 periods,
                 options.seed,
             )?
-            .0
+            .table
         }
     };
     let calibration_source = match &options.calibration {

@@ -40,7 +40,7 @@ use crate::atomic_write::write_atomic;
 use crate::rig::{RigFile, RigSpec, ShakerKind};
 use crate::scene::bed_cache::BedSource;
 use crate::scene::file::{CyclesSpec, Orientation, Scene, SceneError};
-use crate::scene::measurement::{CalibrationSource, ShakeSetup, shaker_name};
+use crate::scene::measurement::{CalibrationSource, ShakeSetup};
 use crate::scene::phases::{
     PhaseIndicators, PhaseObserver, PhaseThresholds, classify, collective_impacts,
 };
@@ -346,7 +346,7 @@ impl SweepPlan {
             shard,
             scene: self.scene.name.clone(),
             rig: self.rig.clone(),
-            shaker: self.shaker.map(shaker_name).unwrap_or("rig default").into(),
+            shaker: self.shaker.map_or("rig default", ShakerKind::as_str).into(),
             cycles: cycles_text(&self.scene),
             steady_cycles: self.scene.drive.steady_cycles,
             freqs_hz: self.freqs_hz.clone(),
@@ -514,10 +514,9 @@ fn try_condition(
     let started = Instant::now();
     let scene = plan.scene_for(c)?;
     let g = scene.simulation.gravity_mps2;
-    let (rig, shaker) = resolve_rig(&plan.rig, plan.shaker, c.freq_hz, c.gamma, g)?;
+    let rig = resolve_rig(&plan.rig, plan.shaker, c.freq_hz, c.gamma, g)?;
     let setup = ShakeSetup {
         rig,
-        shaker,
         freq_hz: c.freq_hz,
         gamma: c.gamma,
         calibration: CalibrationSource::OnTheFly,
