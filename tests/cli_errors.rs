@@ -210,4 +210,8 @@ fn one_message_shape_for_a_scene_file_a_rig_file_and_a_flag() {
     assert!(rig.contains(" V/N: must be positive and finite"), "{rig}");
     assert!(scene.contains("scene.toml"), "{scene}");
     assert!(rig.contains("rig.toml"), "{rig}");
+    assert!(
+        rig.contains("--rig rig.toml: force.sensitivity_v_per_n"),
+        "the rig file is named once: {rig}"
+    );
 }

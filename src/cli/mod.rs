@@ -101,7 +101,8 @@ pub fn main() -> ExitCode {
 }
 
 /// The error and its causes on one line, without repeating a cause that an
-/// outer message already quotes.
+/// outer message already quotes, nor a file an outer message just named
+/// (`--rig rig.toml: rig.toml: force...` reads `--rig rig.toml: force...`).
 fn one_line(err: &anyhow::Error) -> String {
     let mut out = String::new();
     for cause in err.chain() {
@@ -109,6 +110,11 @@ fn one_line(err: &anyhow::Error) -> String {
         if out.contains(&text) {
             continue;
         }
+        let last = out.rsplit(' ').next().unwrap_or("");
+        let text = match text.strip_prefix(last) {
+            Some(rest) if !last.is_empty() && rest.starts_with(": ") => rest[2..].to_string(),
+            _ => text,
+        };
         if !out.is_empty() {
             out.push_str(": ");
         }

@@ -286,7 +286,7 @@ pub const CSV_HEADER: &str =
     "study,parameter,value,quantity,estimate,reference,error_rel,stderr_rel,wall_s,note";
 
 /// `rows` as CSV text: numbers in shortest round-trip form, NaN as an empty
-/// field, the note quoted.
+/// field, a field quoted when it holds a comma, a quote or a line break.
 pub fn rows_to_csv(rows: &[AccuracyRow]) -> String {
     let num = |x: f64| {
         if x.is_finite() {
@@ -295,24 +295,25 @@ pub fn rows_to_csv(rows: &[AccuracyRow]) -> String {
             String::new()
         }
     };
-    let mut out = String::from(CSV_HEADER);
-    out.push('\n');
+    let mut w = csv::Writer::from_writer(Vec::new());
+    // Writing into memory cannot fail.
+    let _ = w.write_record(CSV_HEADER.split(','));
     for r in rows {
-        out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},\"{}\"\n",
-            r.study,
-            r.parameter,
+        let _ = w.write_record([
+            r.study.to_string(),
+            r.parameter.to_string(),
             num(r.value),
-            r.quantity,
+            r.quantity.to_string(),
             num(r.estimate),
             num(r.reference),
             num(r.error_rel),
             num(r.stderr_rel),
             num(r.wall_s),
-            r.note.replace('"', "\"\"")
-        ));
+            r.note.clone(),
+        ]);
     }
-    out
+    let bytes = w.into_inner().unwrap_or_default();
+    String::from_utf8_lossy(&bytes).into_owned()
 }
 
 /// Least-squares slope of `ln |y|` against `ln x` over the points with both

@@ -26,6 +26,7 @@
 
 use std::f64::consts::PI;
 
+use glam::{DMat2, DVec2};
 use serde::{Deserialize, Serialize};
 
 use super::error::{Result, SignalsError};
@@ -86,15 +87,14 @@ impl PhaseErrorModel {
             sxp += x * phi;
             syp += y * phi;
         }
-        let det = sxx * syy - sxy * sxy;
-        if points.len() < 2 || det <= FIT_MIN_SPREAD * sxx * syy {
+        let normal = DMat2::from_cols(DVec2::new(sxx, sxy), DVec2::new(sxy, syy));
+        if points.len() < 2 || normal.determinant() <= FIT_MIN_SPREAD * sxx * syy {
             return Err(bad(format!(
                 "phase-error fit: needs at least two distinct frequencies, got {}",
                 points.len()
             )));
         }
-        let c_hz = (sxp * syy - syp * sxy) / det;
-        let skew_s = (syp * sxx - sxp * sxy) / det;
+        let DVec2 { x: c_hz, y: skew_s } = normal.inverse() * DVec2::new(sxp, syp);
         Ok(Self {
             force_high_pass_hz: c_hz.max(0.0),
             accel_high_pass_hz: (-c_hz).max(0.0),
