@@ -955,7 +955,9 @@ mod tests {
         // Starts on the 40 kHz grid: (k + i) / fs, shortest text.
         let on_grid: [(f64, [&str; 4]); 4] = [
             (0.0, ["0", "0.000025", "0.00005", "0.000075"]),
-            // A start that should be 0, off by rounding (seen from vlab shake).
+            // A start that should be 0, off by rounding, as another program
+            // may declare it (vlab's DAQ puts a start on a sample at 0 exactly,
+            // `rig::Daq::finish`).
             (
                 -1.3877787807814457e-17,
                 ["0", "0.000025", "0.00005", "0.000075"],
