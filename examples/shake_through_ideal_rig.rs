@@ -18,10 +18,9 @@ fn main() -> Result<(), SceneError> {
     )?;
     let (freq_hz, gamma) = (40.0, 10.0);
     let g = scene.simulation.gravity_mps2;
-    let (rig, shaker) = resolve_rig("ideal", None, freq_hz, gamma, g)?;
+    let rig = resolve_rig("ideal", None, freq_hz, gamma, g)?;
     let setup = ShakeSetup {
         rig,
-        shaker,
         freq_hz,
         gamma,
         calibration: CalibrationSource::OnTheFly,

@@ -22,3 +22,4 @@ pub mod scene;
 pub mod signals;
 pub mod stats;
 pub mod validation;
+pub mod warning;

@@ -11,6 +11,9 @@
 //! negative correlation only shrinks the error and a larger one cannot be
 //! estimated from few cycles). No thesis equation: the thesis reports means
 //! over its 5 steady cycles without an error.
+//!
+//! Also the plain mean and sample standard deviation ([`mean_std`]) of
+//! figures that are not a series (restitution over drop-test triples).
 
 use serde::Serialize;
 
@@ -48,6 +51,33 @@ impl MeanStderr {
     }
 }
 
+/// A mean with the sample standard deviation of the values.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MeanStd {
+    /// The mean (NaN of no values).
+    pub mean: f64,
+    /// The sample standard deviation (`n - 1` in the denominator); zero for
+    /// fewer than 2 values.
+    pub std: f64,
+}
+
+/// Mean and sample standard deviation of `xs`.
+pub fn mean_std(xs: &[f64]) -> MeanStd {
+    let n = xs.len() as f64;
+    let mean = xs.iter().sum::<f64>() / n;
+    let std = if xs.len() > 1 {
+        sample_variance(xs, mean).sqrt()
+    } else {
+        0.0
+    };
+    MeanStd { mean, std }
+}
+
+/// `sum (x - mean)^2 / (n - 1)` (at least 2 values).
+fn sample_variance(xs: &[f64], mean: f64) -> f64 {
+    xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (xs.len() - 1) as f64
+}
+
 /// Mean and standard error of `xs` (see the module documentation).
 pub fn mean_stderr(xs: &[f64]) -> MeanStderr {
     let n = xs.len();
@@ -63,7 +93,7 @@ pub fn mean_stderr(xs: &[f64]) -> MeanStderr {
             lag1: 0.0,
         };
     }
-    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    let var = sample_variance(xs, mean);
     let lag1 = if n >= 4 && var > 0.0 {
         let c1 = xs
             .windows(2)

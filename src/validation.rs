@@ -65,6 +65,13 @@ impl InvalidParameter {
         }
     }
 
+    /// The same refusal with `reason` after what is valid, in parentheses:
+    /// `in [0, 1)` becomes `in [0, 1) (an underdamped plate)`.
+    pub fn because(mut self, reason: &str) -> Self {
+        self.valid = format!("{} ({reason})", self.valid);
+        self
+    }
+
     /// The same refusal with `prefix.` in front of the key (`particles.` +
     /// `material.poisson`).
     pub fn within(mut self, prefix: &str) -> Self {

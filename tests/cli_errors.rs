@@ -41,6 +41,26 @@ fn bad_drive_parameters() {
     );
 }
 
+/// The record's two whole periods: refused by the key when a scene file set
+/// the window, by the flag when the flag did.
+#[test]
+fn steady_window_too_short_for_yangs_method() {
+    let from_file = refuses(
+        &["shake", "--scene", "scene.toml"],
+        Some("[drive]\nsteady_cycles = 1\n"),
+        &[
+            "drive.steady_cycles = 1: must be at least 2",
+            "Yang's method",
+        ],
+    );
+    assert!(!from_file.contains("--steady-cycles"), "{from_file}");
+    refuses(
+        &["shake", "--steady-cycles", "1"],
+        None,
+        &["--steady-cycles = 1: must be at least 2", "Yang's method"],
+    );
+}
+
 #[test]
 fn time_step_above_stability_limit() {
     refuses(
@@ -224,4 +244,8 @@ fn one_message_shape_for_a_scene_file_a_rig_file_and_a_flag() {
     assert!(rig.contains(" V/N: must be positive and finite"), "{rig}");
     assert!(scene.contains("scene.toml"), "{scene}");
     assert!(rig.contains("rig.toml"), "{rig}");
+    assert!(
+        rig.contains("--rig rig.toml: force.sensitivity_v_per_n"),
+        "the rig file is named once: {rig}"
+    );
 }

@@ -673,8 +673,7 @@ fn round_trip_through_lammps_agrees_with_vlab() {
     // vlab on the packing, prescribed drive (the deck's), until steady.
     let rig = RigSpec::from_name_or_path("ideal").expect("ideal rig");
     let setup = ShakeSetup {
-        rig,
-        shaker: ShakerKind::Prescribed,
+        rig: rig.with_shaker(ShakerKind::Prescribed),
         freq_hz: freq,
         gamma,
         calibration: CalibrationSource::OnTheFly,

@@ -36,8 +36,9 @@ fn measure(
     let dt = scene.drive_dt_s(freq_hz, gamma);
     let mut world = prepare_drive(bed, &scene, dt).expect("ready to drive");
     let setup = ShakeSetup {
-        rig: RigSpec::builtin(rig).expect("built-in rig"),
-        shaker,
+        rig: RigSpec::builtin(rig)
+            .expect("built-in rig")
+            .with_shaker(shaker),
         freq_hz,
         gamma,
         calibration: CalibrationSource::OnTheFly,

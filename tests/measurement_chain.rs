@@ -103,7 +103,7 @@ fn calibrate(rig: &RigSpec, freqs: &[f64]) -> PhaseCalibration {
         1,
     )
     .expect("calibration")
-    .0
+    .table
 }
 
 /// A record with known dissipation at the harmonics, through the thesis

@@ -53,7 +53,7 @@ pub fn run(a: AccuracyArgs, quiet: bool) -> Result<()> {
         .set(true, "gamma", "--gamma");
     check_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
     let g = scene.simulation.gravity_mps2;
-    let (rig, _) = resolve_rig(&a.rig, Some(ShakerKind::Prescribed), a.freq_hz, a.gamma, g)
+    let rig = resolve_rig(&a.rig, Some(ShakerKind::Prescribed), a.freq_hz, a.gamma, g)
         .with_context(|| format!("--rig {}", a.rig))?;
     let plan = if a.quick {
         AccuracyPlan::quick(a.freq_hz, a.gamma)

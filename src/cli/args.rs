@@ -6,10 +6,19 @@
 //! error: --freq = -40 Hz: must be positive and finite
 //! error: particles.diameter_m = -0.005 m: must be positive and finite
 //! ```
+//!
+//! Also the options several commands share: the scene flags
+//! ([`SceneArgs`]) and the phase-calibration source.
 
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use anyhow::{Context, Result};
+use clap::Args;
 use clap::error::{ContextKind, ContextValue, ErrorKind};
+use vlab::scene::file::{Orientation, Scene, SceneOverrides};
+use vlab::scene::measurement::CalibrationSource;
+use vlab::signals::PhaseCalibration;
 use vlab::validation::{Bound, InvalidParameter, in_range};
 
 /// Placeholder key of a refused flag value; [`parse_error`] puts the flag there.
@@ -128,6 +137,73 @@ pub fn threads(s: &str) -> Result<usize, InvalidParameter> {
     vlab::validation::count_in(FLAG, v, "", 1, None)
 }
 
+/// Scene options shared by the commands that run the damper.
+#[derive(Debug, Clone, Args)]
+pub struct SceneArgs {
+    /// Scene file (TOML) merged over the built-in thesis scene.
+    #[arg(long, value_name = "FILE")]
+    pub scene: Option<PathBuf>,
+    /// Drive cycles in all, fixing the count [scene default: run until steady:
+    /// input work and dissipation within 1 %, standard error of the energy
+    /// per cycle below 1 %, at most 400 cycles].
+    #[arg(long)]
+    pub cycles: Option<u32>,
+    /// Last cycles kept as the steady window; alone, the steady rule's
+    /// transient cycles then this many [scene default: 5 of --cycles].
+    #[arg(long)]
+    pub steady_cycles: Option<u32>,
+    /// Gravity relative to the drive axis [scene default: vertical].
+    #[arg(long, value_enum)]
+    pub orientation: Option<Orientation>,
+    /// Seed of the random fill [scene default: 1].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Time step (s) [scene default: every collision resolved by 25 steps at
+    /// the largest expected impact speed]; at most the Rayleigh limit.
+    #[arg(long = "dt-s", value_name = "S", value_parser = seconds)]
+    pub dt_s: Option<f64>,
+}
+
+impl SceneArgs {
+    /// The scene keys these flags set.
+    pub fn flags(&self) -> FlagKeys {
+        FlagKeys::drive(
+            self.cycles.is_some(),
+            self.steady_cycles.is_some(),
+            self.dt_s.is_some(),
+        )
+    }
+
+    /// The scene (built-in or file) with the command-line overrides applied and
+    /// everything validated; a refusal names the flag or the key at fault.
+    pub fn resolve(&self) -> Result<Scene> {
+        let scene = Scene::load_or_thesis(self.scene.as_deref())?;
+        let overrides = SceneOverrides {
+            cycles: self.cycles,
+            steady_cycles: self.steady_cycles,
+            orientation: self.orientation,
+            seed: self.seed,
+            dt_s: self.dt_s,
+        };
+        overrides
+            .apply(scene)
+            .map_err(|e| self.flags().name_flags(e.into()))
+    }
+}
+
+/// The `--calibration FILE` table, or one measured on the fly on the empty
+/// enclosure when no file is given.
+pub fn calibration_source(path: Option<&Path>) -> anyhow::Result<CalibrationSource> {
+    Ok(match path {
+        Some(path) => {
+            let table = PhaseCalibration::load_json(path)
+                .with_context(|| format!("--calibration {}", path.display()))?;
+            CalibrationSource::Given(table, format!("table {}", path.display()))
+        }
+        None => CalibrationSource::OnTheFly,
+    })
+}
+
 /// Prints a command-line error and gives the exit status (2, a usage error).
 /// A value one of the parsers above refused is printed with its flag as the
 /// key, in the crate's one shape; everything else as clap words it.
@@ -162,12 +238,26 @@ impl FlagKeys {
         FlagKeys::default()
     }
 
+    /// The drive's scene keys, set by `--cycles`, `--steady-cycles` and
+    /// `--dt-s` (when given).
+    pub fn drive(cycles: bool, steady_cycles: bool, dt_s: bool) -> Self {
+        FlagKeys::new()
+            .set(cycles, "drive.cycles", "--cycles")
+            .set(steady_cycles, "drive.steady_cycles", "--steady-cycles")
+            .set(dt_s, "simulation.dt_s", "--dt-s")
+    }
+
     /// `key` was set by `flag` (when `given`).
     pub fn set(mut self, given: bool, key: &str, flag: &str) -> Self {
         if given {
             self.0.push((key.to_string(), flag.to_string()));
         }
         self
+    }
+
+    /// What to call `key`: the flag that set it, else the key itself.
+    pub fn name<'a>(&'a self, key: &'a str) -> &'a str {
+        self.flag(key).unwrap_or(key)
     }
 
     /// The flag that set `key`, if any.

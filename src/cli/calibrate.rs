@@ -69,16 +69,16 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
     }
     let g = Scene::thesis().simulation.gravity_mps2;
     // Refuse any (frequency, amplitude) the rig cannot do before running anything.
-    let mut rig_and_kind = None;
+    let mut resolved = None;
     for &f in &a.freqs_hz {
         for &gamma in &a.gammas {
-            rig_and_kind = Some(
+            resolved = Some(
                 resolve_rig(&a.rig, a.shaker, f, gamma, g)
                     .with_context(|| format!("--rig {}", a.rig))?,
             );
         }
     }
-    let Some((rig, kind)) = rig_and_kind else {
+    let Some(rig) = resolved else {
         bail!("--freq and --gammas must name at least one value each");
     };
     if a.dt_s > 1.0 / rig.daq.sample_rate_hz {
@@ -97,9 +97,9 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("cannot create folder {}", parent.display()))?;
     }
-    let (table, _points) = calibrate_rig(
+    let table = calibrate_rig(
         &rig,
-        kind,
+        rig.shaker.kind,
         &a.freqs_hz,
         &a.gammas,
         g,
@@ -108,7 +108,8 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
         a.record_cycles,
         1,
     )
-    .context("running the empty enclosure")?;
+    .context("running the empty enclosure")?
+    .table;
     table.save_json(&out)?;
     let rows: Vec<Row> = table
         .points
@@ -126,10 +127,7 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
     } else {
         println!(
             "rig {} ({} shaker), empty enclosure of {} kg, Gamma {:?}:",
-            rig.name,
-            super::shake_name(kind),
-            rig.enclosure.mass_kg,
-            a.gammas
+            rig.name, rig.shaker.kind, rig.enclosure.mass_kg, a.gammas
         );
         println!("   freq [Hz]   phase error [deg]   spread [deg]   rig model [deg]");
         for r in &rows {

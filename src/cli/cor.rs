@@ -1,16 +1,14 @@
 //! `vlab cor TRACE`: the drop-test restitution estimator (thesis eq. 7.3-7.5)
 //! on any force record, CSV (time column first; ',', ';' or tab separated), WAV
 //! with its JSON sidecar or TDMS, such as a real lab file or one `vlab drop`
-//! wrote.
-//! Reads only; writes nothing.
+//! wrote. The work is [`vlab::signals::impacts`]'s; this is its command
+//! line. Reads only; writes nothing.
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use serde::Serialize;
-
-use vlab::signals::{ImpactParams, Trace, estimate_cor};
+use vlab::signals::{CorInput, CorReport, ImpactParams, Trace, cor_report};
 
 use super::analyze::LabFileArgs;
 use super::args;
@@ -40,38 +38,6 @@ pub struct CorArgs {
     pub json: bool,
 }
 
-#[derive(Debug, Serialize)]
-struct ImpactRow {
-    onset_time_s: f64,
-    peak_time_s: f64,
-    peak_force: f64,
-}
-
-#[derive(Debug, Serialize)]
-struct CorReport {
-    file: String,
-    channel: String,
-    unit: String,
-    sample_rate_hz: f64,
-    samples: usize,
-    g_mps2: f64,
-    threshold: f64,
-    release: f64,
-    holdoff_s: f64,
-    noise_std: f64,
-    impacts: Vec<ImpactRow>,
-    gaps_s: Vec<f64>,
-    /// COR of each triple (eq. 7.5).
-    cor_per_triple: Vec<f64>,
-    /// Speed at each triple's middle impact, g T / 2 of the gap before it (eq. 7.3), m/s.
-    impact_speeds_mps: Vec<f64>,
-    cor_mean: f64,
-    cor_std: f64,
-    /// Triples (from 1) whose second gap is longer than the first.
-    growing_gap_triples: Vec<usize>,
-    warnings: Vec<String>,
-}
-
 fn read_trace(path: &std::path::Path, file: &LabFileArgs) -> Result<Trace> {
     if !path.is_file() {
         bail!(
@@ -94,7 +60,7 @@ pub fn run(a: CorArgs) -> Result<()> {
             trace.channel_names().join(", ")
         ),
     };
-    let channel = trace
+    trace
         .channel(&name)
         .with_context(|| format!("--channel {name}"))?;
     let params = ImpactParams {
@@ -102,7 +68,14 @@ pub fn run(a: CorArgs) -> Result<()> {
         holdoff_s: a.holdoff_s,
         ..ImpactParams::default()
     };
-    let r = estimate_cor(&trace, &name, &params, a.g_mps2).with_context(|| {
+    let report = cor_report(
+        &a.trace.display().to_string(),
+        &trace,
+        &name,
+        &params,
+        a.g_mps2,
+    )
+    .with_context(|| {
         format!(
             "{}, channel '{name}' ({} samples at {} Hz)",
             a.trace.display(),
@@ -110,57 +83,11 @@ pub fn run(a: CorArgs) -> Result<()> {
             trace.sample_rate_hz
         )
     })?;
-    let d = &r.detection;
-    let n = r.cor.cor_per_triple.len();
-    let grown: Vec<usize> = r.cor.growing_gaps().iter().map(|k| k + 1).collect();
-    let mut warnings = Vec::new();
-    if !grown.is_empty() {
-        warnings.push(format!(
-            "triple(s) {} have a second gap longer than the first (COR > 1): an impact was \
-             missed or ringing taken for one; try --threshold-n or --holdoff-s",
-            grown
-                .iter()
-                .map(|k| k.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-    }
-    if channel.unit != "N" {
-        warnings.push(format!(
-            "channel '{name}' is in '{}', not N: the threshold is in that unit",
-            channel.unit
-        ));
-    }
-    let report = CorReport {
-        file: a.trace.display().to_string(),
-        channel: name.clone(),
-        unit: channel.unit.clone(),
-        sample_rate_hz: trace.sample_rate_hz,
-        samples: trace.len(),
-        g_mps2: a.g_mps2,
-        threshold: d.threshold_n,
-        release: d.release_n,
-        holdoff_s: d.holdoff_s,
-        noise_std: d.noise_std_n,
-        impacts: d
-            .impacts
-            .iter()
-            .map(|i| ImpactRow {
-                onset_time_s: i.onset_time_s,
-                peak_time_s: i.peak_time_s,
-                peak_force: i.peak_force_n,
-            })
-            .collect(),
-        gaps_s: r.cor.gaps_s.clone(),
-        cor_per_triple: r.cor.cor_per_triple.clone(),
-        impact_speeds_mps: r.cor.impact_speeds_mps[..n].to_vec(),
-        cor_mean: r.cor.cor_mean,
-        cor_std: r.cor.cor_std,
-        growing_gap_triples: grown,
-        warnings,
-    };
     for w in &report.warnings {
-        eprintln!("warning: {w}");
+        match w.advice {
+            Some(CorInput::Detection) => eprintln!("warning: {w} (--threshold-n, --holdoff-s)"),
+            None => eprintln!("warning: {w}"),
+        }
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);

@@ -16,13 +16,12 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 use rayon::prelude::*;
-use serde::Serialize;
 
 use vlab::atomic_write::{OutputDir, write_atomic, write_bytes_atomic};
 use vlab::rig::{DROP_RIG, DropRigSpec, RigFile};
 use vlab::scene::drop::{
-    DROP_FRICTION, DROP_GRAVITY_MPS2, DemImpact, DropEstimate, DropNumerics, DropOutcome,
-    DropParticle, DropSetup, run_drop,
+    DROP_FRICTION, DROP_GRAVITY_MPS2, DropEstimate, DropNumerics, DropOutcome, DropParticle,
+    DropSetup, DropSummary, millimetres, run_drop, summarise_drops,
 };
 use vlab::scene::validity::yield_warning;
 use vlab::signals::{ImpactParams, Series, SeriesStyle, plot_xy_svg, write_csv, write_wav};
@@ -91,84 +90,6 @@ pub struct DropArgs {
     pub json: bool,
 }
 
-/// One height's record and what was made of it.
-#[derive(Debug, Serialize)]
-struct RunSummary {
-    height_m: f64,
-    /// `sqrt(2 g h)`, m/s.
-    first_impact_speed_mps: f64,
-    /// Hertz contact duration at the first impact (eq. 5.10), s.
-    contact_duration_s: f64,
-    impacts_detected: usize,
-    onset_times_s: Vec<f64>,
-    /// COR of each triple (eq. 7.5).
-    cor_per_triple: Vec<f64>,
-    /// Speed at the middle impact of each triple (eq. 7.3), m/s.
-    impact_speeds_mps: Vec<f64>,
-    cor_mean: f64,
-    cor_std: f64,
-    /// DEM restitution (bounce) of each triple's middle impact.
-    realised_model_cor_per_triple: Vec<Option<f64>>,
-    realised_model_cor: Option<f64>,
-    /// Triples whose gaps grew (a missed or false impact).
-    growing_gap_triples: Vec<usize>,
-    threshold_n: f64,
-    holdoff_s: f64,
-    peak_transducer_force_n: f64,
-    clipped_samples: u64,
-    /// Every contact the DEM resolved.
-    dem_impacts: Vec<DemImpact>,
-    rest_time_s: Option<f64>,
-    tick_s: f64,
-    dem_steps: u64,
-    fine_steps: u64,
-    wall_time_s: f64,
-    files: Vec<String>,
-}
-
-#[derive(Debug, Serialize)]
-struct DropSummary {
-    vlab_version: &'static str,
-    particle: String,
-    material: &'static str,
-    diameter_m: f64,
-    /// The contact law's configured restitution (exact mode).
-    configured_cor: f64,
-    rig: String,
-    sample_rate_hz: f64,
-    gravity_mps2: f64,
-    seed: u64,
-    /// Mean of every triple's COR over all heights.
-    cor_mean: f64,
-    /// Sample standard deviation of the same.
-    cor_std: f64,
-    cor_per_triple: Vec<f64>,
-    /// Speed at each triple's middle impact, m/s.
-    impact_speeds_mps: Vec<f64>,
-    /// Heights of each triple, m.
-    heights_m: Vec<f64>,
-    /// Mean DEM restitution of the triples' middle impacts: the sphere's own
-    /// rebound / impact speed (eq. 7.2).
-    realised_model_cor: Option<f64>,
-    realised_model_cor_per_triple: Vec<Option<f64>>,
-    /// The same relative to the moving plate: the contact law's restitution.
-    realised_contact_cor: Option<f64>,
-    /// `cor_mean / realised_model_cor - 1`.
-    cor_error_rel: Option<f64>,
-    /// Yield velocity of the sphere on the plate (eq. 5.26), m/s.
-    yield_velocity_mps: Option<f64>,
-    /// Lowest accepted sample rate: one sample per first pulse, Hz.
-    min_sample_rate_hz: f64,
-    warnings: Vec<String>,
-    runs: Vec<RunSummary>,
-    files: Vec<String>,
-}
-
-/// Text for a height in a file name: 0.05 -> "50", 0.0125 -> "12.5".
-fn millimetres(h_m: f64) -> String {
-    format!("{}", (h_m * 1e6).round() / 1e3)
-}
-
 /// The flag the heights came from.
 fn height_flag(a: &DropArgs) -> &'static str {
     if a.heights.is_some() {
@@ -176,6 +97,19 @@ fn height_flag(a: &DropArgs) -> &'static str {
     } else {
         "--height-m"
     }
+}
+
+/// The set-up keys these flags set.
+fn flag_keys(a: &DropArgs) -> args::FlagKeys {
+    args::FlagKeys::new()
+        .set(true, "diameter_m", "--diameter-m")
+        .set(a.cor.is_some(), "restitution", "--cor")
+        .set(true, "height_m", height_flag(a))
+        .set(
+            a.sample_rate_hz.is_some(),
+            "daq.sample_rate_hz",
+            "--sample-rate-hz",
+        )
 }
 
 fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
@@ -202,15 +136,7 @@ fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
         }
         seen.push(millimetres(h));
     }
-    let flags = args::FlagKeys::new()
-        .set(true, "diameter_m", "--diameter-m")
-        .set(a.cor.is_some(), "restitution", "--cor")
-        .set(true, "height_m", height_flag(a))
-        .set(
-            a.sample_rate_hz.is_some(),
-            "daq.sample_rate_hz",
-            "--sample-rate-hz",
-        );
+    let flags = flag_keys(a);
     heights
         .iter()
         .map(|&height_m| {
@@ -242,7 +168,7 @@ pub fn run(a: DropArgs) -> Result<()> {
         .iter()
         .max_by(|x, y| x.height_m.total_cmp(&y.height_m))
         .unwrap_or(first);
-    if let Some(w) = fastest.sampling_warning()? {
+    if let Some(w) = fastest.sampling_warning_naming(flag_keys(&a).name("daq.sample_rate_hz"))? {
         warnings.push(w);
     }
     let out_dir = a
@@ -258,7 +184,6 @@ pub fn run(a: DropArgs) -> Result<()> {
     let result = simulate(&setups, &params);
     let runs = made.keep_if_ok(result)?;
 
-    let g = DROP_GRAVITY_MPS2;
     let yield_mps = first.yield_velocity_mps();
     for (s, (out, _)) in setups.iter().zip(&runs) {
         let fastest = out
@@ -292,7 +217,12 @@ pub fn run(a: DropArgs) -> Result<()> {
             ));
         }
     }
-    let summary = summarise(&a, &setups, &runs, warnings, g)?;
+    let summary = summarise_drops(
+        &setups,
+        &runs,
+        a.particle.preset().material_name(),
+        warnings,
+    )?;
     write_outputs(&out_dir, &setups, &runs, summary, a.json)
 }
 
@@ -317,109 +247,6 @@ fn simulate(
             Ok((out, est))
         })
         .collect()
-}
-
-fn mean_std(x: &[f64]) -> (f64, f64) {
-    let n = x.len() as f64;
-    let mean = x.iter().sum::<f64>() / n;
-    let std = if x.len() > 1 {
-        (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
-    } else {
-        0.0
-    };
-    (mean, std)
-}
-
-fn summarise(
-    a: &DropArgs,
-    setups: &[DropSetup],
-    runs: &[(DropOutcome, DropEstimate)],
-    warnings: Vec<String>,
-    g: f64,
-) -> Result<DropSummary> {
-    let first = &setups[0];
-    let mut all_cor = Vec::new();
-    let mut all_speed = Vec::new();
-    let mut all_height = Vec::new();
-    let mut all_realised = Vec::new();
-    let mut contact = Vec::new();
-    let mut run_summaries = Vec::new();
-    for (s, (out, est)) in setups.iter().zip(runs) {
-        let cor = &est.result.cor;
-        let n = cor.cor_per_triple.len();
-        let speeds = cor.impact_speeds_mps[..n].to_vec();
-        all_cor.extend_from_slice(&cor.cor_per_triple);
-        all_speed.extend_from_slice(&speeds);
-        all_height.extend(std::iter::repeat_n(s.height_m, n));
-        all_realised.extend_from_slice(&est.realised_per_triple);
-        contact
-            .extend((0..n).filter_map(|k| est.matched[k + 1].map(|i| out.impacts[i].contact_cor)));
-        let stem = format!("force-h{}mm", millimetres(s.height_m));
-        run_summaries.push(RunSummary {
-            height_m: s.height_m,
-            first_impact_speed_mps: s.first_impact_speed_mps(),
-            contact_duration_s: out.first_contact_duration_s,
-            impacts_detected: est.result.detection.impacts.len(),
-            onset_times_s: est.result.detection.onset_times_s(),
-            cor_per_triple: cor.cor_per_triple.clone(),
-            impact_speeds_mps: speeds,
-            cor_mean: cor.cor_mean,
-            cor_std: cor.cor_std,
-            realised_model_cor_per_triple: est.realised_per_triple.clone(),
-            realised_model_cor: est.realised_mean(),
-            growing_gap_triples: cor.growing_gaps(),
-            threshold_n: est.result.detection.threshold_n,
-            holdoff_s: est.result.detection.holdoff_s,
-            peak_transducer_force_n: out.rig_report.peak_transducer_force_n,
-            clipped_samples: out.rig_report.clipped,
-            dem_impacts: out.impacts.clone(),
-            rest_time_s: out.rest_time_s,
-            tick_s: out.tick_s,
-            dem_steps: out.dem_steps,
-            fine_steps: out.fine_steps,
-            wall_time_s: out.wall_time_s,
-            files: vec![
-                format!("{stem}.csv"),
-                format!("{stem}.wav"),
-                format!("{stem}.wav.json"),
-            ],
-        });
-    }
-    let (cor_mean, cor_std) = mean_std(&all_cor);
-    let realised: Vec<f64> = all_realised.iter().flatten().copied().collect();
-    let realised_model_cor = (!realised.is_empty()).then(|| mean_std(&realised).0);
-    let mut files: Vec<String> = run_summaries.iter().flat_map(|r| r.files.clone()).collect();
-    files.extend(["results.csv", "cor-vs-speed.svg", "drop.json"].map(String::from));
-    Ok(DropSummary {
-        vlab_version: env!("CARGO_PKG_VERSION"),
-        particle: first.particle_name.clone(),
-        material: a.particle.preset().material_name(),
-        diameter_m: first.diameter_m,
-        configured_cor: first.restitution,
-        rig: first.rig.name.clone(),
-        sample_rate_hz: first.rig.daq.sample_rate_hz,
-        gravity_mps2: g,
-        seed: first.seed,
-        cor_mean,
-        cor_std,
-        cor_per_triple: all_cor,
-        impact_speeds_mps: all_speed,
-        heights_m: all_height,
-        realised_model_cor,
-        realised_model_cor_per_triple: all_realised,
-        realised_contact_cor: (!contact.is_empty()).then(|| mean_std(&contact).0),
-        cor_error_rel: realised_model_cor.map(|r| cor_mean / r - 1.0),
-        yield_velocity_mps: first.yield_velocity_mps(),
-        min_sample_rate_hz: setups
-            .iter()
-            .map(|s| s.min_sample_rate_hz().map(|(_, r)| r))
-            .collect::<Result<Vec<f64>, _>>()?
-            .into_iter()
-            .fold(0.0, f64::max),
-        warnings,
-        runs: run_summaries,
-        files,
-    })
 }
 
 fn write_outputs(

@@ -15,7 +15,6 @@ use vlab::scene::lammps::{
 use super::args;
 use super::cache_cmd::NoCacheArg;
 use super::progress::ProgressLine;
-use super::shake::SceneArgs;
 
 #[derive(Debug, Clone, Args)]
 pub struct ExportArgs {
@@ -44,7 +43,7 @@ struct LammpsArgs {
     #[arg(long, value_parser = args::gamma)]
     gamma: f64,
     #[command(flatten)]
-    scene: SceneArgs,
+    scene: args::SceneArgs,
     /// Output folder for in.damper, packing.data and export.json.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,

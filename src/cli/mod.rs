@@ -12,6 +12,7 @@ mod calibrate;
 mod cor;
 mod drop;
 mod export;
+mod hints;
 mod impact;
 mod plot;
 mod predict;
@@ -84,11 +85,6 @@ enum Command {
     Cache(cache_cmd::CacheArgs),
 }
 
-/// Name of a shaker kind, as on the command line.
-pub fn shake_name(kind: vlab::rig::ShakerKind) -> &'static str {
-    vlab::scene::measurement::shaker_name(kind)
-}
-
 /// Runs the command line and maps errors to an exit status.
 pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
@@ -98,14 +94,15 @@ pub fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {}", one_line(&err));
+            eprintln!("error: {}", hints::with_flag_hint(one_line(&err), &err));
             ExitCode::FAILURE
         }
     }
 }
 
 /// The error and its causes on one line, without repeating a cause that an
-/// outer message already quotes.
+/// outer message already quotes, nor a file an outer message just named
+/// (`--rig rig.toml: rig.toml: force...` reads `--rig rig.toml: force...`).
 fn one_line(err: &anyhow::Error) -> String {
     let mut out = String::new();
     for cause in err.chain() {
@@ -113,6 +110,11 @@ fn one_line(err: &anyhow::Error) -> String {
         if out.contains(&text) {
             continue;
         }
+        let last = out.rsplit(' ').next().unwrap_or("");
+        let text = match text.strip_prefix(last) {
+            Some(rest) if !last.is_empty() && rest.starts_with(": ") => rest[2..].to_string(),
+            _ => text,
+        };
         if !out.is_empty() {
             out.push_str(": ");
         }

@@ -11,14 +11,12 @@ use clap::Args;
 use vlab::atomic_write::OutputDir;
 use vlab::rig::{RigFile, RigSpec};
 use vlab::scene::file::Orientation;
-use vlab::scene::measurement::CalibrationSource;
 use vlab::scene::replay::{
     ColumnMap, ReplayOptions, ReplaySummary, Source, default_out_dir, read_enclosure_record,
     replay_record,
 };
-use vlab::signals::PhaseCalibration;
 
-use super::args;
+use super::{args, hints};
 
 #[derive(Debug, Clone, Args)]
 #[command(allow_negative_numbers = true)]
@@ -102,14 +100,7 @@ pub fn run(a: ReplayArgs) -> Result<()> {
         .set(true, "particle_mass_kg", "--particle-mass-kg");
     let columns = column_map(&a.columns)?;
     let rig = RigSpec::from_name_or_path(&a.rig).with_context(|| format!("--rig {}", a.rig))?;
-    let calibration = match &a.calibration {
-        Some(path) => {
-            let table = PhaseCalibration::load_json(path)
-                .with_context(|| format!("--calibration {}", path.display()))?;
-            CalibrationSource::Given(table, format!("table {}", path.display()))
-        }
-        None => CalibrationSource::OnTheFly,
-    };
+    let calibration = args::calibration_source(a.calibration.as_deref())?;
     let record = read_enclosure_record(&a.record, &columns)?;
     let options = ReplayOptions {
         freq_hz: a.freq_hz,
@@ -132,7 +123,10 @@ pub fn run(a: ReplayArgs) -> Result<()> {
     let mut run = made.keep_if_ok(result)?;
     run.write(&out_dir, &rig)?;
     for w in &run.summary.warnings {
-        eprintln!("warning: {w}");
+        match w.advice {
+            Some(o) => eprintln!("warning: {w} ({})", hints::replay_option_flag(o)),
+            None => eprintln!("warning: {w}"),
+        }
     }
     if a.json {
         print!("{}", run.summary_json());

@@ -66,9 +66,7 @@ pub fn run(a: RigArgs) -> Result<()> {
             println!("{} ({kind} rig): {}", r.name, r.description);
             println!(
                 "  enclosure above the gauge {} kg; default shaker {}; sample rate {} Hz",
-                r.enclosure.mass_kg,
-                super::shake_name(r.shaker.kind),
-                r.daq.sample_rate_hz
+                r.enclosure.mass_kg, r.shaker.kind, r.daq.sample_rate_hz
             );
             for f in [20.0, 40.0, 160.0] {
                 println!(

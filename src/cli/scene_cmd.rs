@@ -8,7 +8,9 @@ use clap::Args;
 
 use vlab::dem::restitution::realised_restitution;
 use vlab::scene::damper::contact_laws;
-use vlab::scene::file::{CyclesSpec, Scene, THESIS_DAMPER_TOML, THESIS_SCENE_FILE, TimeStepSpec};
+use vlab::scene::file::{
+    CyclesSpec, Scene, THESIS_DAMPER_TOML, THESIS_SCENE_FILE, TimeStepRule, TimeStepSpec,
+};
 
 #[derive(Debug, Clone, Args)]
 pub struct SceneArgs {
@@ -33,7 +35,8 @@ pub fn run(a: SceneArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let (pp, pw) = contact_laws(&scene);
+    let laws = contact_laws(&scene);
+    let (pp, pw) = (laws.particle_particle, laws.particle_wall);
     let p = &scene.particles;
     let e = &scene.enclosure;
     match &a.scene {
@@ -79,11 +82,11 @@ pub fn run(a: SceneArgs) -> Result<()> {
     }
     let dt_rule = match &scene.simulation.dt_s {
         TimeStepSpec::Seconds(_) => "fixed".to_string(),
-        TimeStepSpec::Rule(r) if r == "rayleigh" => format!(
+        TimeStepSpec::Rule(TimeStepRule::Rayleigh) => format!(
             "{} x the Rayleigh step",
             scene.simulation.rayleigh_safety_factor
         ),
-        TimeStepSpec::Rule(_) => format!(
+        TimeStepSpec::Rule(TimeStepRule::Contacts) => format!(
             "{} steps per contact at the fastest expected impact ({:.2} m/s at 40 Hz, Gamma 20)",
             scene.simulation.steps_per_contact,
             scene.expected_impact_speed_mps(40.0, 20.0)
@@ -94,9 +97,10 @@ pub fn run(a: SceneArgs) -> Result<()> {
         scene.drive_dt_s(40.0, 20.0),
         scene.rayleigh_limit_s()
     );
-    if let Some((vpp, vpw)) = scene.yield_velocities_mps() {
+    if let Some(y) = scene.yield_velocities_mps() {
         println!(
-            "  yield velocity   {vpp:.3} m/s particle-particle, {vpw:.3} m/s particle-wall (eq. 5.26)"
+            "  yield velocity   {:.3} m/s particle-particle, {:.3} m/s particle-wall (eq. 5.26)",
+            y.particle_particle_mps, y.particle_wall_mps
         );
     }
     let d = &scene.drive;

@@ -4,20 +4,19 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
 use vlab::rig::ShakerKind;
 use vlab::scene::damper::{Kinematics, NoObserver, StepObserver};
 use vlab::scene::dump::VtkDump;
-use vlab::scene::file::{Orientation, Scene, SceneOverrides};
-use vlab::scene::measurement::{CalibrationSource, ShakeSetup};
+use vlab::scene::measurement::ShakeSetup;
 use vlab::scene::shake::{
-    ShakeSummary, check_drive, default_out_dir, resolve_rig, run_shake_from, run_shake_on_bed,
+    ShakeSummary, check_drive, check_record_window, default_out_dir, resolve_rig, run_shake_from,
+    run_shake_on_bed,
 };
 use vlab::scene::snapshots::PhaseSnapshots;
-use vlab::signals::PhaseCalibration;
 
 use super::args;
 use super::cache_cmd::NoCacheArg;
@@ -33,7 +32,7 @@ pub struct ShakeArgs {
     #[arg(long, default_value = "20", value_parser = args::gamma)]
     pub gamma: f64,
     #[command(flatten)]
-    pub scene: SceneArgs,
+    pub scene: args::SceneArgs,
     /// The rig that measures the damper: a built-in name (thesis-shaker, ideal)
     /// or a rig file (TOML).
     #[arg(long, value_name = "NAME|FILE", default_value = vlab::rig::DEFAULT_RIG)]
@@ -83,63 +82,6 @@ impl StepObserver for Both<'_> {
     }
 }
 
-/// Scene options shared by the commands that run the damper.
-#[derive(Debug, Clone, Args)]
-pub struct SceneArgs {
-    /// Scene file (TOML) merged over the built-in thesis scene.
-    #[arg(long, value_name = "FILE")]
-    pub scene: Option<PathBuf>,
-    /// Drive cycles in all, fixing the count [scene default: run until steady:
-    /// input work and dissipation within 1 %, standard error of the energy
-    /// per cycle below 1 %, at most 400 cycles].
-    #[arg(long)]
-    pub cycles: Option<u32>,
-    /// Last cycles kept as the steady window; alone, the steady rule's
-    /// transient cycles then this many [scene default: 5 of --cycles].
-    #[arg(long)]
-    pub steady_cycles: Option<u32>,
-    /// Gravity relative to the drive axis [scene default: vertical].
-    #[arg(long, value_enum)]
-    pub orientation: Option<Orientation>,
-    /// Seed of the random fill [scene default: 1].
-    #[arg(long)]
-    pub seed: Option<u64>,
-    /// Time step (s) [scene default: every collision resolved by 25 steps at
-    /// the largest expected impact speed]; at most the Rayleigh limit.
-    #[arg(long = "dt-s", value_name = "S", value_parser = args::seconds)]
-    pub dt_s: Option<f64>,
-}
-
-impl SceneArgs {
-    /// The scene keys these flags set.
-    pub fn flags(&self) -> args::FlagKeys {
-        args::FlagKeys::new()
-            .set(self.cycles.is_some(), "drive.cycles", "--cycles")
-            .set(
-                self.steady_cycles.is_some(),
-                "drive.steady_cycles",
-                "--steady-cycles",
-            )
-            .set(self.dt_s.is_some(), "simulation.dt_s", "--dt-s")
-    }
-
-    /// The scene (built-in or file) with the command-line overrides applied and
-    /// everything validated; a refusal names the flag or the key at fault.
-    pub fn resolve(&self) -> Result<Scene> {
-        let scene = Scene::load_or_thesis(self.scene.as_deref())?;
-        let overrides = SceneOverrides {
-            cycles: self.cycles,
-            steady_cycles: self.steady_cycles,
-            orientation: self.orientation,
-            seed: self.seed,
-            dt_s: self.dt_s,
-        };
-        overrides
-            .apply(scene)
-            .map_err(|e| self.flags().name_flags(e.into()))
-    }
-}
-
 /// Runs the command.
 pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     let flags = a.scene.flags().set(true, "freq_hz", "--freq");
@@ -148,23 +90,11 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         scene.set_record_length(d, a.freq_hz);
     }
     check_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
-    if scene.drive.steady_cycles < 2 {
-        bail!(
-            "--steady-cycles = {}: must be at least 2: the rig's record needs 2 whole periods for Yang's method",
-            scene.drive.steady_cycles
-        );
-    }
+    check_record_window(&scene).map_err(|e| flags.name_flags(e.into()))?;
     let g = scene.simulation.gravity_mps2;
-    let (rig, kind) = resolve_rig(&a.rig, a.shaker, a.freq_hz, a.gamma, g)
+    let rig = resolve_rig(&a.rig, a.shaker, a.freq_hz, a.gamma, g)
         .with_context(|| format!("--rig {}", a.rig))?;
-    let calibration = match &a.calibration {
-        Some(path) => {
-            let table = PhaseCalibration::load_json(path)
-                .with_context(|| format!("--calibration {}", path.display()))?;
-            CalibrationSource::Given(table, format!("table {}", path.display()))
-        }
-        None => CalibrationSource::OnTheFly,
-    };
+    let calibration = args::calibration_source(a.calibration.as_deref())?;
     let out_dir = a
         .out
         .clone()
@@ -174,7 +104,6 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     let mut progress = ProgressLine::new("shake", quiet);
     let setup = ShakeSetup {
         rig,
-        shaker: kind,
         freq_hz: a.freq_hz,
         gamma: a.gamma,
         calibration,

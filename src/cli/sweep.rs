@@ -126,18 +126,15 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
         Some(SweepAction::Relabel(r)) => return relabel(r),
         None => {}
     }
-    let flags = args::FlagKeys::new()
-        .set(a.cycles.is_some(), "drive.cycles", "--cycles")
-        .set(
-            a.steady_cycles.is_some(),
-            "drive.steady_cycles",
-            "--steady-cycles",
-        )
-        .set(a.dt_s.is_some(), "simulation.dt_s", "--dt-s")
-        .set(true, "freq_hz", "--freq")
-        .set(true, "gamma", "--gamma")
-        .set(true, "seeds", "--seeds")
-        .set(true, "fill_ratio", "--fill-ratio");
+    let flags = args::FlagKeys::drive(
+        a.cycles.is_some(),
+        a.steady_cycles.is_some(),
+        a.dt_s.is_some(),
+    )
+    .set(true, "freq_hz", "--freq")
+    .set(true, "gamma", "--gamma")
+    .set(true, "seeds", "--seeds")
+    .set(true, "fill_ratio", "--fill-ratio");
     let scene = Scene::load_or_thesis(a.scene.as_deref())?;
     let scene = SceneOverrides {
         cycles: a.cycles,

@@ -6,8 +6,6 @@ use thiserror::Error;
 /// diagnosis instead of letting NaNs reach an output file.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum DemError {
-    #[error("{0}")]
-    Invalid(String),
     #[error(
         "numerical instability at t = {time_s:.6} s (step {step}): particle {particle} has a non-finite position; reduce the time step (now {dt_s:.3e} s)"
     )]

@@ -13,7 +13,7 @@
 use serde_json::json;
 
 use super::channel::MeasurementChannel;
-use super::error::{InvalidParameter, RigError, finite, positive};
+use super::error::{RigError, non_negative};
 use super::file::RigFile;
 use super::noise::GaussianNoise;
 use super::spec::{ChannelParams, RigSpec, Sampling};
@@ -103,28 +103,9 @@ impl Daq {
         seed: u64,
     ) -> Result<Daq, RigError> {
         spec.validate()?;
-        positive("dem_dt_s", dem_dt_s, "s")?;
-        finite("record_start_s", record_start_s, "s")?;
-        if record_start_s < 0.0 {
-            return Err(RigError::from(InvalidParameter::new(
-                "record_start_s",
-                record_start_s,
-                "s",
-                "zero or positive (time from the drive start)",
-            )));
-        }
-        let period = 1.0 / spec.daq.sample_rate_hz;
-        if dem_dt_s > period {
-            return Err(RigError::from(InvalidParameter::new(
-                "dem_dt_s",
-                dem_dt_s,
-                "s",
-                format!(
-                    "at most one sample period, {period} s at daq.sample_rate_hz = {} Hz",
-                    spec.daq.sample_rate_hz
-                ),
-            )));
-        }
+        spec.daq.check_step("dem_dt_s", dem_dt_s)?;
+        non_negative("record_start_s", record_start_s, "s")
+            .map_err(|e| e.because("time from the drive start"))?;
         let make = |p: &ChannelParams, stream| {
             MeasurementChannel::new(
                 p,

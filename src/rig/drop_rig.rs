@@ -18,7 +18,7 @@ use serde_json::json;
 
 use super::channel::MeasurementChannel;
 use super::drop_spec::DropRigSpec;
-use super::error::{InvalidParameter, RigError, positive};
+use super::error::RigError;
 use super::noise::GaussianNoise;
 use super::plate::Plate;
 use super::spec::Sampling;
@@ -63,19 +63,7 @@ impl DropRig {
     /// takes its first sample at t = 0.
     pub fn new(spec: &DropRigSpec, tick_s: f64, seed: u64) -> Result<DropRig, RigError> {
         spec.validate()?;
-        positive("tick_s", tick_s, "s")?;
-        let period = 1.0 / spec.daq.sample_rate_hz;
-        if tick_s > period {
-            return Err(RigError::from(InvalidParameter::new(
-                "tick_s",
-                tick_s,
-                "s",
-                format!(
-                    "at most one sample period, {period} s at daq.sample_rate_hz = {} Hz",
-                    spec.daq.sample_rate_hz
-                ),
-            )));
-        }
+        spec.daq.check_step("tick_s", tick_s)?;
         let mut channel = MeasurementChannel::new(
             &spec.force_channel(),
             &spec.daq,

@@ -13,9 +13,10 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::error::{InvalidParameter, RigError, positive};
+use super::error::{RigError, positive};
 use super::file::{RigFile, RigKind, check_header, drop_test_kind};
 use super::spec::{ChannelParams, DaqSpec, ForceSpec};
+use crate::validation::{Bound, in_range};
 
 /// Name of the built-in drop rig.
 pub const DROP_RIG: &str = "drop-test";
@@ -85,20 +86,7 @@ pub struct RecordSpec {
 impl DropRigSpec {
     /// The force channel in common terms.
     pub fn force_channel(&self) -> ChannelParams {
-        let f = &self.force;
-        ChannelParams {
-            name: "force",
-            unit: "N",
-            sensitivity_unit: "V/N",
-            section: "force",
-            sensitivity: f.sensitivity_v_per_n,
-            noise_rms: f.noise_rms_n,
-            conditioner_gain: f.conditioner_gain,
-            high_pass_hz: f.high_pass_hz,
-            low_pass: f.low_pass,
-            sample_skew_s: f.sample_skew_s,
-            sampling: f.sampling,
-        }
+        self.force.params()
     }
 
     /// Undamped natural frequency of the plate on its mount, Hz.
@@ -115,14 +103,13 @@ impl RigFile for DropRigSpec {
         let p = &self.plate;
         positive("plate.mass_kg", p.mass_kg, "kg")?;
         positive("plate.youngs_pa", p.youngs_pa, "Pa")?;
-        if !(p.poisson > -1.0 && p.poisson < 0.5) {
-            return Err(RigError::from(InvalidParameter::new(
-                "plate.poisson",
-                p.poisson,
-                "",
-                "in (-1, 0.5)",
-            )));
-        }
+        in_range(
+            "plate.poisson",
+            p.poisson,
+            "",
+            Bound::Open(-1.0),
+            Bound::Open(0.5),
+        )?;
         if let Some(y) = p.yield_strength_pa {
             positive("plate.yield_strength_pa", y, "Pa")?;
         }
@@ -131,26 +118,23 @@ impl RigFile for DropRigSpec {
             self.mount.stiffness_n_per_m,
             "N/m",
         )?;
-        let z = self.mount.damping_ratio;
-        if !(0.0..1.0).contains(&z) {
-            return Err(RigError::from(InvalidParameter::new(
-                "mount.damping_ratio",
-                z,
-                "",
-                "in [0, 1) (an underdamped plate, as a transducer mount is)",
-            )));
-        }
+        in_range(
+            "mount.damping_ratio",
+            self.mount.damping_ratio,
+            "",
+            Bound::Closed(0.0),
+            Bound::Open(1.0),
+        )
+        .map_err(|e| e.because("an underdamped plate, as a transducer mount is"))?;
         self.daq.validate()?;
         self.force_channel().validate(self.daq.sample_rate_hz)?;
-        let len = self.record.length_s;
-        if !(len.is_finite() && len > 0.0 && len <= MAX_RECORD_LENGTH_S) {
-            return Err(RigError::from(InvalidParameter::new(
-                "record.length_s",
-                len,
-                "s",
-                format!("positive, at most {MAX_RECORD_LENGTH_S} s"),
-            )));
-        }
+        in_range(
+            "record.length_s",
+            self.record.length_s,
+            "s",
+            Bound::Open(0.0),
+            Bound::Closed(MAX_RECORD_LENGTH_S),
+        )?;
         Ok(())
     }
 }

@@ -3,7 +3,8 @@
 //! Every fallible function in `rig` returns [`RigError`]. A refused value is
 //! the crate's one [`InvalidParameter`] (its rig-file key where there is one,
 //! its unit and the valid range); a refusal because the lab hardware cannot do what was asked names the
-//! limit and suggests the `ideal` rig, which has none.
+//! limit and suggests the `ideal` rig, which has none. Messages name rig keys
+//! and parameters (`gamma`), never the `vlab` binary's flags.
 
 use std::path::PathBuf;
 
@@ -21,7 +22,7 @@ pub enum RigError {
     /// The requested motion needs more stroke than the shaker has.
     #[error(
         "Gamma {gamma} at {freq_hz} Hz needs {needed_mm:.1} mm peak-to-peak stroke; the {rig} rig \
-         allows {allowed_mm} mm (stroke limit, shaker.stroke_pp_m): lower --gamma or use --rig ideal"
+         allows {allowed_mm} mm (stroke limit, shaker.stroke_pp_m): lower gamma or use the ideal rig"
     )]
     StrokeLimit {
         /// Rig name.
@@ -38,8 +39,8 @@ pub enum RigError {
     /// The requested motion needs more acceleration than the shaker can give.
     #[error(
         "Gamma {gamma} at {freq_hz} Hz needs {needed_mps2:.1} m/s^2 peak acceleration; the {rig} rig \
-         allows {allowed_mps2} m/s^2 (acceleration limit, shaker.max_accel_mps2): lower --gamma or \
-         use --rig ideal"
+         allows {allowed_mps2} m/s^2 (acceleration limit, shaker.max_accel_mps2): lower gamma or \
+         use the ideal rig"
     )]
     AccelerationLimit {
         /// Rig name.

@@ -33,6 +33,7 @@
 //! `a = k.acceleration_mps2`.
 
 pub mod channel;
+pub mod channel_spec;
 pub mod daq;
 pub mod discretise;
 pub mod drop_rig;
@@ -48,6 +49,7 @@ pub mod spec;
 pub mod transducer;
 
 pub use channel::{Adc, MeasurementChannel};
+pub use channel_spec::{Acceleration, ChannelQuantity, ChannelSpec, Force};
 pub use daq::{ACCEL_CHANNEL, ChannelReport, Daq, DaqReport, FORCE_CHANNEL};
 pub use drop_rig::{DROP_FORCE_CHANNEL, DropRig, DropRigReport};
 pub use drop_spec::{DROP_RIG, DropRigSpec, MountSpec, PlateSpec, RecordSpec};

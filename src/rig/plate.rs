@@ -28,7 +28,8 @@ use glam::{DMat3, DVec3};
 
 use super::discretise::zero_order_hold;
 use super::drop_spec::DropRigSpec;
-use super::error::{InvalidParameter, RigError, positive};
+use super::error::{RigError, positive};
+use crate::validation::{Bound, in_range};
 
 /// The plate on its mount.
 #[derive(Debug, Clone)]
@@ -50,14 +51,13 @@ impl Plate {
     pub fn new(mass_kg: f64, stiffness_n_per_m: f64, damping_ratio: f64) -> Result<Self, RigError> {
         positive("plate.mass_kg", mass_kg, "kg")?;
         positive("mount.stiffness_n_per_m", stiffness_n_per_m, "N/m")?;
-        if !(0.0..1.0).contains(&damping_ratio) {
-            return Err(RigError::from(InvalidParameter::new(
-                "mount.damping_ratio",
-                damping_ratio,
-                "",
-                "in [0, 1)",
-            )));
-        }
+        in_range(
+            "mount.damping_ratio",
+            damping_ratio,
+            "",
+            Bound::Closed(0.0),
+            Bound::Open(1.0),
+        )?;
         let c = 2.0 * damping_ratio * (stiffness_n_per_m * mass_kg).sqrt();
         let a = DMat3::from_cols_array_2d(&[
             [0.0, 1.0, 0.0],

@@ -405,17 +405,7 @@ impl Shaker {
         Ok(match kind {
             ShakerKind::Prescribed => Shaker::Prescribed(target),
             ShakerKind::Electrodynamic => {
-                let p = spec
-                    .shaker
-                    .electrodynamic
-                    .ok_or_else(|| RigError::MissingSection {
-                        rig: spec.name.clone(),
-                        section: "shaker.electrodynamic",
-                        hint:
-                            "an electrodynamic drive needs the lumped shaker parameters: use the \
-                           prescribed drive or a rig that has them (thesis-shaker)"
-                                .into(),
-                    })?;
+                let p = spec.electrodynamic()?;
                 let model = Electrodynamic::new(p, moving_mass_kg, particle_mass_kg, &target);
                 let kin = model.kinematics(0.0, 1.0, 0.0);
                 Shaker::Electrodynamic(Box::new(ElectrodynamicShaker {
@@ -568,7 +558,7 @@ mod tests {
             "{stroke}"
         );
         assert!(
-            stroke.ends_with("lower --gamma or use --rig ideal"),
+            stroke.ends_with("lower gamma or use the ideal rig"),
             "{stroke}"
         );
         let msg = check_limits(&rig, 20.0, 15.0, G)
@@ -582,7 +572,7 @@ mod tests {
             accel.starts_with("Gamma 41 at 40 Hz needs 402.2 m/s^2 peak acceleration; the thesis-shaker rig allows 392.4 m/s^2 (acceleration limit"),
             "{accel}"
         );
-        assert!(accel.contains("--rig ideal"), "{accel}");
+        assert!(accel.contains("the ideal rig"), "{accel}");
         for (f, gamma) in [(20.0, 12.0), (40.0, 40.0), (160.0, 40.0), (1024.0, 40.0)] {
             check_limits(&rig, f, gamma, G).unwrap_or_else(|e| panic!("{f} Hz Gamma {gamma}: {e}"));
         }

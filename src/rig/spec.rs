@@ -23,11 +23,12 @@ use std::f64::consts::PI;
 use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+use super::channel_spec::{Acceleration, ChannelSpec, Force};
 use super::error::{InvalidParameter, RigError, finite, non_negative, positive};
 use super::file::{RigFile, RigKind, check_header, shaker_kind};
 use super::filter::{MAX_LOW_PASS_ORDER, butterworth_response, high_pass_response};
 use crate::signals::{PhaseErrorModel, wrap_phase_rad};
-use crate::validation::count_in;
+use crate::validation::{Bound, count_in, in_range, require};
 
 /// Name of the default rig.
 pub const DEFAULT_RIG: &str = "thesis-shaker";
@@ -44,6 +45,22 @@ pub enum ShakerKind {
     /// A lumped electrodynamic shaker driven by an amplifier; the particles'
     /// force disturbs its motion.
     Electrodynamic,
+}
+
+impl ShakerKind {
+    /// Lower-case name, as in rig files and on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ShakerKind::Prescribed => "prescribed",
+            ShakerKind::Electrodynamic => "electrodynamic",
+        }
+    }
+}
+
+impl std::fmt::Display for ShakerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
 }
 
 /// A complete rig description.
@@ -169,61 +186,11 @@ pub struct LowPassSpec {
     pub order: u32,
 }
 
-/// The accelerometer and its conditioner channel.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AccelerometerSpec {
-    /// Transducer sensitivity, V/(m/s^2).
-    pub sensitivity_v_per_mps2: f64,
-    /// White noise referred to the input, rms, m/s^2 (added per sample).
-    #[serde(default)]
-    pub noise_rms_mps2: f64,
-    /// Conditioner gain, V/V.
-    #[serde(default = "default_gain")]
-    pub conditioner_gain: f64,
-    /// AC-coupling high-pass corner, Hz; 0 = DC-coupled.
-    #[serde(default)]
-    pub high_pass_hz: f64,
-    /// Anti-alias low-pass; absent = none.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub low_pass: Option<LowPassSpec>,
-    /// Channel samples at `t_k + sample_skew_s`, s.
-    #[serde(default)]
-    pub sample_skew_s: f64,
-    /// Sampling method.
-    #[serde(default)]
-    pub sampling: Sampling,
-}
+/// The accelerometer and its conditioner channel (`[accelerometer]`).
+pub type AccelerometerSpec = ChannelSpec<Acceleration>;
 
-/// The force transducer and its conditioner channel.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ForceSpec {
-    /// Transducer sensitivity, V/N.
-    pub sensitivity_v_per_n: f64,
-    /// White noise referred to the input, rms, N (added per sample).
-    #[serde(default)]
-    pub noise_rms_n: f64,
-    /// Conditioner gain, V/V.
-    #[serde(default = "default_gain")]
-    pub conditioner_gain: f64,
-    /// AC-coupling high-pass corner, Hz; 0 = DC-coupled.
-    #[serde(default)]
-    pub high_pass_hz: f64,
-    /// Anti-alias low-pass; absent = none.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub low_pass: Option<LowPassSpec>,
-    /// Channel samples at `t_k + sample_skew_s`, s.
-    #[serde(default)]
-    pub sample_skew_s: f64,
-    /// Sampling method.
-    #[serde(default)]
-    pub sampling: Sampling,
-}
-
-fn default_gain() -> f64 {
-    1.0
-}
+/// The force transducer and its conditioner channel (`[force]`).
+pub type ForceSpec = ChannelSpec<Force>;
 
 /// The digitiser.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -266,6 +233,9 @@ pub struct ChannelParams {
     pub sensitivity_unit: &'static str,
     /// Rig-file section (`accelerometer`, `force`), for messages.
     pub section: &'static str,
+    /// Keys of the sensitivity and the noise in that section.
+    pub sensitivity_key: &'static str,
+    pub noise_key: &'static str,
     /// Transducer sensitivity, V per physical unit.
     pub sensitivity: f64,
     /// Noise rms in physical units, referred to the input.
@@ -310,18 +280,12 @@ impl ChannelParams {
     /// names the rig-file key, its unit and valid range.
     pub fn validate(&self, sample_rate_hz: f64) -> Result<(), RigError> {
         let key = |k: &str| format!("{}.{k}", self.section);
-        let sens_key = if self.name == "force" {
-            "sensitivity_v_per_n"
-        } else {
-            "sensitivity_v_per_mps2"
-        };
-        let noise_key = if self.name == "force" {
-            "noise_rms_n"
-        } else {
-            "noise_rms_mps2"
-        };
-        positive(&key(sens_key), self.sensitivity, self.sensitivity_unit)?;
-        non_negative(&key(noise_key), self.noise_rms, self.unit)?;
+        positive(
+            &key(self.sensitivity_key),
+            self.sensitivity,
+            self.sensitivity_unit,
+        )?;
+        non_negative(&key(self.noise_key), self.noise_rms, self.unit)?;
         positive(&key("conditioner_gain"), self.conditioner_gain, "V/V")?;
         non_negative(&key("high_pass_hz"), self.high_pass_hz, "Hz")?;
         if let Some(lp) = self.low_pass {
@@ -368,38 +332,12 @@ impl ChannelParams {
 impl RigSpec {
     /// The accelerometer channel in common terms.
     pub fn accel_channel(&self) -> ChannelParams {
-        let a = &self.accelerometer;
-        ChannelParams {
-            name: "acceleration",
-            unit: "m/s^2",
-            sensitivity_unit: "V/(m/s^2)",
-            section: "accelerometer",
-            sensitivity: a.sensitivity_v_per_mps2,
-            noise_rms: a.noise_rms_mps2,
-            conditioner_gain: a.conditioner_gain,
-            high_pass_hz: a.high_pass_hz,
-            low_pass: a.low_pass,
-            sample_skew_s: a.sample_skew_s,
-            sampling: a.sampling,
-        }
+        self.accelerometer.params()
     }
 
     /// The force channel in common terms.
     pub fn force_channel(&self) -> ChannelParams {
-        let f = &self.force;
-        ChannelParams {
-            name: "force",
-            unit: "N",
-            sensitivity_unit: "V/N",
-            section: "force",
-            sensitivity: f.sensitivity_v_per_n,
-            noise_rms: f.noise_rms_n,
-            conditioner_gain: f.conditioner_gain,
-            high_pass_hz: f.high_pass_hz,
-            low_pass: f.low_pass,
-            sample_skew_s: f.sample_skew_s,
-            sampling: f.sampling,
-        }
+        self.force.params()
     }
 
     /// The model's own phase error at `freq_hz`: the phase of the force
@@ -428,6 +366,26 @@ impl RigSpec {
         }
     }
 
+    /// The same rig driven by `kind` (`shaker.kind`).
+    pub fn with_shaker(mut self, kind: ShakerKind) -> RigSpec {
+        self.shaker.kind = kind;
+        self
+    }
+
+    /// The electrodynamic shaker's lumped parameters: the one refusal of an
+    /// electrodynamic drive on a rig without them.
+    pub fn electrodynamic(&self) -> Result<ElectrodynamicSpec, RigError> {
+        self.shaker
+            .electrodynamic
+            .ok_or_else(|| RigError::MissingSection {
+                rig: self.name.clone(),
+                section: "shaker.electrodynamic",
+                hint: "an electrodynamic drive needs the lumped shaker parameters: use the \
+                       prescribed drive or a rig that has them (thesis-shaker)"
+                    .into(),
+            })
+    }
+
     /// True when the two channels read with no phase error at `freq_hz` and
     /// no noise (the `ideal` rig): an empty-enclosure calibration could only
     /// measure rounding, so none is run and the correction is zero.
@@ -453,12 +411,7 @@ impl RigFile for RigSpec {
         match (&s.electrodynamic, s.kind) {
             (Some(e), _) => e.validate()?,
             (None, ShakerKind::Electrodynamic) => {
-                return Err(RigError::MissingSection {
-                    rig: self.name.clone(),
-                    section: "shaker.electrodynamic",
-                    hint: "shaker.kind = \"electrodynamic\" needs the lumped shaker parameters"
-                        .into(),
-                });
+                self.electrodynamic()?;
             }
             (None, ShakerKind::Prescribed) => {}
         }
@@ -471,6 +424,25 @@ impl RigFile for RigSpec {
 }
 
 impl DaqSpec {
+    /// Checks a step of the clock that drives the channels, `step_s` named
+    /// `key`: positive and at most one sample period (each sample needs at
+    /// least one step).
+    pub fn check_step(&self, key: &str, step_s: f64) -> Result<(), RigError> {
+        positive(key, step_s, "s")?;
+        let period = 1.0 / self.sample_rate_hz;
+        require(
+            step_s <= period,
+            key,
+            step_s,
+            "s",
+            format!(
+                "at most one sample period, {period} s at daq.sample_rate_hz = {} Hz",
+                self.sample_rate_hz
+            ),
+        )?;
+        Ok(())
+    }
+
     /// Checks sample rate, bits and full scale.
     pub fn validate(&self) -> Result<(), RigError> {
         positive("daq.sample_rate_hz", self.sample_rate_hz, "Hz")?;
@@ -502,23 +474,20 @@ impl ElectrodynamicSpec {
             self.amplifier_gain_v_per_v,
             "V/V",
         )?;
-        if !(self.loop_gain > 0.0 && self.loop_gain <= 1.0) {
-            return Err(RigError::from(InvalidParameter::new(
-                k("loop_gain"),
-                self.loop_gain,
-                "",
-                "in (0, 1]",
-            )));
-        }
-        let f = self.feedforward_particle_fraction;
-        if !(0.0..=1.0).contains(&f) {
-            return Err(RigError::from(InvalidParameter::new(
-                k("feedforward_particle_fraction"),
-                f,
-                "",
-                "in [0, 1]",
-            )));
-        }
+        in_range(
+            &k("loop_gain"),
+            self.loop_gain,
+            "",
+            Bound::Open(0.0),
+            Bound::Closed(1.0),
+        )?;
+        in_range(
+            &k("feedforward_particle_fraction"),
+            self.feedforward_particle_fraction,
+            "",
+            Bound::Closed(0.0),
+            Bound::Closed(1.0),
+        )?;
         Ok(())
     }
 }
@@ -574,7 +543,7 @@ mod tests {
     #[test]
     fn bad_values_name_key_unit_and_range() {
         let mut rig = RigSpec::builtin("thesis-shaker").expect("built in");
-        rig.accelerometer.sensitivity_v_per_mps2 = -0.001;
+        rig.accelerometer.sensitivity = -0.001;
         let msg = rig.validate().expect_err("negative").to_string();
         assert_eq!(
             msg,

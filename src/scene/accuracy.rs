@@ -286,7 +286,7 @@ pub const CSV_HEADER: &str =
     "study,parameter,value,quantity,estimate,reference,error_rel,stderr_rel,wall_s,note";
 
 /// `rows` as CSV text: numbers in shortest round-trip form, NaN as an empty
-/// field, the note quoted.
+/// field, a field quoted when it holds a comma, a quote or a line break.
 pub fn rows_to_csv(rows: &[AccuracyRow]) -> String {
     let num = |x: f64| {
         if x.is_finite() {
@@ -295,24 +295,25 @@ pub fn rows_to_csv(rows: &[AccuracyRow]) -> String {
             String::new()
         }
     };
-    let mut out = String::from(CSV_HEADER);
-    out.push('\n');
+    let mut w = csv::Writer::from_writer(Vec::new());
+    // Writing into memory cannot fail.
+    let _ = w.write_record(CSV_HEADER.split(','));
     for r in rows {
-        out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},\"{}\"\n",
-            r.study,
-            r.parameter,
+        let _ = w.write_record([
+            r.study.to_string(),
+            r.parameter.to_string(),
             num(r.value),
-            r.quantity,
+            r.quantity.to_string(),
             num(r.estimate),
             num(r.reference),
             num(r.error_rel),
             num(r.stderr_rel),
             num(r.wall_s),
-            r.note.replace('"', "\"\"")
-        ));
+            r.note.clone(),
+        ]);
     }
-    out
+    let bytes = w.into_inner().unwrap_or_default();
+    String::from_utf8_lossy(&bytes).into_owned()
 }
 
 /// Least-squares slope of `ln |y|` against `ln x` over the points with both
@@ -335,14 +336,28 @@ pub fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
+/// The spread of block means about a reference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockSpread {
+    /// Root-mean-square relative deviation of the block means (NaN without
+    /// blocks).
+    pub rms_rel: f64,
+    /// How many blocks.
+    pub blocks: usize,
+}
+
 /// Root-mean-square relative deviation from `reference` of the means of
 /// disjoint blocks of `n` values of each series (a series' leftover values
 /// are dropped), and the number of blocks.
-pub fn block_rms_rel(series: &[Vec<f64>], n: usize, reference: f64) -> (f64, usize) {
+pub fn block_rms_rel(series: &[Vec<f64>], n: usize, reference: f64) -> BlockSpread {
+    let none = BlockSpread {
+        rms_rel: f64::NAN,
+        blocks: 0,
+    };
     let mut sum_sq = 0.0;
     let mut blocks = 0usize;
     if n == 0 {
-        return (f64::NAN, 0);
+        return none;
     }
     for s in series {
         for block in s.chunks_exact(n) {
@@ -352,9 +367,12 @@ pub fn block_rms_rel(series: &[Vec<f64>], n: usize, reference: f64) -> (f64, usi
         }
     }
     if blocks == 0 {
-        (f64::NAN, 0)
+        none
     } else {
-        ((sum_sq / blocks as f64).sqrt(), blocks)
+        BlockSpread {
+            rms_rel: (sum_sq / blocks as f64).sqrt(),
+            blocks,
+        }
     }
 }
 
@@ -857,7 +875,10 @@ fn dem_study(
             row.note = "the reference itself".into();
         }
         rows.push(row);
-        let (rms, blocks) = block_rms_rel(&series, n, pooled);
+        let BlockSpread {
+            rms_rel: rms,
+            blocks,
+        } = block_rms_rel(&series, n, pooled);
         if blocks >= 2 {
             let mut row = AccuracyRow::new(
                 "dem",
@@ -1407,11 +1428,11 @@ fn yang_study(
     };
     for &k in &plan.noise_factors {
         let mut r = rig.clone();
-        r.force.noise_rms_n *= k;
-        r.accelerometer.noise_rms_mps2 *= k;
+        r.force.noise_rms *= k;
+        r.accelerometer.noise_rms *= k;
         let note = format!(
             "noise {:.3e} N and {:.3e} m/s^2 rms",
-            r.force.noise_rms_n, r.accelerometer.noise_rms_mps2
+            r.force.noise_rms, r.accelerometer.noise_rms
         );
         setting("noise_factor", k, &r, note)?;
     }
@@ -1421,7 +1442,7 @@ fn yang_study(
         r.daq.ideal_adc = false;
         let lsb_n = 2.0 * r.daq.full_scale_v
             / 2f64.powi(bits as i32)
-            / (r.force.sensitivity_v_per_n * r.force.conditioner_gain);
+            / (r.force.sensitivity * r.force.conditioner_gain);
         setting(
             "adc_bits",
             f64::from(bits),
@@ -1721,12 +1742,21 @@ mod tests {
     fn block_rms_uses_disjoint_whole_blocks() {
         let series = vec![vec![1.0, 3.0, 2.0, 2.0, 9.0], vec![2.0, 2.0]];
         // Blocks of 2: [1,3] [2,2] | [2,2]: means 2, 2, 2 → no deviation from 2.
-        assert_eq!(block_rms_rel(&series, 2, 2.0), (0.0, 3));
+        assert_eq!(
+            block_rms_rel(&series, 2, 2.0),
+            BlockSpread {
+                rms_rel: 0.0,
+                blocks: 3
+            }
+        );
         // Blocks of 1 of the first series against 2: deviations -0.5, 0.5, 0, 0, 3.5, 0, 0.
-        let (rms, n) = block_rms_rel(&series, 1, 2.0);
+        let BlockSpread {
+            rms_rel: rms,
+            blocks: n,
+        } = block_rms_rel(&series, 1, 2.0);
         assert_eq!(n, 7);
         assert!((rms - ((0.25 + 0.25 + 12.25) / 7.0f64).sqrt()).abs() < 1e-12);
-        assert_eq!(block_rms_rel(&series, 6, 2.0).1, 0);
+        assert_eq!(block_rms_rel(&series, 6, 2.0).blocks, 0);
     }
 
     #[test]

@@ -190,8 +190,17 @@ pub enum BadBed {
 #[derive(Debug, Clone)]
 pub struct DecodedBed {
     pub header: BedHeader,
-    /// Position, velocity, angular velocity and radius of each particle.
-    pub state: Vec<(DVec3, DVec3, DVec3, f64)>,
+    /// Each particle's state.
+    pub state: Vec<ParticleState>,
+}
+
+/// One particle of a bed file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParticleState {
+    pub position_m: DVec3,
+    pub velocity_mps: DVec3,
+    pub angular_velocity_radps: DVec3,
+    pub radius_m: f64,
 }
 
 /// Reads a bed file's bytes; `expect_key` (when given) must be its key.
@@ -238,7 +247,12 @@ pub fn decode_bed(bytes: &[u8], expect_key: Option<&str>) -> Result<DecodedBed, 
         .map(|i| {
             let o = F64_PER_PARTICLE * i;
             let v = |k: usize| DVec3::new(f(o + k), f(o + k + 1), f(o + k + 2));
-            (v(0), v(3), v(6), f(o + 9))
+            ParticleState {
+                position_m: v(0),
+                velocity_mps: v(3),
+                angular_velocity_radps: v(6),
+                radius_m: f(o + 9),
+            }
         })
         .collect();
     Ok(DecodedBed { header, state })
@@ -307,8 +321,14 @@ impl BedCache {
         })?;
         let density = scene.particle_material().density_kgm3;
         let mut particles = Particles::default();
-        for (x, v, w, r) in decoded.state {
-            particles.push(x, v, w, r, density);
+        for s in decoded.state {
+            particles.push(
+                s.position_m,
+                s.velocity_mps,
+                s.angular_velocity_radps,
+                s.radius_m,
+                density,
+            );
         }
         let h = decoded.header;
         let mut world = rebuild_settled_world(scene, particles, h.dt_s).map_err(|e| {
@@ -490,7 +510,13 @@ mod tests {
         let back = decode_bed(&bytes, Some(&key)).expect("reads back");
         assert_eq!(back.state.len(), 40);
         let p = &bed.world.particles;
-        for (i, (x, v, w, r)) in back.state.iter().enumerate() {
+        for (i, s) in back.state.iter().enumerate() {
+            let (x, v, w, r) = (
+                s.position_m,
+                s.velocity_mps,
+                s.angular_velocity_radps,
+                s.radius_m,
+            );
             assert_eq!(
                 x.to_array().map(f64::to_bits),
                 p.position[i].to_array().map(f64::to_bits)

@@ -59,17 +59,30 @@ impl StepObserver for NoObserver {
     fn observe(&mut self, _t_s: f64, _world: &World, _enclosure: &Kinematics) {}
 }
 
+/// A scene's two contact laws.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactLaws {
+    pub particle_particle: ContactLaw,
+    pub particle_wall: ContactLaw,
+}
+
 /// The contact laws of a scene.
-pub fn contact_laws(scene: &Scene) -> (ContactLaw, ContactLaw) {
+pub fn contact_laws(scene: &Scene) -> ContactLaws {
     let pm = scene.particle_material();
     let wm = scene.wall_material();
     let c = &scene.contact;
     let pp = c.particle_particle;
     let pw = c.particle_wall;
-    (
-        ContactLaw::new(&pm, &pm, pp.restitution, pp.friction, c.restitution_mode),
-        ContactLaw::new(&pm, &wm, pw.restitution, pw.friction, c.restitution_mode),
-    )
+    ContactLaws {
+        particle_particle: ContactLaw::new(
+            &pm,
+            &pm,
+            pp.restitution,
+            pp.friction,
+            c.restitution_mode,
+        ),
+        particle_wall: ContactLaw::new(&pm, &wm, pw.restitution, pw.friction, c.restitution_mode),
+    }
 }
 
 /// Gravity vector for an orientation; the enclosure axis is z.

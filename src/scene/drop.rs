@@ -64,11 +64,18 @@
 //! fifth of the estimator's default threshold) or a contact lasts longer than
 //! 1 ms, the sphere is taken to rest on the plate: the DEM stops and the rig
 //! carries the sphere's weight to the end of the record.
+//!
+//! # Several heights
+//!
+//! [`summarise_drops`] gathers the drops of one sphere from several heights
+//! into what `vlab drop` writes as `drop.json` ([`DropSummary`]): every
+//! triple's estimate beside the model's realised restitution.
 
 use crate::rig::{DROP_RIG, RigFile};
 use std::time::Instant;
 
 use glam::DVec3;
+use serde::Serialize;
 
 use crate::dem::hertz_theory;
 use crate::dem::material::{Material, effective_youngs_pa, sphere_mass_kg};
@@ -78,6 +85,7 @@ use crate::scene::validity::sphere_wall_yield_velocity_mps;
 use crate::signals::{
     DropTestResult, ImpactParams, SignalsError, Trace, TraceMetadata, estimate_cor,
 };
+use crate::stats::mean_std;
 use crate::validation::{self, Bound, InvalidParameter, in_range, non_negative, positive, require};
 
 /// Gravity of the drop scene, m/s^2 (as the thesis scene).
@@ -298,29 +306,39 @@ impl DropSetup {
     }
 
     /// The transducer's first pulse at the fastest impact and the lowest
-    /// sample rate that puts one sample in it, (s, Hz).
-    pub fn min_sample_rate_hz(&self) -> Result<(f64, f64), DropError> {
+    /// sample rate that puts one sample in it.
+    pub fn min_sample_rate_hz(&self) -> Result<SamplingLimit, DropError> {
         let plate = Plate::from_spec(&self.rig)?;
         let pulse =
             plate.first_pulse_duration_s(self.contact_duration_s(self.first_impact_speed_mps()));
-        Ok((pulse, 1.0 / pulse))
+        Ok(SamplingLimit {
+            first_pulse_s: pulse,
+            min_rate_hz: 1.0 / pulse,
+        })
     }
 
     /// A warning when the sample rate resolves the impacts only barely: fewer
     /// than two samples per first pulse, or the plate's ring above the Nyquist
     /// frequency (it aliases). Point-sampled, an impact can then be caught near
     /// its zero crossings, timed a ring period late or missed altogether; the
-    /// estimate shows a missed impact as a triple with `e > 1`.
+    /// estimate shows a missed impact as a triple with `e > 1`. The sample
+    /// rate is named by its rig key, `daq.sample_rate_hz`.
     pub fn sampling_warning(&self) -> Result<Option<String>, DropError> {
+        self.sampling_warning_naming("daq.sample_rate_hz")
+    }
+
+    /// [`DropSetup::sampling_warning`] with the sample rate named `name` (a
+    /// caller's own name for the value: the flag that set it).
+    pub fn sampling_warning_naming(&self, name: &str) -> Result<Option<String>, DropError> {
         let fs = self.rig.daq.sample_rate_hz;
-        let (pulse, _) = self.min_sample_rate_hz()?;
+        let pulse = self.min_sample_rate_hz()?.first_pulse_s;
         let ring_hz = Plate::from_spec(&self.rig)?.ring_freq_hz();
         let good = (2.0 / pulse).max(2.0 * ring_hz);
         if fs >= good {
             return Ok(None);
         }
         Ok(Some(format!(
-            "--sample-rate-hz {fs} Hz barely resolves the impacts: the transducer's first pulse \
+            "{name} {fs} Hz barely resolves the impacts: the transducer's first pulse \
              ({:.1} us) spans {:.1} sample periods and the plate's {:.1} kHz ring is {} the \
              {:.1} kHz Nyquist frequency, so an impact can be sampled near its zero crossings, \
              timed a ring period late or missed (use at least {:.0} Hz, or a lower detection \
@@ -386,7 +404,10 @@ impl DropSetup {
         let g = positive("gravity_mps2", self.gravity_mps2, "m/s^2")?;
         self.rig.validate()?;
         let fs = self.rig.daq.sample_rate_hz;
-        let (pulse, min_rate) = self.min_sample_rate_hz()?;
+        let SamplingLimit {
+            first_pulse_s: pulse,
+            min_rate_hz: min_rate,
+        } = self.min_sample_rate_hz()?;
         if fs < min_rate {
             let v = self.first_impact_speed_mps();
             return Err(InvalidParameter::new(
@@ -457,6 +478,16 @@ pub struct DemImpact {
     pub contact_cor: f64,
     /// Largest contact force, N.
     pub peak_contact_force_n: f64,
+}
+
+/// The transducer's first pulse at a drop's fastest impact and the lowest
+/// sample rate that puts one sample in it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SamplingLimit {
+    /// Duration of the first pulse, s.
+    pub first_pulse_s: f64,
+    /// `1 / first_pulse_s`, Hz.
+    pub min_rate_hz: f64,
 }
 
 /// What one drop produced.
@@ -709,6 +740,182 @@ pub fn run_drop(setup: &DropSetup) -> Result<DropOutcome, DropError> {
         rest_time_s,
         first_contact_duration_s: setup.contact_duration_s(first_speed),
         wall_time_s: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Text for a height in a file name: 0.05 -> "50", 0.0125 -> "12.5" (mm).
+pub fn millimetres(h_m: f64) -> String {
+    format!("{}", (h_m * 1e6).round() / 1e3)
+}
+
+/// One height's record and what was made of it.
+#[derive(Debug, Clone, Serialize)]
+pub struct DropRunSummary {
+    pub height_m: f64,
+    /// `sqrt(2 g h)`, m/s.
+    pub first_impact_speed_mps: f64,
+    /// Hertz contact duration at the first impact (eq. 5.10), s.
+    pub contact_duration_s: f64,
+    pub impacts_detected: usize,
+    pub onset_times_s: Vec<f64>,
+    /// COR of each triple (eq. 7.5).
+    pub cor_per_triple: Vec<f64>,
+    /// Speed at the middle impact of each triple (eq. 7.3), m/s.
+    pub impact_speeds_mps: Vec<f64>,
+    pub cor_mean: f64,
+    pub cor_std: f64,
+    /// DEM restitution (bounce) of each triple's middle impact.
+    pub realised_model_cor_per_triple: Vec<Option<f64>>,
+    pub realised_model_cor: Option<f64>,
+    /// Triples whose gaps grew (a missed or false impact).
+    pub growing_gap_triples: Vec<usize>,
+    pub threshold_n: f64,
+    pub holdoff_s: f64,
+    pub peak_transducer_force_n: f64,
+    pub clipped_samples: u64,
+    /// Every contact the DEM resolved.
+    pub dem_impacts: Vec<DemImpact>,
+    pub rest_time_s: Option<f64>,
+    pub tick_s: f64,
+    pub dem_steps: u64,
+    pub fine_steps: u64,
+    pub wall_time_s: f64,
+    /// The record's files: `force-h<mm>mm.csv`, `.wav`, `.wav.json`.
+    pub files: Vec<String>,
+}
+
+/// Everything `drop.json` says about a drop test of one sphere from one or
+/// several heights.
+#[derive(Debug, Clone, Serialize)]
+pub struct DropSummary {
+    pub vlab_version: &'static str,
+    pub particle: String,
+    pub material: &'static str,
+    pub diameter_m: f64,
+    /// The contact law's configured restitution (exact mode).
+    pub configured_cor: f64,
+    pub rig: String,
+    pub sample_rate_hz: f64,
+    pub gravity_mps2: f64,
+    pub seed: u64,
+    /// Mean of every triple's COR over all heights.
+    pub cor_mean: f64,
+    /// Sample standard deviation of the same.
+    pub cor_std: f64,
+    pub cor_per_triple: Vec<f64>,
+    /// Speed at each triple's middle impact, m/s.
+    pub impact_speeds_mps: Vec<f64>,
+    /// Heights of each triple, m.
+    pub heights_m: Vec<f64>,
+    /// Mean DEM restitution of the triples' middle impacts: the sphere's own
+    /// rebound / impact speed (eq. 7.2).
+    pub realised_model_cor: Option<f64>,
+    pub realised_model_cor_per_triple: Vec<Option<f64>>,
+    /// The same relative to the moving plate: the contact law's restitution.
+    pub realised_contact_cor: Option<f64>,
+    /// `cor_mean / realised_model_cor - 1`.
+    pub cor_error_rel: Option<f64>,
+    /// Yield velocity of the sphere on the plate (eq. 5.26), m/s.
+    pub yield_velocity_mps: Option<f64>,
+    /// Lowest accepted sample rate: one sample per first pulse, Hz.
+    pub min_sample_rate_hz: f64,
+    pub warnings: Vec<String>,
+    pub runs: Vec<DropRunSummary>,
+    pub files: Vec<String>,
+}
+
+/// The summary of drops `setups` (the same sphere and rig from one or
+/// several heights; at least one) and their `runs`, with the `warnings` the
+/// caller has for them; `material` names the sphere's material.
+pub fn summarise_drops(
+    setups: &[DropSetup],
+    runs: &[(DropOutcome, DropEstimate)],
+    material: &'static str,
+    warnings: Vec<String>,
+) -> Result<DropSummary, DropError> {
+    let first = setups
+        .first()
+        .ok_or_else(|| InvalidParameter::new("setups", "[]", "", "a list of at least one drop"))?;
+    let mut all_cor = Vec::new();
+    let mut all_speed = Vec::new();
+    let mut all_height = Vec::new();
+    let mut all_realised = Vec::new();
+    let mut contact = Vec::new();
+    let mut run_summaries = Vec::new();
+    for (s, (out, est)) in setups.iter().zip(runs) {
+        let cor = &est.result.cor;
+        let n = cor.cor_per_triple.len();
+        let speeds = cor.impact_speeds_mps[..n].to_vec();
+        all_cor.extend_from_slice(&cor.cor_per_triple);
+        all_speed.extend_from_slice(&speeds);
+        all_height.extend(std::iter::repeat_n(s.height_m, n));
+        all_realised.extend_from_slice(&est.realised_per_triple);
+        contact
+            .extend((0..n).filter_map(|k| est.matched[k + 1].map(|i| out.impacts[i].contact_cor)));
+        let stem = format!("force-h{}mm", millimetres(s.height_m));
+        run_summaries.push(DropRunSummary {
+            height_m: s.height_m,
+            first_impact_speed_mps: s.first_impact_speed_mps(),
+            contact_duration_s: out.first_contact_duration_s,
+            impacts_detected: est.result.detection.impacts.len(),
+            onset_times_s: est.result.detection.onset_times_s(),
+            cor_per_triple: cor.cor_per_triple.clone(),
+            impact_speeds_mps: speeds,
+            cor_mean: cor.cor_mean,
+            cor_std: cor.cor_std,
+            realised_model_cor_per_triple: est.realised_per_triple.clone(),
+            realised_model_cor: est.realised_mean(),
+            growing_gap_triples: cor.growing_gaps(),
+            threshold_n: est.result.detection.threshold_n,
+            holdoff_s: est.result.detection.holdoff_s,
+            peak_transducer_force_n: out.rig_report.peak_transducer_force_n,
+            clipped_samples: out.rig_report.clipped,
+            dem_impacts: out.impacts.clone(),
+            rest_time_s: out.rest_time_s,
+            tick_s: out.tick_s,
+            dem_steps: out.dem_steps,
+            fine_steps: out.fine_steps,
+            wall_time_s: out.wall_time_s,
+            files: vec![
+                format!("{stem}.csv"),
+                format!("{stem}.wav"),
+                format!("{stem}.wav.json"),
+            ],
+        });
+    }
+    let cor = mean_std(&all_cor);
+    let realised: Vec<f64> = all_realised.iter().flatten().copied().collect();
+    let realised_model_cor = (!realised.is_empty()).then(|| mean_std(&realised).mean);
+    let mut files: Vec<String> = run_summaries.iter().flat_map(|r| r.files.clone()).collect();
+    files.extend(["results.csv", "cor-vs-speed.svg", "drop.json"].map(String::from));
+    let mut min_sample_rate_hz = 0.0f64;
+    for s in setups {
+        min_sample_rate_hz = min_sample_rate_hz.max(s.min_sample_rate_hz()?.min_rate_hz);
+    }
+    Ok(DropSummary {
+        vlab_version: env!("CARGO_PKG_VERSION"),
+        particle: first.particle_name.clone(),
+        material,
+        diameter_m: first.diameter_m,
+        configured_cor: first.restitution,
+        rig: first.rig.name.clone(),
+        sample_rate_hz: first.rig.daq.sample_rate_hz,
+        gravity_mps2: first.gravity_mps2,
+        seed: first.seed,
+        cor_mean: cor.mean,
+        cor_std: cor.std,
+        cor_per_triple: all_cor,
+        impact_speeds_mps: all_speed,
+        heights_m: all_height,
+        realised_model_cor,
+        realised_model_cor_per_triple: all_realised,
+        realised_contact_cor: (!contact.is_empty()).then(|| mean_std(&contact).mean),
+        cor_error_rel: realised_model_cor.map(|r| cor.mean / r - 1.0),
+        yield_velocity_mps: first.yield_velocity_mps(),
+        min_sample_rate_hz,
+        warnings,
+        runs: run_summaries,
+        files,
     })
 }
 

@@ -18,6 +18,7 @@ use crate::dem::timestep::{check_time_step, rayleigh_time_step_s, shortest_conta
 use crate::dem::{DemError, RestitutionMode, hertz_theory};
 use crate::rig::RigError;
 use crate::scene::damper::{DriveLength, SteadyCriteria};
+use crate::scene::validity::YieldVelocities;
 use crate::signals::SignalsError;
 use crate::validation::{
     self, Bound, InvalidParameter, count_in, in_range, non_negative, positive, require,
@@ -114,6 +115,14 @@ pub enum SceneError {
         path: std::path::PathBuf,
         problem: String,
     },
+    /// A record that cannot be replayed without an option it does not
+    /// declare; `problem` says which.
+    #[error("record {}: {problem}", path.display())]
+    RecordNeeds {
+        path: std::path::PathBuf,
+        problem: String,
+        option: crate::scene::replay::ReplayOption,
+    },
     #[error(transparent)]
     Dem(#[from] DemError),
     #[error(transparent)]
@@ -182,12 +191,51 @@ impl Orientation {
     }
 }
 
-/// `dt_s`: a time step in seconds, or "rayleigh" for the safety factor rule.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+/// `simulation.dt_s`: a time step in seconds, or the rule that chooses it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged, try_from = "NumberOrWord<f64>")]
 pub enum TimeStepSpec {
     Seconds(f64),
-    Rule(String),
+    Rule(TimeStepRule),
+}
+
+/// How the time step is chosen when the scene does not give it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TimeStepRule {
+    /// `"contacts"`: the shortest expected contact in `steps_per_contact`
+    /// steps ([`Scene::drive_dt_s`]).
+    Contacts,
+    /// `"rayleigh"`: `rayleigh_safety_factor` times the Rayleigh step.
+    Rayleigh,
+}
+
+/// A scene value written as a number or a word (`dt_s`, `cycles`), as read.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum NumberOrWord<T> {
+    Number(T),
+    Word(String),
+}
+
+impl TryFrom<NumberOrWord<f64>> for TimeStepSpec {
+    type Error = InvalidParameter;
+
+    fn try_from(v: NumberOrWord<f64>) -> Result<Self, InvalidParameter> {
+        match v {
+            NumberOrWord::Number(dt) => Ok(TimeStepSpec::Seconds(dt)),
+            NumberOrWord::Word(w) => match w.as_str() {
+                "contacts" => Ok(TimeStepSpec::Rule(TimeStepRule::Contacts)),
+                "rayleigh" => Ok(TimeStepSpec::Rule(TimeStepRule::Rayleigh)),
+                _ => Err(InvalidParameter::new(
+                    "simulation.dt_s",
+                    format!("\"{w}\""),
+                    "",
+                    "a time step in seconds, \"contacts\" or \"rayleigh\"",
+                )),
+            },
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -278,11 +326,36 @@ pub struct DriveSpec {
 }
 
 /// `drive.cycles`: a number, or `"steady"`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged, try_from = "NumberOrWord<u32>")]
 pub enum CyclesSpec {
     Count(u32),
-    Rule(String),
+    Rule(CyclesRule),
+}
+
+/// How many cycles a drive runs when the scene does not fix the count.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CyclesRule {
+    /// `"steady"`: until the bed is steady ([`DriveLength::UntilSteady`]).
+    Steady,
+}
+
+impl TryFrom<NumberOrWord<u32>> for CyclesSpec {
+    type Error = InvalidParameter;
+
+    fn try_from(v: NumberOrWord<u32>) -> Result<Self, InvalidParameter> {
+        match v {
+            NumberOrWord::Number(n) => Ok(CyclesSpec::Count(n)),
+            NumberOrWord::Word(w) if w == "steady" => Ok(CyclesSpec::Rule(CyclesRule::Steady)),
+            NumberOrWord::Word(w) => Err(InvalidParameter::new(
+                "drive.cycles",
+                format!("\"{w}\""),
+                "",
+                "a number of cycles or \"steady\"",
+            )),
+        }
+    }
 }
 
 fn default_min_cycles() -> u32 {
@@ -429,17 +502,8 @@ impl Scene {
             Bound::Open(0.0),
             Bound::Closed(1.0),
         )?;
-        match &s.dt_s {
-            TimeStepSpec::Rule(rule) => require(
-                rule == "rayleigh" || rule == "contacts",
-                "simulation.dt_s",
-                format!("\"{rule}\""),
-                "",
-                "a time step in seconds, \"contacts\" or \"rayleigh\"",
-            )?,
-            TimeStepSpec::Seconds(dt) => {
-                check_time_step("simulation.dt_s", *dt, self.rayleigh_limit_s())?;
-            }
+        if let TimeStepSpec::Seconds(dt) = s.dt_s {
+            check_time_step("simulation.dt_s", dt, self.rayleigh_limit_s())?;
         }
         in_range(
             "simulation.steps_per_contact",
@@ -462,14 +526,7 @@ impl Scene {
                     format!("in [1, drive.cycles = {cycles}]"),
                 )?;
             }
-            CyclesSpec::Rule(rule) => {
-                require(
-                    rule == "steady",
-                    "drive.cycles",
-                    format!("\"{rule}\""),
-                    "",
-                    "a number of cycles or \"steady\"",
-                )?;
+            CyclesSpec::Rule(CyclesRule::Steady) => {
                 count_in("drive.min_cycles", d.min_cycles, "", 4, None)?;
                 count_in(
                     "drive.max_cycles",
@@ -497,7 +554,7 @@ impl Scene {
                 cycles,
                 steady_cycles: d.steady_cycles,
             },
-            CyclesSpec::Rule(_) => DriveLength::UntilSteady {
+            CyclesSpec::Rule(CyclesRule::Steady) => DriveLength::UntilSteady {
                 min_cycles: d.min_cycles,
                 max_cycles: d.max_cycles,
                 criteria: SteadyCriteria {
@@ -572,15 +629,15 @@ impl Scene {
     pub fn drive_dt_s(&self, freq_hz: f64, gamma: f64) -> f64 {
         let sim = &self.simulation;
         let rayleigh = sim.rayleigh_safety_factor * self.rayleigh_limit_s();
-        match &sim.dt_s {
-            TimeStepSpec::Seconds(dt) => *dt,
-            TimeStepSpec::Rule(rule) if rule == "rayleigh" => rayleigh,
-            TimeStepSpec::Rule(_) => {
-                let (pp, pw) = crate::scene::damper::contact_laws(self);
+        match sim.dt_s {
+            TimeStepSpec::Seconds(dt) => dt,
+            TimeStepSpec::Rule(TimeStepRule::Rayleigh) => rayleigh,
+            TimeStepSpec::Rule(TimeStepRule::Contacts) => {
+                let laws = crate::scene::damper::contact_laws(self);
                 let speed = self.expected_impact_speed_mps(freq_hz, gamma);
                 let t_c = shortest_contact_s(
-                    &pp,
-                    &pw,
+                    &laws.particle_particle,
+                    &laws.particle_wall,
                     self.radius_m(),
                     self.particle_material().density_kgm3,
                     speed,
@@ -606,7 +663,7 @@ impl Scene {
 
     /// Yield velocities (m/s) of particle-particle and particle-wall impacts,
     /// eq. 5.26, when the particle material has a yield strength.
-    pub fn yield_velocities_mps(&self) -> Option<(f64, f64)> {
+    pub fn yield_velocities_mps(&self) -> Option<YieldVelocities> {
         let pm = self.particle_material();
         let wm = self.wall_material();
         let y = pm.yield_strength_pa?;
@@ -619,7 +676,10 @@ impl Scene {
             y,
         );
         let pw = hertz_theory::yield_velocity_mps(m, effective_youngs_pa(&pm, &wm), r, y);
-        Some((pp, pw))
+        Some(YieldVelocities {
+            particle_particle_mps: pp,
+            particle_wall_mps: pw,
+        })
     }
 }
 
@@ -734,9 +794,10 @@ mod tests {
         assert!((v - 2.447).abs() < 0.01, "{v}");
         let expected = 1.33e-6 * (1.666f64 / v).powf(0.2);
         assert!((dt - expected).abs() < 0.02e-6, "{dt} vs {expected}");
-        let (pp, _) = s
+        let pp = s
             .yield_velocities_mps()
-            .expect("acrylic has a yield strength");
+            .expect("acrylic has a yield strength")
+            .particle_particle_mps;
         assert!((pp - 3.5).abs() < 0.1);
     }
 
@@ -777,6 +838,34 @@ mod tests {
         assert!(err.to_string().contains("version"), "{err}");
         let err = Scene::merge_over_preset("[particles\n", "f.toml").unwrap_err();
         assert!(err.to_string().contains("f.toml"), "{err}");
+    }
+
+    #[test]
+    fn rules_keep_their_spelling_and_bad_words_are_named() {
+        let s = Scene::thesis();
+        assert_eq!(
+            s.simulation.dt_s,
+            TimeStepSpec::Rule(TimeStepRule::Contacts)
+        );
+        assert_eq!(s.drive.cycles, CyclesSpec::Rule(CyclesRule::Steady));
+        let text = s.to_toml();
+        assert!(text.contains("dt_s = \"contacts\""), "{text}");
+        assert!(text.contains("cycles = \"steady\""), "{text}");
+        assert_eq!(
+            Scene::from_toml_str(&text, "printed").expect("reads back"),
+            s
+        );
+        let err = Scene::merge_over_preset("[simulation]\ndt_s = \"fast\"\n", "f.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("simulation.dt_s = \"fast\": must be a time step in seconds, \"contacts\" or \"rayleigh\""),
+            "{err}"
+        );
+        let err = Scene::merge_over_preset("[drive]\ncycles = \"forever\"\n", "f.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("drive.cycles = \"forever\""), "{err}");
     }
 
     #[test]

@@ -222,8 +222,23 @@ pub struct DeckSummary {
     /// cylinder contact, `√(1 - R / (2 R_c))`.
     pub side_wall_factor: f64,
     /// Every scene key and what the deck did with it.
-    pub scene_keys: Vec<(String, String, String)>,
+    pub scene_keys: Vec<SceneKeyUse>,
     pub files: Vec<String>,
+}
+
+/// A scene key, its value and what the deck does with it; written out
+/// (`export.json`) as the array `[key, value, use]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneKeyUse {
+    pub key: String,
+    pub value: String,
+    pub use_in_deck: String,
+}
+
+impl Serialize for SceneKeyUse {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        (&self.key, &self.value, &self.use_in_deck).serialize(s)
+    }
 }
 
 /// The deck: the LAMMPS input, the packing and vlab's account of it.
@@ -308,7 +323,7 @@ fn scene_key_uses(
     scene: &Scene,
     export: &LammpsExport,
     dt_s: f64,
-) -> Result<Vec<(String, String, String)>, SceneError> {
+) -> Result<Vec<SceneKeyUse>, SceneError> {
     let value: toml::Value = toml::Value::try_from(scene).map_err(|e| SceneError::Parse {
         path: scene.name.clone(),
         message: e.to_string(),
@@ -376,7 +391,11 @@ fn scene_key_uses(
                 .into());
             }
         };
-        out.push((key, value, use_));
+        out.push(SceneKeyUse {
+            key,
+            value,
+            use_in_deck: use_,
+        });
     }
     Ok(out)
 }
@@ -429,7 +448,8 @@ pub fn lammps_deck(
     let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
     let length = scene.enclosure.inner_length_m;
     let mode = scene.contact.restitution_mode;
-    let (pp_law, pw_law) = contact_laws(scene);
+    let laws = contact_laws(scene);
+    let (pp_law, pw_law) = (laws.particle_particle, laws.particle_wall);
     let pm = scene.particle_material();
     let wm = scene.wall_material();
     // Spheres: their own E and nu (LAMMPS mixes E* of eq. 5.6 correctly).
@@ -556,8 +576,8 @@ pub fn lammps_deck(
         &mut s,
         "# Every key of the scene and what this deck does with it:",
     );
-    for (key, value, use_) in &keys {
-        let _ = writeln!(s, "#   {key} = {value}: {use_}");
+    for k in &keys {
+        let _ = writeln!(s, "#   {} = {}: {}", k.key, k.value, k.use_in_deck);
     }
     line(&mut s, "#");
     line(

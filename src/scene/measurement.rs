@@ -78,11 +78,11 @@ pub enum CalibrationSource {
     OnTheFly,
 }
 
-/// How a measured shake is run.
+/// How a measured shake is run: the rig (driven by its `shaker.kind`), the
+/// drive and the phase calibration.
 #[derive(Debug, Clone)]
 pub struct ShakeSetup {
     pub rig: RigSpec,
-    pub shaker: ShakerKind,
     pub freq_hz: f64,
     pub gamma: f64,
     pub calibration: CalibrationSource,
@@ -127,7 +127,7 @@ pub struct Measured {
     pub calibration: String,
     pub n_periods: usize,
     pub rig: String,
-    pub shaker: &'static str,
+    pub shaker: ShakerKind,
     /// Fundamental enclosure acceleration / g over the last cycle.
     pub achieved_gamma: Option<f64>,
     pub clipping: Vec<String>,
@@ -143,14 +143,6 @@ pub struct ShakeExperiment {
     pub shaker: ShakerReport,
     pub measured: Measured,
     pub calibration: PhaseCalibration,
-}
-
-/// Name of a shaker kind, as on the command line.
-pub fn shaker_name(kind: ShakerKind) -> &'static str {
-    match kind {
-        ShakerKind::Prescribed => "prescribed",
-        ShakerKind::Electrodynamic => "electrodynamic",
-    }
 }
 
 /// Static weight the force gauge carries along the drive axis (N).
@@ -191,7 +183,7 @@ pub fn run_measured_shake_observed(
     let particle_mass = world.particles.total_mass_kg();
     let mut shaker = Shaker::new(
         rig,
-        setup.shaker,
+        rig.shaker.kind,
         setup.freq_hz,
         setup.gamma,
         g,
@@ -239,7 +231,7 @@ pub fn run_measured_shake_observed(
         rig,
         &setup.calibration,
         &CalibrationRun {
-            shaker: setup.shaker,
+            shaker: rig.shaker.kind,
             freq_hz: setup.freq_hz,
             gamma: setup.gamma,
             gravity_mps2: g,
@@ -281,7 +273,7 @@ pub fn run_measured_shake_observed(
         calibration: source,
         n_periods: corrected.n_periods,
         rig: rig.name.clone(),
-        shaker: shaker_name(setup.shaker),
+        shaker: rig.shaker.kind,
         achieved_gamma: shaker_report.achieved_gamma,
         clipping: daq_report.clipping_warnings(),
     };
@@ -337,7 +329,7 @@ pub fn phase_calibration(
     }
     let freqs = calibration_freqs_hz(run.freq_hz, rig.daq.sample_rate_hz);
     let gammas = [0.5 * run.gamma, run.gamma];
-    let (table, _) = calibrate_rig(
+    let table = calibrate_rig(
         rig,
         run.shaker,
         &freqs,
@@ -347,7 +339,8 @@ pub fn phase_calibration(
         run.cycles,
         run.record_cycles,
         run.seed,
-    )?;
+    )?
+    .table;
     let description = format!(
         "measured on the fly: empty enclosure of rig {} at {} Hz, Gamma {} and {}, averaged{}",
         rig.name,
@@ -501,7 +494,7 @@ fn trace_metadata(
     extra.insert("scene".to_string(), serde_json::json!(scene.name));
     extra.insert(
         "shaker".to_string(),
-        serde_json::json!(shaker_name(setup.shaker)),
+        serde_json::json!(setup.rig.shaker.kind.as_str()),
     );
     extra.insert("seed".to_string(), serde_json::json!(scene.simulation.seed));
     TraceMetadata {
@@ -532,10 +525,17 @@ fn exact_calibration(rig: &RigSpec, freq_hz: f64) -> Result<PhaseCalibration, Sc
     Ok(PhaseCalibration::from_points(rig.name.clone(), &[point])?)
 }
 
+/// An empty-enclosure calibration: the amplitude-averaged table and the
+/// individual points it averages.
+#[derive(Debug, Clone)]
+pub struct RigCalibration {
+    pub table: PhaseCalibration,
+    pub points: Vec<PhaseErrorPoint>,
+}
+
 /// Runs the empty enclosure of `rig` at every frequency and amplitude for
 /// `cycles` cycles, recording the last `record_cycles` as a damper run does, and estimates the phase error of each record
-/// (true force/velocity phase exactly 90°). Returns the amplitude-averaged table
-/// and the individual points.
+/// (true force/velocity phase exactly 90°).
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate_rig(
     rig: &RigSpec,
@@ -547,7 +547,7 @@ pub fn calibrate_rig(
     cycles: u32,
     record_cycles: u32,
     seed: u64,
-) -> Result<(PhaseCalibration, Vec<PhaseErrorPoint>), SceneError> {
+) -> Result<RigCalibration, SceneError> {
     let mut points = Vec::new();
     for &f in freqs_hz {
         for &gamma in gammas {
@@ -576,5 +576,5 @@ pub fn calibrate_rig(
         }
     }
     let table = PhaseCalibration::from_points(rig.name.clone(), &points)?;
-    Ok((table, points))
+    Ok(RigCalibration { table, points })
 }

@@ -21,7 +21,7 @@ use std::f64::consts::PI;
 
 use serde::Serialize;
 
-use crate::validation::{InvalidParameter, positive};
+use crate::validation::{Bound, InvalidParameter, in_range, positive};
 
 /// Random close packing of equal spheres: ν_max of the thesis' CP estimate.
 pub const CLOSE_PACKING: f64 = 0.64;
@@ -68,16 +68,18 @@ pub fn predict_bouncing_bed(
 ) -> Result<BouncingBedPrediction, InvalidParameter> {
     positive("length_m", length_m, "m")?;
     positive("gravity_mps2", gravity_mps2, "m/s^2")?;
-    if !(fill_ratio > 0.0 && fill_ratio < LOOSE_PACKING) {
-        return Err(InvalidParameter::new(
-            "fill_ratio",
-            fill_ratio,
-            "",
-            format!(
-                "above 0 and below {LOOSE_PACKING} (random loose packing): a fuller bed leaves no clearance in eq. 6.13"
-            ),
-        ));
-    }
+    in_range(
+        "fill_ratio",
+        fill_ratio,
+        "",
+        Bound::Open(0.0),
+        Bound::Open(LOOSE_PACKING),
+    )
+    .map_err(|e| {
+        e.because(&format!(
+            "{LOOSE_PACKING} is random loose packing: a fuller bed leaves no clearance in eq. 6.13"
+        ))
+    })?;
     for &f in freq_hz {
         positive("freq_hz", f, "Hz")?;
     }

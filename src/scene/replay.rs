@@ -74,6 +74,7 @@ use crate::signals::{
     read_table,
 };
 use crate::validation::{InvalidParameter, positive};
+use crate::warning::Warning;
 
 /// The rig is stepped at most this far apart (s): the thesis' DEM step.
 pub const PUSH_STEP_S: f64 = 1e-6;
@@ -105,6 +106,41 @@ pub struct ColumnMap {
     pub displacement: Option<String>,
     pub acceleration: Option<String>,
 }
+
+/// A replay option that an error or a warning asks the caller to give,
+/// named as the field of [`ReplayOptions`] that holds it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReplayOption {
+    /// `freq_hz`.
+    FreqHz,
+    /// `particle_mass_kg`.
+    ParticleMassKg,
+    /// `columns.force`.
+    ForceColumn,
+    /// `columns.velocity` (or `displacement`, `acceleration`).
+    MotionColumn,
+}
+
+impl ReplayOption {
+    /// The field's name.
+    pub fn key(self) -> &'static str {
+        match self {
+            ReplayOption::FreqHz => "freq_hz",
+            ReplayOption::ParticleMassKg => "particle_mass_kg",
+            ReplayOption::ForceColumn => "columns.force",
+            ReplayOption::MotionColumn => "columns.velocity",
+        }
+    }
+}
+
+impl std::fmt::Display for ReplayOption {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.key())
+    }
+}
+
+/// A warning of a replay, and the option that would lift it.
+pub type ReplayWarning = Warning<ReplayOption>;
 
 /// How a record is replayed. `None` fields come from the record's
 /// declarations (a vlab CSV's metadata, `# key: value` comments such as those
@@ -248,14 +284,18 @@ impl EnclosureRecord {
                 known.contains(&bare.as_str())
             }))
         };
-        let force = find(&names.force, "force", &FORCE_NAMES)?.ok_or_else(|| {
-            refuse(format!(
-                "no column of the particles' force on the enclosure among [{}]: name it \
-                 particle_force_axial (N, the particles' force on the enclosure, positive along \
-                 the drive axis), or give its name (vlab replay --column force=NAME)",
-                available()
-            ))
-        })?;
+        let force =
+            find(&names.force, "force", &FORCE_NAMES)?.ok_or_else(|| SceneError::RecordNeeds {
+                path: table.path.clone(),
+                problem: format!(
+                    "no column of the particles' force on the enclosure among [{}]: name it \
+                     particle_force_axial (N, the particles' force on the enclosure, positive \
+                     along the drive axis), or give its name as {}",
+                    available(),
+                    ReplayOption::ForceColumn
+                ),
+                option: ReplayOption::ForceColumn,
+            })?;
         let velocity = find(&names.velocity, "velocity", &VELOCITY_NAMES)?;
         let displacement = find(&names.displacement, "displacement", &DISPLACEMENT_NAMES)?;
         let acceleration = find(&names.acceleration, "acceleration", &ACCELERATION_NAMES)?;
@@ -264,12 +304,17 @@ impl EnclosureRecord {
             (None, Some(x), _) => (x, "displacement"),
             (None, None, Some(a)) => (a, "acceleration"),
             (None, None, None) => {
-                return Err(refuse(format!(
-                    "no column of the enclosure's motion among [{}]: name one enclosure_velocity \
-                     (m/s), enclosure_displacement (m) or enclosure_acceleration (m/s^2), or give \
-                     its name (vlab replay --column velocity=NAME)",
-                    available()
-                )));
+                return Err(SceneError::RecordNeeds {
+                    path: table.path.clone(),
+                    problem: format!(
+                        "no column of the enclosure's motion among [{}]: name one \
+                         enclosure_velocity (m/s), enclosure_displacement (m) or \
+                         enclosure_acceleration (m/s^2), or give its name as {}",
+                        available(),
+                        ReplayOption::MotionColumn
+                    ),
+                    option: ReplayOption::MotionColumn,
+                });
             }
         };
         for (column, unit) in [
@@ -424,7 +469,7 @@ pub struct ReplaySummary {
     pub push_step_s: f64,
     pub truth: RecordTruth,
     pub measured: ReplayMeasured,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<ReplayWarning>,
     pub files: Vec<String>,
 }
 
@@ -472,15 +517,22 @@ pub fn replay_record(
         (None, Some(f)) => (f, Source::Record),
         (None, None) => {
             let f = estimate_freq_hz(record.start_s, h, record.motion.velocity_samples_mps())
-                .ok_or_else(|| SceneError::Record {
+                .ok_or_else(|| SceneError::RecordNeeds {
                     path: table.path.clone(),
-                    problem: "the record does not state its drive frequency and its velocity \
-                              does not oscillate enough to tell it: give it (vlab replay --freq HZ)"
-                        .into(),
+                    problem: format!(
+                        "the record does not state its drive frequency and its velocity does not \
+                         oscillate enough to tell it: give it as {}",
+                        ReplayOption::FreqHz
+                    ),
+                    option: ReplayOption::FreqHz,
                 })?;
-            warnings.push(format!(
-                "the record does not state its drive frequency; {f:.4} Hz was estimated from its \
-                 velocity (give --freq for an exact window of whole periods)"
+            warnings.push(ReplayWarning::advising(
+                format!(
+                    "the record does not state its drive frequency; {f:.4} Hz was estimated from \
+                     its velocity (give {} for an exact window of whole periods)",
+                    ReplayOption::FreqHz
+                ),
+                ReplayOption::FreqHz,
             ));
             (f, Source::Estimated)
         }
@@ -499,13 +551,13 @@ pub fn replay_record(
     }
     let sample_rate_hz = rig.daq.sample_rate_hz;
     if h > 1.0 / sample_rate_hz * (1.0 + 1e-9) {
-        warnings.push(format!(
+        warnings.push(ReplayWarning::from(format!(
             "the record steps {h:.4e} s, coarser than the DAQ's {:.4e} s: each value is held over \
              its interval, so the record's content above {:.0} Hz is that of the hold, not of \
              the damper",
             1.0 / sample_rate_hz,
             0.5 / h
-        ));
+        )));
     }
 
     // The window: the last whole periods the record covers.
@@ -555,10 +607,10 @@ pub fn replay_record(
         }
         Some(n) => n,
         None if available < f64::from(DEFAULT_STEADY_CYCLES) => {
-            warnings.push(format!(
+            warnings.push(ReplayWarning::from(format!(
                 "the record covers {available} whole periods, fewer than the {DEFAULT_STEADY_CYCLES} \
                  the thesis measured; all {available} are used"
-            ));
+            )));
             available as u32
         }
         None => DEFAULT_STEADY_CYCLES,
@@ -606,11 +658,13 @@ pub fn replay_record(
         (Some(m), _) => (Some(m), Some(Source::Given)),
         (None, Some(m)) => (Some(m), Some(Source::Record)),
         (None, None) => {
-            warnings.push(
-                "the record does not state the particle mass: no efficiency (give \
-                     --particle-mass-kg)"
-                    .into(),
-            );
+            warnings.push(ReplayWarning::advising(
+                format!(
+                    "the record does not state the particle mass: no efficiency (give {})",
+                    ReplayOption::ParticleMassKg
+                ),
+                ReplayOption::ParticleMassKg,
+            ));
             (None, None)
         }
     };
@@ -699,10 +753,10 @@ pub fn replay_record(
     }
     let truth_energy = truth_power / freq_hz;
     if truth_power <= 0.0 {
-        warnings.push(format!(
+        warnings.push(ReplayWarning::from(format!(
             "the record's input power is {truth_power:.4e} W, not positive: is the force the \
              enclosure's on the particles rather than the particles' on the enclosure (the sign)?"
-        ));
+        )));
     }
     let e_max_j = particle_mass_kg
         .map(|m| max_energy_per_cycle_j(m, gamma, freq_hz, g))
@@ -731,15 +785,15 @@ pub fn replay_record(
         rig: rig.name.clone(),
         clipping: daq_report.clipping_warnings(),
     };
-    warnings.extend(measured.clipping.iter().cloned());
+    warnings.extend(measured.clipping.iter().cloned().map(ReplayWarning::from));
     if table.format == crate::signals::TableFormat::LammpsText
         && !table.comments.contains_key("units")
     {
-        warnings.push(
+        warnings.push(ReplayWarning::from(
             "the record does not state its LAMMPS unit system (a '# units: si' comment); it was \
              read as SI"
-                .into(),
-        );
+                .to_string(),
+        ));
     }
     let summary = ReplaySummary {
         vlab_version: env!("CARGO_PKG_VERSION"),

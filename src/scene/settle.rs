@@ -228,7 +228,10 @@ pub fn settle_bed(
     )?;
     world.set_contact_laws(pp_rough, pw_rough)?;
     run_until_rest(&mut world, 0.0, MAX_POUR_S, "pouring", started, progress)?;
-    let (packing_fraction, bed_height_m) = packing(&world, scene);
+    let Packing {
+        fraction: packing_fraction,
+        bed_height_m,
+    } = packing(&world, scene);
 
     // 2. Close the lid, as a piston where spheres stand above it.
     close_lid(&mut world, scene, started, progress)?;
@@ -442,9 +445,18 @@ fn top_of_bed(world: &World) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// How a poured bed packs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Packing {
+    /// Packing fraction of the bulk of the bed.
+    pub fraction: f64,
+    /// Height the particles' volume fills at that packing (m).
+    pub bed_height_m: f64,
+}
+
 /// Packing fraction of the bulk of a bed poured along the axis (z), and the
-/// height its particles' volume fills at that packing (m).
-pub fn packing(world: &World, scene: &Scene) -> (f64, f64) {
+/// height its particles' volume fills at that packing.
+pub fn packing(world: &World, scene: &Scene) -> Packing {
     let p = &world.particles;
     let area = PI * (0.5 * scene.enclosure.inner_diameter_m).powi(2);
     let v_p: f64 = (0..p.len())
@@ -456,13 +468,19 @@ pub fn packing(world: &World, scene: &Scene) -> (f64, f64) {
     if hi - lo < d {
         // Too shallow for a bulk: the whole bed up to its top.
         let phi = v_p / (area * top.max(f64::MIN_POSITIVE));
-        return (phi, top);
+        return Packing {
+            fraction: phi,
+            bed_height_m: top,
+        };
     }
     let inside: f64 = (0..p.len())
         .map(|i| sphere_volume_between(p.position[i].z, p.radius[i], lo, hi))
         .sum();
     let phi = inside / (area * (hi - lo));
-    (phi, v_p / (area * phi))
+    Packing {
+        fraction: phi,
+        bed_height_m: v_p / (area * phi),
+    }
 }
 
 /// Volume of a sphere of radius `r` centred at height `z` between the planes
@@ -573,8 +591,8 @@ fn run_steps(
 /// started.
 pub fn prepare_drive(bed: &SettledBed, scene: &Scene, dt_s: f64) -> Result<World, SceneError> {
     let mut world = bed.world.clone();
-    let (pp, pw) = contact_laws(scene);
-    world.set_contact_laws(pp, pw)?;
+    let laws = contact_laws(scene);
+    world.set_contact_laws(laws.particle_particle, laws.particle_wall)?;
     world.set_dt_s(dt_s);
     world.numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
     world.start_ledger();

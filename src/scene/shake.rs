@@ -10,10 +10,9 @@
 //!
 //! let scene = Scene::thesis();
 //! let g = scene.simulation.gravity_mps2;
-//! let (rig, shaker) = resolve_rig("thesis-shaker", None, 40.0, 20.0, g)?;
+//! let rig = resolve_rig("thesis-shaker", None, 40.0, 20.0, g)?;
 //! let setup = ShakeSetup {
 //!     rig,
-//!     shaker,
 //!     freq_hz: 40.0,
 //!     gamma: 20.0,
 //!     calibration: CalibrationSource::OnTheFly,
@@ -42,37 +41,31 @@ use crate::scene::measurement::{
 use crate::scene::record::TruthSamples;
 use crate::scene::settle::{SettledBed, prepare_drive};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
-use crate::validation::{InvalidParameter, positive};
+use crate::validation::{InvalidParameter, positive, require};
 
 /// Sample rate of the truth record (Hz), the thesis DAQ's.
 pub const TRUTH_SAMPLE_RATE_HZ: f64 = 40_000.0;
 
-/// The rig `name_or_path` (a built-in name or a rig file) and the drive it
-/// uses (`shaker`, or the rig's own), refusing what the rig cannot do at
-/// `freq_hz` and `gamma` (thesis: Γ ≤ 12 at 20 Hz, ≤ 40 elsewhere).
+/// The rig `name_or_path` (a built-in name or a rig file) driven by
+/// `shaker` (`None`: the rig's own `shaker.kind`), refusing what the rig
+/// cannot do at `freq_hz` and `gamma` (thesis: Γ ≤ 12 at 20 Hz, ≤ 40
+/// elsewhere) and an electrodynamic drive on a rig without its parameters.
 pub fn resolve_rig(
     name_or_path: &str,
     shaker: Option<ShakerKind>,
     freq_hz: f64,
     gamma: f64,
     g_mps2: f64,
-) -> Result<(RigSpec, ShakerKind), SceneError> {
-    let rig = RigSpec::from_name_or_path(name_or_path)?;
-    let kind = shaker.unwrap_or(rig.shaker.kind);
-    check_limits(&rig, freq_hz, gamma, g_mps2)?;
-    if kind == ShakerKind::Electrodynamic && rig.shaker.electrodynamic.is_none() {
-        return Err(InvalidParameter::new(
-            "shaker",
-            "\"electrodynamic\"",
-            "",
-            format!(
-                "\"prescribed\" on rig {}: it has no [shaker.electrodynamic] section (rig thesis-shaker has one)",
-                rig.name
-            ),
-        )
-        .into());
+) -> Result<RigSpec, SceneError> {
+    let mut rig = RigSpec::from_name_or_path(name_or_path)?;
+    if let Some(kind) = shaker {
+        rig = rig.with_shaker(kind);
     }
-    Ok((rig, kind))
+    check_limits(&rig, freq_hz, gamma, g_mps2)?;
+    if rig.shaker.kind == ShakerKind::Electrodynamic {
+        rig.electrodynamic()?;
+    }
+    Ok(rig)
 }
 
 /// Checks that a drive at `freq_hz` and `gamma` can be resolved by the
@@ -97,17 +90,31 @@ pub fn check_drive(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<(), SceneE
     Ok(())
 }
 
+/// Whole drive periods Yang's method needs in the rig's record.
+pub const MIN_RECORD_PERIODS: u32 = 2;
+
+/// Checks that the scene's steady window, `drive.steady_cycles`, holds the
+/// [`MIN_RECORD_PERIODS`] whole periods Yang's method needs in the rig's
+/// record.
+pub fn check_record_window(scene: &Scene) -> Result<(), InvalidParameter> {
+    let n = scene.drive.steady_cycles;
+    require(
+        n >= MIN_RECORD_PERIODS,
+        "drive.steady_cycles",
+        n,
+        "",
+        format!(
+            "at least {MIN_RECORD_PERIODS}: the rig's record needs {MIN_RECORD_PERIODS} whole periods for Yang's method"
+        ),
+    )
+}
+
 /// Default output folder of a shake: `signals/<scene>-<freq>Hz-G<gamma>`.
 pub fn default_out_dir(scene: &Scene, freq_hz: f64, gamma: f64) -> PathBuf {
     PathBuf::from("signals").join(format!("{}-{freq_hz}Hz-G{gamma}", scene.name))
 }
 
-/// Yield velocities, or the largest impact speeds to hold against them (m/s).
-#[derive(Debug, Clone, Serialize)]
-pub struct YieldVelocities {
-    pub particle_particle_mps: f64,
-    pub particle_wall_mps: f64,
-}
+pub use crate::scene::validity::YieldVelocities;
 
 /// Fraction of the scene's steps per contact below which a run warns.
 pub const STEPS_PER_CONTACT_SLACK: f64 = 0.8;
@@ -190,12 +197,7 @@ impl DemTruth {
                 particle_particle_mps: out.impact_speeds.particle_particle_mps,
                 particle_wall_mps: out.impact_speeds.particle_wall_mps,
             },
-            yield_velocity_mps: scene
-                .yield_velocities_mps()
-                .map(|(pp, pw)| YieldVelocities {
-                    particle_particle_mps: pp,
-                    particle_wall_mps: pw,
-                }),
+            yield_velocity_mps: scene.yield_velocities_mps(),
         }
     }
 
@@ -283,7 +285,7 @@ pub struct ShakeSummary {
     /// Start of the steady window and of the rig's record, from the drive start (s).
     pub steady_start_s: f64,
     pub rig: String,
-    pub shaker: &'static str,
+    pub shaker: ShakerKind,
     pub sample_rate_hz: f64,
     /// Wall-clock time of the drive's stepping loop (s).
     pub wall_time_s: f64,

@@ -40,13 +40,13 @@ use crate::atomic_write::write_atomic;
 use crate::rig::{RigFile, RigSpec, ShakerKind};
 use crate::scene::bed_cache::BedSource;
 use crate::scene::file::{CyclesSpec, Orientation, Scene, SceneError};
-use crate::scene::measurement::{CalibrationSource, ShakeSetup, shaker_name};
+use crate::scene::measurement::{CalibrationSource, ShakeSetup};
 use crate::scene::phases::{
     PhaseIndicators, PhaseObserver, PhaseThresholds, classify, collective_impacts,
 };
 use crate::scene::predict::{CLOSE_PACKING, effective_clearance_m};
 use crate::scene::settle::SettledBed;
-use crate::scene::shake::{check_drive, resolve_rig, run_shake_on_bed};
+use crate::scene::shake::{check_drive, check_record_window, resolve_rig, run_shake_on_bed};
 use crate::validation::InvalidParameter;
 
 /// First line of every sweep file.
@@ -71,11 +71,20 @@ pub enum SweepError {
     },
     #[error("{path} is not a sweep file: {reason}")]
     NotASweep { path: PathBuf, reason: String },
-    #[error("{path} holds another sweep ({what} differ{s}): {hint}", s = if what.ends_with('s') { "" } else { "s" })]
-    OtherSweep {
-        path: PathBuf,
-        what: String,
-        hint: String,
+    /// A sweep file is already there and `resume` was not asked for.
+    #[error("{} exists: resume it, or choose another folder", path.display())]
+    Exists { path: PathBuf },
+    /// Resuming a file of another sweep.
+    #[error("{path} holds another sweep ({what} differ{s}): resume it with the plan it was started with, or choose another folder", s = if what.ends_with('s') { "" } else { "s" })]
+    OtherSweep { path: PathBuf, what: String },
+    /// Merging a shard that has not run all its conditions.
+    #[error(
+        "cannot merge: shard {shard} lacks {lacking} of its {of} conditions: finish it by resuming it"
+    )]
+    UnfinishedShard {
+        shard: Shard,
+        lacking: usize,
+        of: usize,
     },
     #[error("cannot merge: {0}")]
     Merge(String),
@@ -289,16 +298,8 @@ impl SweepPlan {
             )?;
         }
         // A drive run until steady keeps at least 5/8 of 4 cycles.
-        if matches!(self.scene.drive.cycles, CyclesSpec::Count(_))
-            && self.scene.drive.steady_cycles < 2
-        {
-            return Err(InvalidParameter::new(
-                "drive.steady_cycles",
-                self.scene.drive.steady_cycles,
-                "",
-                "at least 2: the rig's record needs 2 whole periods for Yang's method",
-            )
-            .into());
+        if matches!(self.scene.drive.cycles, CyclesSpec::Count(_)) {
+            check_record_window(&self.scene)?;
         }
         for &f in &self.freqs_hz {
             for &g in &self.gammas {
@@ -364,7 +365,7 @@ impl SweepPlan {
             shard,
             scene: self.scene.name.clone(),
             rig: self.rig.clone(),
-            shaker: self.shaker.map(shaker_name).unwrap_or("rig default").into(),
+            shaker: self.shaker.map_or("rig default", ShakerKind::as_str).into(),
             cycles: cycles_text(&self.scene),
             steady_cycles: self.scene.drive.steady_cycles,
             freqs_hz: self.freqs_hz.clone(),
@@ -532,10 +533,9 @@ fn try_condition(
     let started = Instant::now();
     let scene = plan.scene_for(c)?;
     let g = scene.simulation.gravity_mps2;
-    let (rig, shaker) = resolve_rig(&plan.rig, plan.shaker, c.freq_hz, c.gamma, g)?;
+    let rig = resolve_rig(&plan.rig, plan.shaker, c.freq_hz, c.gamma, g)?;
     let setup = ShakeSetup {
         rig,
-        shaker,
         freq_hz: c.freq_hz,
         gamma: c.gamma,
         calibration: CalibrationSource::OnTheFly,
@@ -1102,12 +1102,7 @@ pub fn run_sweep(
     let header = plan.header(shard);
     let mut file = if path.exists() {
         if !resume {
-            return Err(SweepError::OtherSweep {
-                path: path.clone(),
-                what: "nothing yet, but the file exists".into(),
-                hint: "pass --resume to continue it, or choose another --out".into(),
-            }
-            .into_exists());
+            return Err(SweepError::Exists { path });
         }
         let old = SweepFile::read(&path)?;
         for (what, same) in [
@@ -1125,7 +1120,6 @@ pub fn run_sweep(
                 return Err(SweepError::OtherSweep {
                     path,
                     what: what.into(),
-                    hint: "resume with the same arguments it was started with, or choose another --out".into(),
                 });
             }
         }
@@ -1242,17 +1236,6 @@ pub fn run_sweep(
     Ok(file)
 }
 
-impl SweepError {
-    fn into_exists(self) -> SweepError {
-        match self {
-            SweepError::OtherSweep { path, hint, .. } => {
-                SweepError::Merge(format!("{} exists: {hint}", path.display()))
-            }
-            e => e,
-        }
-    }
-}
-
 /// Joins the shard files of one sweep into the file the unsharded sweep
 /// writes (rows in canonical order, shard `1/1`).
 pub fn merge_shards(files: &[SweepFile]) -> Result<SweepFile, SweepError> {
@@ -1308,11 +1291,11 @@ pub fn merge_shards(files: &[SweepFile]) -> Result<SweepFile, SweepError> {
         let have: std::collections::HashSet<_> = f.rows.iter().map(|r| r.condition.key()).collect();
         let lacking = expected.iter().filter(|k| !have.contains(k)).count();
         if lacking > 0 {
-            return Err(SweepError::Merge(format!(
-                "shard {} lacks {lacking} of its {} conditions: finish it with --resume",
-                f.header.shard,
-                expected.len()
-            )));
+            return Err(SweepError::UnfinishedShard {
+                shard: f.header.shard,
+                lacking,
+                of: expected.len(),
+            });
         }
         rows.extend(f.rows.iter().cloned());
     }

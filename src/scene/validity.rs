@@ -18,6 +18,14 @@ use crate::dem::material::{
     Material, effective_mass_kg, effective_radius_m, effective_youngs_pa, sphere_mass_kg,
 };
 
+/// Yield velocities of a damper's two pair types, or the largest impact
+/// speeds to hold against them (m/s).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct YieldVelocities {
+    pub particle_particle_mps: f64,
+    pub particle_wall_mps: f64,
+}
+
 /// The yield strength that limits a pair: the smaller of the two that are
 /// given, Pa; `None` when neither material has one.
 pub fn pair_yield_strength_pa(a: &Material, b: &Material) -> Option<f64> {

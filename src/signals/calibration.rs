@@ -55,6 +55,7 @@ use super::error::{Result, SignalsError};
 use super::phase_model::PhaseErrorModel;
 use super::power::{PowerWindow, YangPower, plan_window, wrap_phase_rad};
 use crate::atomic_write::write_bytes_atomic;
+use crate::validation::{finite, positive};
 
 /// Version written into calibration JSON files (2: polarity and model).
 pub const CALIBRATION_VERSION: u32 = 2;
@@ -190,14 +191,12 @@ impl PhaseCalibration {
     /// amplitudes (circular mean; spread = sample std about it).
     pub fn from_points(rig: impl Into<String>, points: &[PhaseErrorPoint]) -> Result<Self> {
         for (i, p) in points.iter().enumerate() {
-            if !(p.freq_hz.is_finite() && p.freq_hz > 0.0 && p.phase_error_rad.is_finite()) {
-                return Err(SignalsError::InvalidCalibration {
-                    reason: format!(
-                        "point {i}: frequency {} Hz must be positive and finite, phase error {} rad finite",
-                        p.freq_hz, p.phase_error_rad
-                    ),
-                });
-            }
+            positive(&format!("points[{i}].freq_hz"), p.freq_hz, "Hz")?;
+            finite(
+                &format!("points[{i}].phase_error_rad"),
+                p.phase_error_rad,
+                "rad",
+            )?;
         }
         let force_polarity_reversed = points.first().is_some_and(|p| p.force_polarity_reversed);
         if let Some((i, _)) = points
@@ -265,7 +264,7 @@ impl PhaseCalibration {
             ));
         }
         if let Some(model) = &self.model {
-            model.validate()?;
+            model.validate().map_err(|e| e.within("model"))?;
         }
         if self.points.is_empty() {
             return bad("the table has no points".into());

@@ -74,7 +74,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
 
-use super::error::{CsvErrorKind, Result, SignalsError};
+use super::error::{CsvErrorKind, InvalidParameter, Result, SignalsError};
 use super::table::{Table, TableFormat};
 use super::trace::{Channel, Trace, TraceMetadata};
 use crate::atomic_write::write_atomic;
@@ -102,14 +102,17 @@ pub struct CsvReadOptions {
 }
 
 /// Parses a separator as typed on a command line: `,`, `;`, a tab character,
-/// `\t` or `tab`.
-pub fn parse_delimiter(text: &str) -> std::result::Result<u8, String> {
+/// `\t` or `tab`; anything else is refused as the parameter `delimiter`.
+pub fn parse_delimiter(text: &str) -> std::result::Result<u8, InvalidParameter> {
     match text {
         "," => Ok(b','),
         ";" => Ok(b';'),
         "\t" | "\\t" | "tab" | "TAB" => Ok(b'\t'),
-        other => Err(format!(
-            "'{other}' is not a separator vlab reads: give ',', ';' or tab"
+        other => Err(InvalidParameter::new(
+            "delimiter",
+            format!("'{other}'"),
+            "",
+            "',', ';' or tab (the separators vlab reads)",
         )),
     }
 }
@@ -952,7 +955,9 @@ mod tests {
         // Starts on the 40 kHz grid: (k + i) / fs, shortest text.
         let on_grid: [(f64, [&str; 4]); 4] = [
             (0.0, ["0", "0.000025", "0.00005", "0.000075"]),
-            // A start that should be 0, off by rounding (seen from vlab shake).
+            // A start that should be 0, off by rounding, as another program
+            // may declare it (vlab's DAQ puts a start on a sample at 0 exactly,
+            // `rig::Daq::finish`).
             (
                 -1.3877787807814457e-17,
                 ["0", "0.000025", "0.00005", "0.000075"],
@@ -1366,6 +1371,7 @@ mod tests {
         assert!(
             parse_delimiter("|")
                 .unwrap_err()
+                .to_string()
                 .contains("',', ';' or tab")
         );
     }

@@ -125,6 +125,17 @@ pub enum SignalsError {
         /// Previous value.
         prev_time_s: f64,
     },
+    /// A value the record's metadata does not hold and the caller did not
+    /// give.
+    #[error("unknown {what}: the record's metadata has no {metadata_key}; give {parameter}")]
+    NotInMetadata {
+        /// What it is, in words.
+        what: &'static str,
+        /// The metadata key that would have held it.
+        metadata_key: &'static str,
+        /// The parameter that gives it.
+        parameter: &'static str,
+    },
     /// A phase calibration table is unusable.
     #[error("phase calibration: {reason}")]
     InvalidCalibration {
@@ -289,7 +300,7 @@ pub enum CsvErrorKind {
         byte: u8,
     },
     /// The field separator cannot be told from the file.
-    #[error("{problem}; name it with --delimiter (',', ';' or tab)")]
+    #[error("{problem}; name the delimiter: ',', ';' or tab")]
     AmbiguousDelimiter {
         /// What makes it ambiguous.
         problem: String,
@@ -512,14 +523,6 @@ pub enum WavErrorKind {
         full_scale: f64,
         /// What is wrong.
         problem: String,
-    },
-    /// The sample rate cannot be stored in a WAV header.
-    #[error(
-        "sample rate {sample_rate_hz} Hz: a WAV header holds a whole number of hertz in 1..=4294967295"
-    )]
-    RateNotWholeHertz {
-        /// The rate.
-        sample_rate_hz: f64,
     },
     /// Too many channels for a WAV file.
     #[error("{channels} channels: a WAV file holds at most 65535")]

@@ -46,9 +46,14 @@
 //! two gaps were counted as one) or took ringing or noise for one; such an
 //! estimate should not be trusted. Missed impacts happen when the record
 //! samples an impact's short pulse too coarsely for it to cross the threshold.
+//!
+//! [`cor_report`] runs the estimator on one channel of a record as `vlab cor`
+//! reports it ([`CorReport`]), with those warnings.
 
 use super::error::{InvalidParameter, Result, SignalsError, all_finite, positive_finite};
 use super::trace::Trace;
+use crate::stats::{MeanStd, mean_std};
+use crate::warning::Warning;
 
 /// Default threshold as a fraction of the largest peak.
 pub const DEFAULT_THRESHOLD_FRACTION: f64 = 0.10;
@@ -356,18 +361,10 @@ pub fn restitution_from_impact_times(times_s: &[f64], g_mps2: f64) -> Result<Cor
     let gaps_s: Vec<f64> = times_s.windows(2).map(|w| w[1] - w[0]).collect();
     let cor_per_triple: Vec<f64> = gaps_s.windows(2).map(|w| w[1] / w[0]).collect();
     let impact_speeds_mps = gaps_s.iter().map(|t| g_mps2 * t / 2.0).collect();
-    let n = cor_per_triple.len() as f64;
-    let cor_mean = cor_per_triple.iter().sum::<f64>() / n;
-    let cor_std = if cor_per_triple.len() > 1 {
-        (cor_per_triple
-            .iter()
-            .map(|e| (e - cor_mean).powi(2))
-            .sum::<f64>()
-            / (n - 1.0))
-            .sqrt()
-    } else {
-        0.0
-    };
+    let MeanStd {
+        mean: cor_mean,
+        std: cor_std,
+    } = mean_std(&cor_per_triple);
     Ok(CorEstimate {
         gaps_s,
         cor_per_triple,
@@ -389,6 +386,116 @@ pub fn estimate_cor(
     let detection = detect_impacts(&c.samples, trace.sample_rate_hz, trace.start_time_s, params)?;
     let cor = restitution_from_impact_times(&detection.onset_times_s(), g_mps2)?;
     Ok(DropTestResult { detection, cor })
+}
+
+/// One impact as a [`CorReport`] lists it.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ImpactRow {
+    pub onset_time_s: f64,
+    pub peak_time_s: f64,
+    pub peak_force: f64,
+}
+
+/// An input whose change a drop-test estimate's warning advises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CorInput {
+    /// `threshold_n` or `holdoff_s` of [`ImpactParams`]: the detection.
+    Detection,
+}
+
+/// A warning of a restitution estimate, and the input that would lift it.
+pub type CorWarning = Warning<CorInput>;
+
+/// The restitution estimator's result on one force channel of a record, as
+/// `vlab cor` reports it.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CorReport {
+    pub file: String,
+    pub channel: String,
+    pub unit: String,
+    pub sample_rate_hz: f64,
+    pub samples: usize,
+    pub g_mps2: f64,
+    pub threshold: f64,
+    pub release: f64,
+    pub holdoff_s: f64,
+    pub noise_std: f64,
+    pub impacts: Vec<ImpactRow>,
+    pub gaps_s: Vec<f64>,
+    /// COR of each triple (eq. 7.5).
+    pub cor_per_triple: Vec<f64>,
+    /// Speed at each triple's middle impact, g T / 2 of the gap before it (eq. 7.3), m/s.
+    pub impact_speeds_mps: Vec<f64>,
+    pub cor_mean: f64,
+    pub cor_std: f64,
+    /// Triples (from 1) whose second gap is longer than the first.
+    pub growing_gap_triples: Vec<usize>,
+    pub warnings: Vec<CorWarning>,
+}
+
+/// Detects the impacts in channel `channel` of `trace` (the record `file`)
+/// and estimates the restitution ([`estimate_cor`]), with the warnings a lab
+/// user must see: triples whose gaps grew, a channel not in N.
+pub fn cor_report(
+    file: &str,
+    trace: &Trace,
+    channel: &str,
+    params: &ImpactParams,
+    g_mps2: f64,
+) -> Result<CorReport> {
+    let unit = trace.channel(channel)?.unit.clone();
+    let r = estimate_cor(trace, channel, params, g_mps2)?;
+    let d = &r.detection;
+    let n = r.cor.cor_per_triple.len();
+    let grown: Vec<usize> = r.cor.growing_gaps().iter().map(|k| k + 1).collect();
+    let mut warnings = Vec::new();
+    if !grown.is_empty() {
+        warnings.push(CorWarning::advising(
+            format!(
+                "triple(s) {} have a second gap longer than the first (COR > 1): an impact was \
+                 missed or ringing taken for one; try another threshold_n or holdoff_s",
+                grown
+                    .iter()
+                    .map(|k| k.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            CorInput::Detection,
+        ));
+    }
+    if unit != "N" {
+        warnings.push(CorWarning::from(format!(
+            "channel '{channel}' is in '{unit}', not N: the threshold is in that unit"
+        )));
+    }
+    Ok(CorReport {
+        file: file.to_string(),
+        channel: channel.to_string(),
+        unit,
+        sample_rate_hz: trace.sample_rate_hz,
+        samples: trace.len(),
+        g_mps2,
+        threshold: d.threshold_n,
+        release: d.release_n,
+        holdoff_s: d.holdoff_s,
+        noise_std: d.noise_std_n,
+        impacts: d
+            .impacts
+            .iter()
+            .map(|i| ImpactRow {
+                onset_time_s: i.onset_time_s,
+                peak_time_s: i.peak_time_s,
+                peak_force: i.peak_force_n,
+            })
+            .collect(),
+        gaps_s: r.cor.gaps_s.clone(),
+        cor_per_triple: r.cor.cor_per_triple.clone(),
+        impact_speeds_mps: r.cor.impact_speeds_mps[..n].to_vec(),
+        cor_mean: r.cor.cor_mean,
+        cor_std: r.cor.cor_std,
+        growing_gap_triples: grown,
+        warnings,
+    })
 }
 
 #[cfg(test)]

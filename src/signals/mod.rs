@@ -11,6 +11,8 @@
 //! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
 //! - [`phase_model`]: the chain's phase error across frequency (high-pass +
 //!   skew), fitted to that table or taken from a rig;
+//! - [`analysis`]: Yang's method on a whole record as `vlab analyze` runs
+//!   it, with the warnings a lab user must see (clipping, missing inputs);
 //! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
 //! - [`trace_file`]: any of these formats, told apart by the file's extension;
 //! - [`table`], [`lammps`]: records of named columns from other programs (a
@@ -23,6 +25,7 @@
 //! SI units throughout. This module imports neither `dem` nor `rig`. Every
 //! file it writes goes through [`crate::atomic_write`].
 
+pub mod analysis;
 pub mod bench;
 pub mod calibration;
 pub mod csv;
@@ -43,6 +46,7 @@ pub mod wav;
 #[cfg(test)]
 mod testutil;
 
+pub use analysis::{Analysis, AnalysisInput, AnalysisOptions, AnalysisWarning, analyse_trace};
 pub use bench::{YangBenchReport, bench_yang_power};
 pub use calibration::{
     CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error, split_polarity,
@@ -50,8 +54,9 @@ pub use calibration::{
 pub use csv::{CsvReadOptions, read_csv, read_csv_table, read_csv_with, write_csv};
 pub use error::{CsvErrorKind, RecordErrorKind, Result, SignalsError, TdmsErrorKind, WavErrorKind};
 pub use impacts::{
-    CorEstimate, DropTestResult, Impact, ImpactDetection, ImpactParams, Polarity, detect_impacts,
-    estimate_cor, restitution_from_impact_times,
+    CorEstimate, CorInput, CorReport, CorWarning, DropTestResult, Impact, ImpactDetection,
+    ImpactParams, ImpactRow, Polarity, cor_report, detect_impacts, estimate_cor,
+    restitution_from_impact_times,
 };
 pub use lammps::read_lammps_text;
 pub use phase_model::PhaseErrorModel;

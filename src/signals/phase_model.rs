@@ -26,9 +26,11 @@
 
 use std::f64::consts::PI;
 
+use glam::{DMat2, DVec2};
 use serde::{Deserialize, Serialize};
 
 use super::error::{Result, SignalsError};
+use crate::validation::{InvalidParameter, finite, non_negative, positive};
 
 /// Relative determinant below which a fit's two frequencies count as one.
 const FIT_MIN_SPREAD: f64 = 1e-9;
@@ -58,32 +60,22 @@ impl PhaseErrorModel {
             + skew_lead_rad(self.skew_s, freq_hz)
     }
 
-    /// Checks that corners are finite and non-negative and the skew finite.
-    pub fn validate(&self) -> Result<()> {
-        let corners = [self.force_high_pass_hz, self.accel_high_pass_hz];
-        if corners.iter().all(|c| c.is_finite() && *c >= 0.0) && self.skew_s.is_finite() {
-            return Ok(());
-        }
-        Err(SignalsError::InvalidCalibration {
-            reason: format!(
-                "phase-error model: high-pass corners {} Hz (force) and {} Hz (acceleration) \
-                 must be finite and >= 0, skew {} s finite",
-                self.force_high_pass_hz, self.accel_high_pass_hz, self.skew_s
-            ),
-        })
+    /// Checks that corners are finite and non-negative and the skew finite;
+    /// a refusal names the field.
+    pub fn validate(&self) -> std::result::Result<(), InvalidParameter> {
+        non_negative("force_high_pass_hz", self.force_high_pass_hz, "Hz")?;
+        non_negative("accel_high_pass_hz", self.accel_high_pass_hz, "Hz")?;
+        finite("skew_s", self.skew_s, "s")?;
+        Ok(())
     }
 
     /// Least-squares fit of (M2) to `(freq_hz, phase_error_rad)` points at
     /// two or more distinct positive frequencies (see the module docs).
     pub fn fit(points: &[(f64, f64)]) -> Result<Self> {
         let bad = |reason: String| SignalsError::InvalidCalibration { reason };
-        if let Some((f, phi)) = points
-            .iter()
-            .find(|(f, phi)| !(f.is_finite() && *f > 0.0 && phi.is_finite()))
-        {
-            return Err(bad(format!(
-                "phase-error fit: point ({f} Hz, {phi} rad) must have a positive frequency and a finite phase"
-            )));
+        for (i, &(f, phi)) in points.iter().enumerate() {
+            positive(&format!("points[{i}].freq_hz"), f, "Hz")?;
+            finite(&format!("points[{i}].phase_error_rad"), phi, "rad")?;
         }
         // Normal equations of phi = c x + tau y, x = 1/f, y = 2 pi f.
         let (mut sxx, mut sxy, mut syy, mut sxp, mut syp) = (0.0, 0.0, 0.0, 0.0, 0.0);
@@ -95,15 +87,14 @@ impl PhaseErrorModel {
             sxp += x * phi;
             syp += y * phi;
         }
-        let det = sxx * syy - sxy * sxy;
-        if points.len() < 2 || det <= FIT_MIN_SPREAD * sxx * syy {
+        let normal = DMat2::from_cols(DVec2::new(sxx, sxy), DVec2::new(sxy, syy));
+        if points.len() < 2 || normal.determinant() <= FIT_MIN_SPREAD * sxx * syy {
             return Err(bad(format!(
                 "phase-error fit: needs at least two distinct frequencies, got {}",
                 points.len()
             )));
         }
-        let c_hz = (sxp * syy - syp * sxy) / det;
-        let skew_s = (syp * sxx - sxp * sxy) / det;
+        let DVec2 { x: c_hz, y: skew_s } = normal.inverse() * DVec2::new(sxp, syp);
         Ok(Self {
             force_high_pass_hz: c_hz.max(0.0),
             accel_high_pass_hz: (-c_hz).max(0.0),

@@ -107,7 +107,7 @@ impl PhaseCorrection<'_> {
 
     fn validate(&self) -> Result<()> {
         let (name, value, unit) = match self {
-            PhaseCorrection::Model(model) => return model.validate(),
+            PhaseCorrection::Model(model) => return Ok(model.validate()?),
             PhaseCorrection::Constant(rad) => ("phase_correction_rad", *rad, "rad"),
             PhaseCorrection::TimeDelay(s) => ("phase_correction_delay_s", *s, "s"),
             _ => return Ok(()),

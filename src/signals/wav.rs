@@ -44,6 +44,7 @@ use serde::{Deserialize, Serialize};
 use super::error::{Result, SignalsError, WavErrorKind};
 use super::trace::{Trace, TraceMetadata};
 use crate::atomic_write::write_bytes_atomic;
+use crate::validation::require;
 
 /// The sidecar's `format` value.
 pub const WAV_SIDECAR_FORMAT: &str = "vlab-wav-sidecar";
@@ -114,11 +115,13 @@ pub fn write_wav_with_full_scale(
         trace.channel(name)?;
     }
     let rate = trace.sample_rate_hz;
-    if rate.fract() != 0.0 || rate < 1.0 || rate > u32::MAX as f64 {
-        return Err(wav_err(WavErrorKind::RateNotWholeHertz {
-            sample_rate_hz: rate,
-        }));
-    }
+    require(
+        rate.fract() == 0.0 && (1.0..=f64::from(u32::MAX)).contains(&rate),
+        "sample_rate_hz",
+        rate,
+        "Hz",
+        "a whole number of hertz, at most 4294967295: a WAV header holds whole hertz",
+    )?;
     let n_channels = u16::try_from(trace.channels.len())
         .ok()
         .filter(|&n| n > 0)
@@ -132,16 +135,18 @@ pub fn write_wav_with_full_scale(
     for c in &trace.channels {
         let peak = c.samples.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let scale = match full_scale.get(&c.name) {
-            Some(&fs) if fs.is_finite() && fs > 0.0 && fs >= peak => fs,
             Some(&fs) => {
-                return Err(wav_err(WavErrorKind::BadFullScale {
-                    channel: c.name.clone(),
-                    full_scale: fs,
-                    problem: format!(
-                        "must be positive, finite and at least the channel's largest |x| = {peak} {}",
+                require(
+                    fs.is_finite() && fs > 0.0 && fs >= peak,
+                    &format!("full_scale[{}]", c.name),
+                    fs,
+                    &c.unit,
+                    format!(
+                        "positive, finite and at least the channel's largest |x| = {peak} {}",
                         c.unit
                     ),
-                }));
+                )?;
+                fs
             }
             None if peak > 0.0 => peak,
             None => 1.0,
@@ -534,19 +539,13 @@ mod tests {
         t.add_channel("f", "N", vec![1.0, 2.0]).expect("f");
         assert!(matches!(
             write_wav(&path, &t),
-            Err(SignalsError::Wav {
-                kind: WavErrorKind::RateNotWholeHertz { .. },
-                ..
-            })
+            Err(SignalsError::Invalid(p)) if p.key == "sample_rate_hz"
         ));
         t.sample_rate_hz = 40_000.0;
         let too_small: BTreeMap<String, f64> = [("f".to_string(), 1.5)].into();
         assert!(matches!(
             write_wav_with_full_scale(&path, &t, &too_small),
-            Err(SignalsError::Wav {
-                kind: WavErrorKind::BadFullScale { .. },
-                ..
-            })
+            Err(SignalsError::Invalid(p)) if p.key == "full_scale[f]"
         ));
         let unknown: BTreeMap<String, f64> = [("g".to_string(), 1.5)].into();
         assert!(write_wav_with_full_scale(&path, &t, &unknown).is_err());
