@@ -219,3 +219,65 @@ fn vlab_analyze_detects_and_corrects_a_reversed_force() {
     let plain = run(original.to_str().expect("utf-8"), false);
     assert!(!String::from_utf8_lossy(&plain.stdout).contains("polarity"));
 }
+
+/// A window of 2 drive periods at 160 Hz calibrates its 16th harmonic
+/// (2560 Hz, 15.6 samples a period at 40 kHz) on at least 4 of that
+/// harmonic's periods, since 2 of them are 31 samples, 1.98 periods: the
+/// calibration completes and recovers the rig model's phase error at the
+/// harmonic within 5 % (its noise on so short a record).
+#[test]
+fn a_short_window_still_calibrates_the_harmonics() {
+    let rig = RigSpec::builtin("thesis-shaker").expect("rig");
+    let freqs = calibration_freqs_hz(160.0, rig.daq.sample_rate_hz);
+    assert_eq!(freqs, vec![160.0, 640.0, 2560.0]);
+    let cal = calibrate_rig(
+        &rig,
+        ShakerKind::Prescribed,
+        &freqs,
+        &[1.5, 3.0],
+        9.81,
+        1e-6,
+        4,
+        2,
+        1,
+    )
+    .expect("a 2-period window calibrates")
+    .table;
+    let expect = rig.phase_error_model().phase_error_at(2560.0);
+    let got = cal.phase_error_at(2560.0);
+    assert!(
+        (got / expect - 1.0).abs() < 0.05,
+        "2560 Hz: {got} rad calibrated, {expect} rad in the rig model"
+    );
+}
+
+/// `vlab shake` refuses, before it runs, a steady window whose periods do
+/// not hold 2 whole ones once sampled (2 periods of 1024 Hz are 78 samples
+/// at 40 kHz), and says how many would; nothing is written.
+#[test]
+fn a_window_too_short_once_sampled_is_refused_before_the_run() {
+    let dir = Scratch::new("short-window");
+    let out = vlab(
+        &dir.0,
+        &[
+            "shake",
+            "--freq",
+            "1024",
+            "--gamma",
+            "40",
+            "--cycles",
+            "4",
+            "--steady-cycles",
+            "2",
+            "--out",
+            "run",
+        ],
+    );
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(
+        err.contains("--steady-cycles = 2: must be at least 3 at 1024 Hz"),
+        "{err}"
+    );
+    assert!(!dir.0.join("run").exists());
+}

@@ -48,11 +48,13 @@ impl Shake {
     }
 }
 
-/// `vlab shake --freq F --gamma G ARGS --out OUT` in `dir` (not `--quiet`:
-/// warnings are printed only without it); it must succeed.
+/// `vlab --quiet shake --freq F --gamma G ARGS --out OUT` in `dir` (quiet
+/// silences progress, never warnings); it must succeed.
 fn shake(dir: &Scratch, freq: &str, gamma: &str, args: &[&str]) -> Shake {
     let out = format!("{freq}Hz-G{gamma}");
-    let mut all = vec!["shake", "--freq", freq, "--gamma", gamma, "--out", &out];
+    let mut all = vec![
+        "--quiet", "shake", "--freq", freq, "--gamma", gamma, "--out", &out,
+    ];
     all.extend_from_slice(args);
     let started = Instant::now();
     let o = vlab(&dir.0, &all);

@@ -70,7 +70,7 @@ fn run_lammps(a: LammpsArgs, quiet: bool) -> Result<()> {
     let made = OutputDir::prepare(&a.out)
         .with_context(|| format!("cannot create output folder {}", a.out.display()))?;
     let mut progress = ProgressLine::new("export", quiet);
-    let beds = a.cache.source(&mut |n| progress.note(n));
+    let beds = a.cache.source(&mut |n| progress.warn(n));
     let result = beds
         .settle(&scene, &mut |p| progress.update(p))
         .context("settling the packing")

@@ -37,7 +37,7 @@ struct Cli {
     /// Worker threads (default: all cores). Physics is bit-identical for any count.
     #[arg(long, global = true, value_parser = args::threads)]
     threads: Option<usize>,
-    /// No progress on standard error.
+    /// No progress on standard error (warnings are still printed).
     #[arg(long, short, global = true)]
     quiet: bool,
     #[command(subcommand)]

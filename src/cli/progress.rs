@@ -1,5 +1,6 @@
 //! Progress of long runs on standard error: a line rewritten in place on a
-//! terminal, an occasional line otherwise, nothing with `--quiet`.
+//! terminal, an occasional line otherwise, nothing with `--quiet`; warnings
+//! always.
 
 use std::io::{IsTerminal, Write};
 use std::time::Instant;
@@ -62,6 +63,13 @@ impl ProgressLine {
         if self.enabled && self.terminal && self.last.is_some() {
             let _ = write!(std::io::stderr(), "\r\x1b[2K");
         }
+    }
+
+    /// A warning on standard error, quiet or not: `--quiet` silences
+    /// progress, never what the user must know about the result.
+    pub fn warn(&mut self, text: &str) {
+        self.finish();
+        eprintln!("{text}");
     }
 
     /// A note on standard error, unless quiet.

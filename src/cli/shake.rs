@@ -90,10 +90,11 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         scene.set_record_length(d, a.freq_hz);
     }
     check_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
-    check_record_window(&scene).map_err(|e| flags.name_flags(e.into()))?;
     let g = scene.simulation.gravity_mps2;
     let rig = resolve_rig(&a.rig, a.shaker, a.freq_hz, a.gamma, g)
         .with_context(|| format!("--rig {}", a.rig))?;
+    check_record_window(&scene, a.freq_hz, rig.daq.sample_rate_hz)
+        .map_err(|e| flags.name_flags(e.into()))?;
     let calibration = args::calibration_source(a.calibration.as_deref())?;
     let out_dir = a
         .out
@@ -124,7 +125,7 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         None => None,
     };
     let mut snaps = a.snapshots.then(|| PhaseSnapshots::new(a.freq_hz, 0.0));
-    let beds = a.cache.source(&mut |n| progress.note(n));
+    let beds = a.cache.source(&mut |n| progress.warn(n));
     let result = (|| {
         if dump.is_none() && snaps.is_none() {
             return run_shake_from(&scene, &setup, &beds, &mut NoObserver, &mut |p| {
@@ -185,7 +186,7 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         }
     }
     for w in &shake.summary.warnings {
-        progress.note(&format!("warning: {w}"));
+        progress.warn(&format!("warning: {w}"));
     }
     if a.json {
         print!("{}", shake.summary_json());

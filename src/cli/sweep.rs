@@ -181,6 +181,10 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
         let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
         p.note(&text);
     };
+    let warn = |text: String| {
+        let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
+        p.warn(&text);
+    };
     let on_event = |e: SweepEvent| match e {
         SweepEvent::Started {
             total,
@@ -202,7 +206,7 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
             warnings,
         } => {
             for w in warnings {
-                note(format!("sweep: warning: {w}"));
+                warn(format!("sweep: warning: {w}"));
             }
             note(if from_cache {
                 format!("sweep: bed of seed {seed} read from the cache ({wall_time_s:.1} s)")

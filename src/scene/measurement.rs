@@ -533,8 +533,13 @@ pub struct RigCalibration {
     pub points: Vec<PhaseErrorPoint>,
 }
 
+/// Fewest periods of each calibration frequency recorded on the empty
+/// enclosure ([`calibrate_rig`]).
+pub const MIN_CALIBRATION_PERIODS: u32 = 4;
+
 /// Runs the empty enclosure of `rig` at every frequency and amplitude for
-/// `cycles` cycles, recording the last `record_cycles` as a damper run does, and estimates the phase error of each record
+/// `cycles` cycles, recording the last `record_cycles` (at least
+/// [`MIN_CALIBRATION_PERIODS`]) as a damper run does, and estimates the phase error of each record
 /// (true force/velocity phase exactly 90°).
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate_rig(
@@ -550,9 +555,16 @@ pub fn calibrate_rig(
 ) -> Result<RigCalibration, SceneError> {
     let mut points = Vec::new();
     for &f in freqs_hz {
+        // A harmonic's period may not be a whole number of samples: a few
+        // periods more than the drive's window keep 2 whole ones in the
+        // record whatever the window (2 periods of 2560 Hz at 40 kHz are
+        // 31 samples, 1.98 periods).
+        let record_cycles_f = record_cycles.max(MIN_CALIBRATION_PERIODS);
+        let cycles_f = cycles + (record_cycles_f - record_cycles);
         for &gamma in gammas {
             let mut shaker = Shaker::new(rig, kind, f, gamma, g_mps2, rig.enclosure.mass_kg, 0.0)?;
             let period = 1.0 / f;
+            let (cycles, record_cycles) = (cycles_f, record_cycles_f);
             let record_start = f64::from(cycles - record_cycles) * period;
             let mut daq = Daq::new(rig, dt_s, record_start, seed)?;
             daq.reserve(f64::from(record_cycles) * period + 0.01);

@@ -93,18 +93,48 @@ pub fn check_drive(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<(), SceneE
 /// Whole drive periods Yang's method needs in the rig's record.
 pub const MIN_RECORD_PERIODS: u32 = 2;
 
+/// Whole periods of a `freq_hz` drive that `n` of its periods hold once
+/// sampled at `sample_rate_hz`: a record keeps whole samples, so at 1024 Hz
+/// and 40 kHz two periods (78.1 samples) are 78 samples, 1.997 periods.
+pub fn sampled_whole_periods(n: u32, freq_hz: f64, sample_rate_hz: f64) -> u32 {
+    let samples = (f64::from(n) * sample_rate_hz / freq_hz + 1e-9).floor();
+    (samples * freq_hz / sample_rate_hz + 1e-9).floor() as u32
+}
+
 /// Checks that the scene's steady window, `drive.steady_cycles`, holds the
 /// [`MIN_RECORD_PERIODS`] whole periods Yang's method needs in the rig's
-/// record.
-pub fn check_record_window(scene: &Scene) -> Result<(), InvalidParameter> {
+/// record of a `freq_hz` drive sampled at `sample_rate_hz`.
+pub fn check_record_window(
+    scene: &Scene,
+    freq_hz: f64,
+    sample_rate_hz: f64,
+) -> Result<(), InvalidParameter> {
     let n = scene.drive.steady_cycles;
+    let held = |k| sampled_whole_periods(k, freq_hz, sample_rate_hz);
+    if n >= MIN_RECORD_PERIODS && held(n) >= MIN_RECORD_PERIODS {
+        return Ok(());
+    }
+    // k + 1 periods always hold k whole ones, so this ends.
+    let least = (MIN_RECORD_PERIODS..)
+        .find(|&k| held(k) >= MIN_RECORD_PERIODS)
+        .unwrap_or(MIN_RECORD_PERIODS + 1);
+    let why = if least == MIN_RECORD_PERIODS {
+        String::new()
+    } else {
+        let samples = (f64::from(n) * sample_rate_hz / freq_hz + 1e-9).floor();
+        format!(
+            " at {freq_hz} Hz: sampled at {sample_rate_hz} Hz, {n} periods are {samples} samples, {} whole period{}",
+            held(n),
+            if held(n) == 1 { "" } else { "s" }
+        )
+    };
     require(
-        n >= MIN_RECORD_PERIODS,
+        false,
         "drive.steady_cycles",
         n,
         "",
         format!(
-            "at least {MIN_RECORD_PERIODS}: the rig's record needs {MIN_RECORD_PERIODS} whole periods for Yang's method"
+            "at least {least}{why}: the rig's record needs {MIN_RECORD_PERIODS} whole periods for Yang's method"
         ),
     )
 }

@@ -297,17 +297,17 @@ impl SweepPlan {
                 crate::validation::Bound::Open(CLOSE_PACKING),
             )?;
         }
-        // A drive run until steady keeps at least 5/8 of 4 cycles.
-        if matches!(self.scene.drive.cycles, CyclesSpec::Count(_)) {
-            check_record_window(&self.scene)?;
-        }
+        // The rig must load (its limits are checked per condition).
+        let rig = RigSpec::from_name_or_path(&self.rig).map_err(SceneError::from)?;
         for &f in &self.freqs_hz {
+            // A drive run until steady keeps 5/8 of at least drive.min_cycles.
+            if matches!(self.scene.drive.cycles, CyclesSpec::Count(_)) {
+                check_record_window(&self.scene, f, rig.daq.sample_rate_hz)?;
+            }
             for &g in &self.gammas {
                 check_drive(&self.scene, f, g)?;
             }
         }
-        // The rig must load (its limits are checked per condition).
-        RigSpec::from_name_or_path(&self.rig).map_err(SceneError::from)?;
         for c in self.conditions() {
             self.scene_for(&c)?;
         }
