@@ -180,8 +180,13 @@ pub struct World {
     neighbours: NeighbourList,
     /// Change of the energy stored in the contacts over the current step (J).
     step_stored_change_j: f64,
-    /// Contact state of particle `i` with wall `w` at `i * n_walls + w`.
+    /// Contact state of particle `i` with wall `w` at `i * n_walls + w`; as
+    /// for the pairs ([`NeighbourList::gaps`]), its `delta_prev` is current
+    /// only while they touch.
     wall_states: Vec<ContactState>,
+    /// Overlap of particle `i` with wall `w` at the previous step (m), at
+    /// `i * n_walls + w`; negative: the gap. Always current.
+    wall_gaps: Vec<f64>,
     /// Scratch of the parallel step, kept from step to step.
     scratch: StepScratch,
     /// Total force of the walls on the particles at the current step (N).
@@ -231,6 +236,7 @@ impl World {
             neighbours: NeighbourList::new(skin),
             step_stored_change_j: 0.0,
             wall_states: Vec::new(),
+            wall_gaps: Vec::new(),
             scratch: StepScratch::default(),
             wall_force: DVec3::ZERO,
             baseline: LedgerSnapshot::default(),
@@ -286,12 +292,13 @@ impl World {
         let n_walls = self.walls.len();
         let offset = self.walls.offset();
         self.wall_states.clear();
+        self.wall_gaps.clear();
         for i in 0..self.particles.len() {
             for w in 0..n_walls {
-                let (dist, _) =
-                    self.walls.shapes[w].distance_and_normal(self.particles.position[i], offset);
-                self.wall_states
-                    .push(ContactState::apart(self.particles.radius[i] - dist));
+                let dist = self.walls.shapes[w].distance_m(self.particles.position[i], offset);
+                let overlap = self.particles.radius[i] - dist;
+                self.wall_states.push(ContactState::apart(overlap));
+                self.wall_gaps.push(overlap);
             }
         }
     }
@@ -343,14 +350,13 @@ impl World {
     pub fn refresh_wall_gaps(&mut self) {
         let n_walls = self.walls.len();
         let offset = self.walls.offset();
-        for (k, st) in self.wall_states.iter_mut().enumerate() {
-            if st.delta_prev > 0.0 {
+        for (k, gap) in self.wall_gaps.iter_mut().enumerate() {
+            if *gap > 0.0 {
                 continue;
             }
             let (i, w) = (k / n_walls, k % n_walls);
-            let (dist, _) =
-                self.walls.shapes[w].distance_and_normal(self.particles.position[i], offset);
-            st.delta_prev = self.particles.radius[i] - dist;
+            let dist = self.walls.shapes[w].distance_m(self.particles.position[i], offset);
+            *gap = self.particles.radius[i] - dist;
         }
     }
 
@@ -383,30 +389,21 @@ impl World {
             .neighbours
             .pairs
             .iter()
-            .zip(&self.neighbours.states)
-            .map(|(&(i, j), st)| st.delta_prev / p.radius[i as usize].min(p.radius[j as usize]));
+            .zip(&self.neighbours.gaps)
+            .map(|(&(i, j), &d)| d / p.radius[i as usize].min(p.radius[j as usize]));
         let n_walls = self.walls.len().max(1);
         let walls = self
-            .wall_states
+            .wall_gaps
             .iter()
             .enumerate()
-            .map(|(k, st)| st.delta_prev / p.radius[k / n_walls]);
+            .map(|(k, &d)| d / p.radius[k / n_walls]);
         pairs.chain(walls).fold(0.0, f64::max)
     }
 
     /// Number of particle-particle and particle-wall contacts now.
     pub fn contact_counts(&self) -> (usize, usize) {
-        let pp = self
-            .neighbours
-            .states
-            .iter()
-            .filter(|s| s.delta_prev > 0.0)
-            .count();
-        let pw = self
-            .wall_states
-            .iter()
-            .filter(|s| s.delta_prev > 0.0)
-            .count();
+        let pp = self.neighbours.gaps.iter().filter(|&&d| d > 0.0).count();
+        let pw = self.wall_gaps.iter().filter(|&&d| d > 0.0).count();
         (pp, pw)
     }
 
@@ -416,15 +413,15 @@ impl World {
         let n = self.particles.len();
         counts.clear();
         counts.resize(n, 0);
-        for (&(i, j), st) in self.neighbours.pairs.iter().zip(&self.neighbours.states) {
-            if st.delta_prev > 0.0 {
+        for (&(i, j), &d) in self.neighbours.pairs.iter().zip(&self.neighbours.gaps) {
+            if d > 0.0 {
                 counts[i as usize] += 1;
                 counts[j as usize] += 1;
             }
         }
         let n_walls = self.walls.len().max(1);
-        for (k, st) in self.wall_states.iter().enumerate() {
-            if st.delta_prev > 0.0 {
+        for (k, &d) in self.wall_gaps.iter().enumerate() {
+            if d > 0.0 {
                 counts[k / n_walls] += 1;
             }
         }
@@ -663,41 +660,75 @@ impl World {
     /// Forces and torques at the current positions. `dt` is the step over which the
     /// tangential springs advance and the ledger accumulates (0 for a pure
     /// evaluation that changes no history).
+    ///
+    /// On one core: gravity and the walls, then each pair added to both its
+    /// particles as it is evaluated. On all threads: the pairs first, each
+    /// leaving its force in its own slot, then one pass over the particles
+    /// that sets gravity, adds the walls and gathers the pair forces in pair
+    /// order (the order of the serial loop, so the same bits), then the
+    /// books, walls first as on one core.
     fn compute_forces(&mut self, dt: f64) -> Result<(), DemError> {
-        let parallel = self.parallel();
         self.wall_force = DVec3::ZERO;
-        match law_kind(&self.pw_law) {
-            (true, true) => self.wall_contacts::<true, true>(dt, parallel),
-            (true, false) => self.wall_contacts::<true, false>(dt, parallel),
-            (false, true) => self.wall_contacts::<false, true>(dt, parallel),
-            (false, false) => self.wall_contacts::<false, false>(dt, parallel),
-        }?;
-        match (law_kind(&self.pp_law), parallel) {
-            ((true, true), false) => self.pair_contacts::<true, true>(dt),
-            ((true, false), false) => self.pair_contacts::<true, false>(dt),
-            ((false, true), false) => self.pair_contacts::<false, true>(dt),
-            ((false, false), false) => self.pair_contacts::<false, false>(dt),
-            ((true, true), true) => self.pair_contacts_parallel::<true, true>(dt),
-            ((true, false), true) => self.pair_contacts_parallel::<true, false>(dt),
-            ((false, true), true) => self.pair_contacts_parallel::<false, true>(dt),
-            ((false, false), true) => self.pair_contacts_parallel::<false, false>(dt),
+        if !self.parallel() {
+            match law_kind(&self.pw_law) {
+                (true, true) => self.wall_contacts::<true, true>(dt, None),
+                (true, false) => self.wall_contacts::<true, false>(dt, None),
+                (false, true) => self.wall_contacts::<false, true>(dt, None),
+                (false, false) => self.wall_contacts::<false, false>(dt, None),
+            }?;
+            return match law_kind(&self.pp_law) {
+                (true, true) => self.pair_contacts::<true, true>(dt),
+                (true, false) => self.pair_contacts::<true, false>(dt),
+                (false, true) => self.pair_contacts::<false, true>(dt),
+                (false, false) => self.pair_contacts::<false, false>(dt),
+            };
         }
+        match law_kind(&self.pp_law) {
+            (true, true) => self.pair_blocks::<true, true>(dt),
+            (true, false) => self.pair_blocks::<true, false>(dt),
+            (false, true) => self.pair_blocks::<false, true>(dt),
+            (false, false) => self.pair_blocks::<false, false>(dt),
+        }
+        let gather = Some(self.pp_law.has_friction());
+        match law_kind(&self.pw_law) {
+            (true, true) => self.wall_contacts::<true, true>(dt, gather),
+            (true, false) => self.wall_contacts::<true, false>(dt, gather),
+            (false, true) => self.wall_contacts::<false, true>(dt, gather),
+            (false, false) => self.wall_contacts::<false, false>(dt, gather),
+        }?;
+        self.book_pair_blocks(dt)
     }
 
-    /// Gravity and the wall contacts, particle by particle in fixed blocks
-    /// (on all threads when `parallel`); what the contacts book is then
-    /// added up on one thread in contact order.
+    /// Gravity and the wall contacts, particle by particle in fixed blocks;
+    /// what the contacts book is then added up on one thread in contact
+    /// order. `gather: Some(torques)`: the step runs on all threads, and each
+    /// block then also adds its particles' pair forces (and torques, when
+    /// `torques`), which [`Self::pair_blocks`] left one per pair.
     fn wall_contacts<const D: bool, const F: bool>(
         &mut self,
         dt: f64,
-        parallel: bool,
+        gather: Option<bool>,
     ) -> Result<(), DemError> {
         let g = self.gravity;
         let p = &mut self.particles;
+        let list = &self.neighbours;
+        let pair_force = &self.scratch.pair_force;
+        let gather_into = |c: usize, f: &mut [DVec3], t: &mut [DVec3]| match gather {
+            Some(true) => gather_block::<true>(list, pair_force, c * PARTICLE_BLOCK, f, t),
+            Some(false) => gather_block::<false>(list, pair_force, c * PARTICLE_BLOCK, f, t),
+            None => {}
+        };
         if self.walls.is_empty() {
             for (f, (t, m)) in p.force.iter_mut().zip(p.torque.iter_mut().zip(&p.mass)) {
                 *f = g * *m;
                 *t = DVec3::ZERO;
+            }
+            if gather.is_some() {
+                p.force
+                    .par_chunks_mut(PARTICLE_BLOCK)
+                    .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
+                    .enumerate()
+                    .for_each(|(c, (f, t))| gather_into(c, f, t));
             }
             return Ok(());
         }
@@ -717,11 +748,14 @@ impl World {
         type Block<'b> = (
             usize,
             (
-                ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [ContactState]),
+                (
+                    ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [ContactState]),
+                    &'b mut [f64],
+                ),
                 &'b mut Vec<WallBooked>,
             ),
         );
-        let block = |(c, (((f, t), st), bk)): Block<'_>| {
+        let block = |(c, ((((f, t), st), gaps), bk)): Block<'_>| {
             wall_block::<D, F>(
                 &law,
                 &walls,
@@ -730,17 +764,20 @@ impl World {
                 c * PARTICLE_BLOCK,
                 f,
                 t,
-                st,
+                (st, gaps),
                 bk,
                 dt,
             );
+            gather_into(c, f, t);
         };
-        let states = &mut self.wall_states;
-        if parallel {
+        let (states, gaps) = (&mut self.wall_states, &mut self.wall_gaps);
+        let chunk = PARTICLE_BLOCK * n_walls;
+        if gather.is_some() {
             p.force
                 .par_chunks_mut(PARTICLE_BLOCK)
                 .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
-                .zip(states.par_chunks_mut(PARTICLE_BLOCK * n_walls))
+                .zip(states.par_chunks_mut(chunk))
+                .zip(gaps.par_chunks_mut(chunk))
                 .zip(books[..n_blocks].par_iter_mut())
                 .enumerate()
                 .for_each(block);
@@ -748,7 +785,8 @@ impl World {
             p.force
                 .chunks_mut(PARTICLE_BLOCK)
                 .zip(p.torque.chunks_mut(PARTICLE_BLOCK))
-                .zip(states.chunks_mut(PARTICLE_BLOCK * n_walls))
+                .zip(states.chunks_mut(chunk))
+                .zip(gaps.chunks_mut(chunk))
                 .zip(books[..n_blocks].iter_mut())
                 .enumerate()
                 .for_each(block);
@@ -786,9 +824,10 @@ impl World {
         let (force, torque) = (&mut p.force, &mut p.torque);
         let nl = &mut self.neighbours;
         let mut refused = None;
-        for (&(i, j), st) in nl.pairs.iter().zip(nl.states.iter_mut()) {
+        let slots = nl.gaps.iter_mut().zip(nl.states.iter_mut());
+        for (&(i, j), (gap, st)) in nl.pairs.iter().zip(slots) {
             let (i, j) = (i as usize, j as usize);
-            let Some(out) = pair_contact::<D, F>(&law, &bodies, i, j, dt, st) else {
+            let Some(out) = pair_contact::<D, F>(&law, &bodies, i, j, dt, gap, st) else {
                 continue;
             };
             if let Err(why) = tally.pair(&out, dt, i, j) {
@@ -808,16 +847,12 @@ impl World {
         }
     }
 
-    /// The pair contacts on all threads: pairs in fixed blocks (each writes
-    /// its own states and forces), then each particle gathers its pair forces
-    /// in pair order, then the ledger is added up on one thread in pair
-    /// order. The same bits as [`Self::pair_contacts`].
-    fn pair_contacts_parallel<const D: bool, const F: bool>(
-        &mut self,
-        dt: f64,
-    ) -> Result<(), DemError> {
+    /// The pair contacts on all threads, in fixed blocks: each pair advances
+    /// its state and leaves its forces in its own slot (zero when apart), and
+    /// each block lists its touching pairs for the books.
+    fn pair_blocks<const D: bool, const F: bool>(&mut self, dt: f64) {
         let law = self.pp_law;
-        let p = &mut self.particles;
+        let p = &self.particles;
         let bodies = bodies!(p);
         let nl = &mut self.neighbours;
         let sc = &mut self.scratch;
@@ -827,37 +862,36 @@ impl World {
         if sc.pair_books.len() < n_blocks {
             sc.pair_books.resize_with(n_blocks, Vec::new);
         }
+        sc.pair_blocks = n_blocks;
         nl.pairs
             .par_chunks(PAIR_BLOCK)
+            .zip(nl.gaps.par_chunks_mut(PAIR_BLOCK))
             .zip(nl.states.par_chunks_mut(PAIR_BLOCK))
             .zip(sc.pair_force.par_chunks_mut(PAIR_BLOCK))
             .zip(sc.pair_books[..n_blocks].par_iter_mut())
             .enumerate()
-            .for_each(|(c, (((pairs, states), forces), books))| {
+            .for_each(|(c, ((((pairs, gaps), states), forces), books))| {
                 pair_block::<D, F>(
                     &law,
                     &bodies,
                     c * PAIR_BLOCK,
                     pairs,
-                    states,
+                    (gaps, states),
                     forces,
                     books,
                     dt,
                 );
             });
-        let list = &*nl;
-        let pair_force = &sc.pair_force;
-        p.force
-            .par_chunks_mut(PARTICLE_BLOCK)
-            .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
-            .enumerate()
-            .for_each(|(c, (f, t))| {
-                gather_block::<F>(list, pair_force, c * PARTICLE_BLOCK, f, t);
-            });
+    }
 
+    /// Books the touching pairs [`Self::pair_blocks`] listed, on one thread
+    /// in pair order, as the serial loop books them.
+    fn book_pair_blocks(&mut self, dt: f64) -> Result<(), DemError> {
         let mut tally = tally!(self);
+        let list = &self.neighbours;
+        let sc = &self.scratch;
         let mut refused = None;
-        'books: for bk in &sc.pair_books[..n_blocks] {
+        'books: for bk in &sc.pair_books[..sc.pair_blocks] {
             for (k, out) in bk {
                 let (i, j) = list.pairs[*k as usize];
                 if let Err(why) = tally.pair(out, dt, i as usize, j as usize) {
@@ -935,6 +969,8 @@ struct StepScratch {
     pair_force: Vec<PairForce>,
     /// Per pair block: its touching pairs (parallel step).
     pair_books: Vec<Vec<(u32, ContactResult)>>,
+    /// Pair blocks of the current step (parallel step).
+    pair_blocks: usize,
 }
 
 /// The state a step borrows to book contacts, apart from the particles.
@@ -1114,7 +1150,7 @@ fn wall_block<const D: bool, const F: bool>(
     start: usize,
     force: &mut [DVec3],
     torque: &mut [DVec3],
-    states: &mut [ContactState],
+    (states, gaps): (&mut [ContactState], &mut [f64]),
     books: &mut Vec<WallBooked>,
     dt: f64,
 ) {
@@ -1125,13 +1161,20 @@ fn wall_block<const D: bool, const F: bool>(
         *f = g * bodies.mass[i];
         *t = DVec3::ZERO;
         let r = bodies.radius[i];
+        let x = bodies.position[i];
         for (w, shape) in walls.shapes.iter().enumerate() {
-            let st = &mut states[m * n_walls + w];
-            let (dist, normal) = shape.distance_and_normal(bodies.position[i], walls.offset);
-            if r - dist <= 0.0 && st.delta_prev <= 0.0 {
-                st.delta_prev = r - dist;
+            let gap = &mut gaps[m * n_walls + w];
+            let dist = shape.distance_m(x, walls.offset);
+            if r - dist <= 0.0 && *gap <= 0.0 {
+                *gap = r - dist;
                 continue;
             }
+            let st = &mut states[m * n_walls + w];
+            if *gap <= 0.0 {
+                // Opening: the contact's books start from the gap.
+                st.delta_prev = *gap;
+            }
+            let normal = shape.normal_from(x);
             let (particle, wall) = (i as u32, w as u32);
             if dist <= 0.0 {
                 books.push(WallBooked {
@@ -1143,6 +1186,7 @@ fn wall_block<const D: bool, const F: bool>(
                 return;
             }
             let out = wall_contact::<D, F>(law, bodies, i, dist, normal, walls.v_wall, dt, st);
+            *gap = st.delta_prev;
             *f += out.force_i;
             if F {
                 *t += out.torque_i;
@@ -1166,14 +1210,15 @@ fn pair_block<const D: bool, const F: bool>(
     bodies: &Bodies,
     start: usize,
     pairs: &[(u32, u32)],
-    states: &mut [ContactState],
+    (gaps, states): (&mut [f64], &mut [ContactState]),
     forces: &mut [PairForce],
     books: &mut Vec<(u32, ContactResult)>,
     dt: f64,
 ) {
     books.clear();
-    for (m, ((&(i, j), st), f)) in pairs.iter().zip(states).zip(forces).enumerate() {
-        match pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, st) {
+    let slots = gaps.iter_mut().zip(states);
+    for (m, ((&(i, j), (gap, st)), f)) in pairs.iter().zip(slots).zip(forces).enumerate() {
+        match pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, gap, st) {
             None => *f = PairForce::default(),
             Some(out) => {
                 *f = PairForce {
@@ -1322,8 +1367,9 @@ fn wall_contact<const D: bool, const F: bool>(
 }
 
 /// One particle-particle contact (thesis eq. 3.1–3.8, 3.26–3.27); `None`
-/// when the particles are apart and were apart (the gap is remembered for
-/// the trapezoid at contact onset).
+/// when the particles are apart and were apart. `gap` is the pair's overlap
+/// at the previous step (negative: the gap), remembered for the trapezoid
+/// at contact onset and updated here; `st` is read only when they touch.
 #[inline(always)]
 fn pair_contact<const D: bool, const F: bool>(
     law: &ContactLaw,
@@ -1331,15 +1377,20 @@ fn pair_contact<const D: bool, const F: bool>(
     i: usize,
     j: usize,
     dt: f64,
+    gap: &mut f64,
     st: &mut ContactState,
 ) -> Option<ContactResult> {
     let d = b.position[j] - b.position[i];
     let (ri, rj) = (b.radius[i], b.radius[j]);
     let dist_sq = d.length_squared();
     let reach = ri + rj;
-    if dist_sq >= reach * reach && st.delta_prev <= 0.0 {
-        st.delta_prev = reach - dist_sq.sqrt();
+    if dist_sq >= reach * reach && *gap <= 0.0 {
+        *gap = reach - dist_sq.sqrt();
         return None;
+    }
+    if *gap <= 0.0 {
+        // Opening: the contact's books start from the gap.
+        st.delta_prev = *gap;
     }
     let dist = dist_sq.sqrt();
     let n = d / dist;
@@ -1362,12 +1413,7 @@ fn pair_contact<const D: bool, const F: bool>(
         normal: n,
         v_rel,
     };
-    Some(resolve_contact::<D, F>(
-        law,
-        &geometry,
-        arms,
-        ri.min(rj),
-        dt,
-        st,
-    ))
+    let out = resolve_contact::<D, F>(law, &geometry, arms, ri.min(rj), dt, st);
+    *gap = st.delta_prev;
+    Some(out)
 }
