@@ -88,25 +88,29 @@ impl NeighbourList {
         &self.adjacency[s as usize..e as usize]
     }
 
-    /// True when some particle moved more than half the skin since the last build
-    /// (or the particle count changed), so that a new contact could be missed.
-    /// `parallel`: look with all threads (the answer is the same).
-    pub fn needs_rebuild(&self, positions: &[DVec3], parallel: bool) -> bool {
-        use rayon::prelude::*;
-        if positions.len() != self.reference.len() {
-            return true;
-        }
-        let limit_sq = 0.25 * self.skin_m * self.skin_m;
-        let moved = |(p, r): (&DVec3, &DVec3)| (*p - *r).length_squared() > limit_sq;
-        if parallel {
-            positions
-                .par_iter()
+    /// Where the particles were when the list was last built: a particle
+    /// that has travelled more than half the skin from there
+    /// ([`Self::rebuild_travel_sq_m2`]) may meet a pair not listed.
+    pub fn reference(&self) -> &[DVec3] {
+        &self.reference
+    }
+
+    /// The squared travel (m²) from [`Self::reference`] beyond which the list
+    /// must be rebuilt: (skin / 2)².
+    pub fn rebuild_travel_sq_m2(&self) -> f64 {
+        0.25 * self.skin_m * self.skin_m
+    }
+
+    /// True when some particle moved more than half the skin since the last
+    /// build (or the particle count changed), so that a new contact could be
+    /// missed. A step asks this of each particle as it moves it instead.
+    pub fn needs_rebuild(&self, positions: &[DVec3]) -> bool {
+        let limit_sq = self.rebuild_travel_sq_m2();
+        positions.len() != self.reference.len()
+            || positions
+                .iter()
                 .zip(&self.reference)
-                .with_min_len(1024)
-                .any(moved)
-        } else {
-            positions.iter().zip(&self.reference).any(moved)
-        }
+                .any(|(p, r)| (*p - *r).length_squared() > limit_sq)
     }
 
     /// Lays out the pairs of every particle (see [`Self::pairs_of`]): a

@@ -478,6 +478,13 @@ impl World {
         }
     }
 
+    /// Whether a step now runs on all threads of the current pool (several
+    /// threads, and enough listed pairs to pay for waking them); the
+    /// results are the same bits either way.
+    pub fn splits_across_threads(&self) -> bool {
+        self.parallel()
+    }
+
     /// Whether this step runs on all threads: several threads, and enough
     /// listed pairs to pay for waking them ([`AUTO_PARALLEL_MIN_PAIRS`]).
     /// Either way the results are the same bits.
@@ -502,8 +509,9 @@ impl World {
         // Work the contact forces do on the particles over the step, as velocity
         // Verlet applies them: the trapezoid of the forces (gravity taken out)
         // at both ends on the drift `v_half dt` (rotation: `ω_half dt`).
-        let (kicked_work, nonfinite) = self.half_kick(Pass::KickDrift, 0.0, parallel);
-        if let Some(i) = nonfinite {
+        let drift = self.half_kick(Pass::KickDrift, 0.0, parallel);
+        let kicked_work = drift.work;
+        if let Some(i) = drift.nonfinite {
             return Err(DemError::NonFinite {
                 time_s: self.time_s + dt,
                 step: self.steps + 1,
@@ -517,10 +525,7 @@ impl World {
         self.walls.velocity_mps = du / dt;
         let axial_before = self.wall_force.dot(self.walls.axis);
 
-        if self
-            .neighbours
-            .needs_rebuild(&self.particles.position, parallel)
-        {
+        if drift.moved_far || self.neighbours.reference().len() != self.particles.len() {
             self.neighbours
                 .rebuild(&self.particles.position, &self.particles.radius);
         }
@@ -528,7 +533,7 @@ impl World {
         self.step_stored_change_j = 0.0;
         self.compute_forces(dt)?;
 
-        let (mut contact_work_j, _) = self.half_kick(Pass::Kick, kicked_work, parallel);
+        let mut contact_work_j = self.half_kick(Pass::Kick, kicked_work, parallel).work;
         contact_work_j *= half;
         // Trapezoidal work of the walls on the particles over the step.
         let work_in_j = 0.5 * (axial_before + self.wall_force.dot(self.walls.axis)) * du;
@@ -553,16 +558,21 @@ impl World {
     /// in fixed blocks. Returns the sum of the contact power terms
     /// `(F - m g)·v + τ·ω` over the particles, added to `carry` in particle
     /// order (block by block, so the same for any thread count; for one block
-    /// the order of a plain loop), and the first particle whose position is
-    /// not finite.
-    fn half_kick(&mut self, pass: Pass, carry: f64, parallel: bool) -> (f64, Option<usize>) {
+    /// the order of a plain loop), the first particle whose position is not
+    /// finite, and whether some particle drifted far enough from where the
+    /// pair list was built for the list to be rebuilt.
+    fn half_kick(&mut self, pass: Pass, carry: f64, parallel: bool) -> KickSums {
+        let reference = self.neighbours.reference();
         let kick = Kick {
             pass,
             dt: self.numerics.dt_s,
             gravity: self.gravity,
             rotation: self.rotates(),
+            travel_sq_m2: self.neighbours.rebuild_travel_sq_m2(),
         };
         let p = &mut self.particles;
+        // A list built for other particles is rebuilt anyway (by the caller).
+        let reference = (reference.len() == p.len()).then_some(reference);
         let (force, torque, mass) = (&p.force, &p.torque, &p.mass);
         let (inv_mass, inv_inertia) = (&p.inv_mass, &p.inv_inertia);
         type Block<'b> = (usize, ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [DVec3]));
@@ -576,8 +586,12 @@ impl World {
                 inv_mass: &inv_mass[s..e],
                 inv_inertia: &inv_inertia[s..e],
             };
-            let (work, bad) = kick.block(&loads, x, v, w, if c == 0 { carry } else { 0.0 });
-            (work, bad.map(|k| s + k))
+            let built_at = reference.map(|r| &r[s..e]);
+            let sums = kick.block(&loads, x, v, w, built_at, if c == 0 { carry } else { 0.0 });
+            KickSums {
+                nonfinite: sums.nonfinite.map(|k| s + k),
+                ..sums
+            }
         };
         let sums = &mut self.scratch.block_sums;
         if parallel {
@@ -599,13 +613,17 @@ impl World {
                     .map(block),
             );
         }
-        let mut total = if sums.is_empty() { carry } else { 0.0 };
-        let mut nonfinite = None;
-        for &(work, bad) in sums.iter() {
-            total += work;
-            nonfinite = nonfinite.or(bad);
+        let mut total = KickSums {
+            work: if sums.is_empty() { carry } else { 0.0 },
+            nonfinite: None,
+            moved_far: false,
+        };
+        for b in sums.iter() {
+            total.work += b.work;
+            total.nonfinite = total.nonfinite.or(b.nonfinite);
+            total.moved_far |= b.moved_far;
         }
-        (total, nonfinite)
+        total
     }
 
     /// Human-readable name of a contact, for diagnoses.
@@ -712,10 +730,10 @@ impl World {
         let g = self.gravity;
         let p = &mut self.particles;
         let list = &self.neighbours;
-        let pair_force = &self.scratch.pair_force;
+        let slots = (&self.scratch.pair_acts[..], &self.scratch.pair_force[..]);
         let gather_into = |c: usize, f: &mut [DVec3], t: &mut [DVec3]| match gather {
-            Some(true) => gather_block::<true>(list, pair_force, c * PARTICLE_BLOCK, f, t),
-            Some(false) => gather_block::<false>(list, pair_force, c * PARTICLE_BLOCK, f, t),
+            Some(true) => gather_block::<true>(list, slots, c * PARTICLE_BLOCK, f, t),
+            Some(false) => gather_block::<false>(list, slots, c * PARTICLE_BLOCK, f, t),
             None => {}
         };
         if self.walls.is_empty() {
@@ -858,6 +876,7 @@ impl World {
         let sc = &mut self.scratch;
         let n_pairs = nl.pairs.len();
         sc.pair_force.resize(n_pairs, PairForce::default());
+        sc.pair_acts.resize(n_pairs, false);
         let n_blocks = n_pairs.div_ceil(PAIR_BLOCK);
         if sc.pair_books.len() < n_blocks {
             sc.pair_books.resize_with(n_blocks, Vec::new);
@@ -867,17 +886,18 @@ impl World {
             .par_chunks(PAIR_BLOCK)
             .zip(nl.gaps.par_chunks_mut(PAIR_BLOCK))
             .zip(nl.states.par_chunks_mut(PAIR_BLOCK))
+            .zip(sc.pair_acts.par_chunks_mut(PAIR_BLOCK))
             .zip(sc.pair_force.par_chunks_mut(PAIR_BLOCK))
             .zip(sc.pair_books[..n_blocks].par_iter_mut())
             .enumerate()
-            .for_each(|(c, ((((pairs, gaps), states), forces), books))| {
+            .for_each(|(c, (((((pairs, gaps), states), acts), forces), books))| {
                 pair_block::<D, F>(
                     &law,
                     &bodies,
                     c * PAIR_BLOCK,
                     pairs,
                     (gaps, states),
-                    forces,
+                    (acts, forces),
                     books,
                     dt,
                 );
@@ -960,13 +980,15 @@ struct WallBooked {
 /// nothing once they have grown.
 #[derive(Debug, Clone, Default)]
 struct StepScratch {
-    /// Per particle block: its share of the contact power and its first
-    /// non-finite particle.
-    block_sums: Vec<(f64, Option<usize>)>,
+    /// Per particle block: what its half kick found.
+    block_sums: Vec<KickSums>,
     /// Per particle block: its touching wall contacts.
     wall_books: Vec<Vec<WallBooked>>,
-    /// Per pair: its forces (parallel step).
+    /// Per pair: its forces (parallel step), written only when it acts.
     pair_force: Vec<PairForce>,
+    /// Per pair: whether it acts this step (touches, or stopped touching:
+    /// the pairs the serial loop adds).
+    pair_acts: Vec<bool>,
     /// Per pair block: its touching pairs (parallel step).
     pair_books: Vec<Vec<(u32, ContactResult)>>,
     /// Pair blocks of the current step (parallel step).
@@ -1076,6 +1098,21 @@ struct Kick {
     gravity: DVec3,
     /// Integrate the spin too (some law has friction).
     rotation: bool,
+    /// Squared travel from where the pair list was built beyond which it
+    /// must be rebuilt (m²).
+    travel_sq_m2: f64,
+}
+
+/// What a half kick found, over a block or over all particles.
+#[derive(Debug, Clone, Copy, Default)]
+struct KickSums {
+    /// `carry` plus the contact power `(F - m g)·v + τ·ω`, summed in order.
+    work: f64,
+    /// The first particle whose position is not finite (drift only).
+    nonfinite: Option<usize>,
+    /// Some particle travelled more than half the skin since the pair list
+    /// was built (drift only).
+    moved_far: bool,
 }
 
 /// The loads and inertia of a block of particles.
@@ -1088,10 +1125,12 @@ struct Loads<'a> {
 }
 
 impl Kick {
-    /// The pass over one block of positions `x`, velocities `v` and spins `w`:
-    /// returns `carry` plus the contact power `(F - m g)·v + τ·ω` summed over
-    /// the block in order, and the first particle of the block whose position
-    /// is not finite (first pass only).
+    /// The pass over one block of positions `x`, velocities `v` and spins `w`
+    /// (`built_at`: where the pair list was built for them): returns `carry`
+    /// plus the contact power `(F - m g)·v + τ·ω` summed over the block in
+    /// order, and on the first pass the first particle of the block whose
+    /// position is not finite and whether one drifted far enough to need a
+    /// new pair list.
     #[inline]
     fn block(
         &self,
@@ -1099,8 +1138,9 @@ impl Kick {
         x: &mut [DVec3],
         v: &mut [DVec3],
         w: &mut [DVec3],
+        built_at: Option<&[DVec3]>,
         carry: f64,
-    ) -> (f64, Option<usize>) {
+    ) -> KickSums {
         let half = 0.5 * self.dt;
         let g = self.gravity;
         let mut work = carry;
@@ -1128,11 +1168,22 @@ impl Kick {
                 }
             }
         }
-        let bad = match self.pass {
-            Pass::KickDrift => x.iter().position(|p| !p.is_finite()),
-            Pass::Kick => None,
+        let (nonfinite, moved_far) = match (self.pass, built_at) {
+            (Pass::Kick, _) => (None, false),
+            (Pass::KickDrift, built_at) => (
+                x.iter().position(|p| !p.is_finite()),
+                built_at.is_some_and(|r| {
+                    x.iter()
+                        .zip(r)
+                        .any(|(p, q)| (*p - *q).length_squared() > self.travel_sq_m2)
+                }),
+            ),
         };
-        (work, bad)
+        KickSums {
+            work,
+            nonfinite,
+            moved_far,
+        }
     }
 }
 
@@ -1201,8 +1252,8 @@ fn wall_block<const D: bool, const F: bool>(
     }
 }
 
-/// The pair contacts `start..` of one block: states advanced, each pair's
-/// forces written (zero when apart), the touching ones listed in `books`.
+/// The pair contacts `start..` of one block: states advanced, whether each
+/// pair acts written and, when it does, its forces; those listed in `books`.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn pair_block<const D: bool, const F: bool>(
@@ -1211,34 +1262,35 @@ fn pair_block<const D: bool, const F: bool>(
     start: usize,
     pairs: &[(u32, u32)],
     (gaps, states): (&mut [f64], &mut [ContactState]),
-    forces: &mut [PairForce],
+    (acts, forces): (&mut [bool], &mut [PairForce]),
     books: &mut Vec<(u32, ContactResult)>,
     dt: f64,
 ) {
     books.clear();
     let slots = gaps.iter_mut().zip(states);
-    for (m, ((&(i, j), (gap, st)), f)) in pairs.iter().zip(slots).zip(forces).enumerate() {
-        match pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, gap, st) {
-            None => *f = PairForce::default(),
-            Some(out) => {
-                *f = PairForce {
-                    force_i: out.force_i,
-                    torque_i: out.torque_i,
-                    torque_j: out.torque_j,
-                };
-                books.push(((start + m) as u32, out));
-            }
+    let outs = acts.iter_mut().zip(forces);
+    for (m, ((&(i, j), (gap, st)), (act, f))) in pairs.iter().zip(slots).zip(outs).enumerate() {
+        let out = pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, gap, st);
+        *act = out.is_some();
+        if let Some(out) = out {
+            *f = PairForce {
+                force_i: out.force_i,
+                torque_i: out.torque_i,
+                torque_j: out.torque_j,
+            };
+            books.push(((start + m) as u32, out));
         }
     }
 }
 
 /// Adds to the forces and torques of the particles `start..` of one block
-/// their pair forces, each particle's in pair order: the order, and so the
-/// rounding, of the serial loop that adds each pair to both its particles.
+/// the forces of their acting pairs, each particle's in pair order: the
+/// pairs, the order, and so the rounding, of the serial loop that adds each
+/// acting pair to both its particles.
 #[inline]
 fn gather_block<const F: bool>(
     list: &NeighbourList,
-    pair_force: &[PairForce],
+    (acts, pair_force): (&[bool], &[PairForce]),
     start: usize,
     force: &mut [DVec3],
     torque: &mut [DVec3],
@@ -1246,7 +1298,11 @@ fn gather_block<const F: bool>(
     for (m, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
         let (mut fa, mut ta) = (*f, *t);
         for &e in list.pairs_of(start + m) {
-            let c = &pair_force[(e >> 1) as usize];
+            let k = (e >> 1) as usize;
+            if !acts[k] {
+                continue;
+            }
+            let c = &pair_force[k];
             if e & 1 == 0 {
                 fa += c.force_i;
                 if F {
