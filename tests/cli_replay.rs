@@ -398,8 +398,12 @@ fn replay_of_a_shake_gives_its_measurement_back() {
     );
     // The replay's standard error is the shake's: the same blocks of the
     // same record (within 10 %: the recorded rows are not the DEM's steps).
-    let se_r = r["measured"]["power_stderr_w"].as_f64().expect("replay stderr");
-    let se_s = s["measured"]["power_stderr_w"].as_f64().expect("shake stderr");
+    let se_r = r["measured"]["power_stderr_w"]
+        .as_f64()
+        .expect("replay stderr");
+    let se_s = s["measured"]["power_stderr_w"]
+        .as_f64()
+        .expect("shake stderr");
     assert!(
         se_r > 0.0 && (se_r / se_s - 1.0).abs() < 0.1,
         "replay stderr {se_r} vs shake {se_s}"

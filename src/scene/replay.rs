@@ -721,9 +721,7 @@ pub fn replay_record(
         efficiency: measured_efficiency,
         power_stderr_w: blocks.map(|b| b.stderr),
         energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / freq_hz),
-        efficiency_stderr: blocks
-            .zip(e_max_j)
-            .map(|(b, e)| b.stderr / freq_hz / e),
+        efficiency_stderr: blocks.zip(e_max_j).map(|(b, e)| b.stderr / freq_hz / e),
         phase_correction_rad: corrected.phase_correction_rad,
         error_vs_record_rel: corrected.energy_per_cycle_j / truth_energy - 1.0,
         uncorrected_energy_per_cycle_j: raw.energy_per_cycle_j,
