@@ -351,7 +351,12 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
     for base in rows.iter().filter(|r| r.threads == 1) {
         for other in rows
             .iter()
-            .filter(|r| r.threads > 1 && r.case == base.case && r.split_across_threads)
+            .filter(|r| {
+                r.threads > 1
+                    && r.case == base.case
+                    && r.particles == base.particles
+                    && r.split_across_threads
+            })
         {
             out.push(Speedup::between(
                 format!("{} threads over 1, {}", other.threads, base.case),
