@@ -349,15 +349,12 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
 fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
     let mut out = Vec::new();
     for base in rows.iter().filter(|r| r.threads == 1) {
-        for other in rows
-            .iter()
-            .filter(|r| {
-                r.threads > 1
-                    && r.case == base.case
-                    && r.particles == base.particles
-                    && r.split_across_threads
-            })
-        {
+        for other in rows.iter().filter(|r| {
+            r.threads > 1
+                && r.case == base.case
+                && r.particles == base.particles
+                && r.split_across_threads
+        }) {
             out.push(Speedup::between(
                 format!("{} threads over 1, {}", other.threads, base.case),
                 base,

@@ -14,15 +14,29 @@
 //! pairs only whether they are still apart, and reads 8 bytes for it instead
 //! of the whole 88-byte contact state.
 //!
-//! Each rebuild also lays out, for every particle, the pairs it belongs to in
-//! increasing pair order ([`NeighbourList::pairs_of`]): a thread that owns a
-//! particle can then gather its pair forces in exactly the order a serial loop
-//! over the pairs would have added them, which keeps the parallel force sums
-//! bit-identical to the serial ones.
+//! Each rebuild also lays out, for every particle, where its pairs are in
+//! the order a serial loop over the pairs adds them to it: first the pairs
+//! in which it is the second particle (`(i, p)`, `i < p`: its *j side*,
+//! [`NeighbourList::j_side`]), then those in which it is the first (its row
+//! of the sorted list, [`NeighbourList::row`]). A thread that owns a
+//! particle can then gather its pair forces in exactly that order, which
+//! keeps the parallel force sums bit-identical to the serial ones. Each pair
+//! also knows its place among its second particle's j side
+//! ([`NeighbourList::j_slot`]), so the parallel step can leave the force
+//! there and the gather reads both sides of a particle as runs of memory.
 
 use glam::DVec3;
 
 use super::contact::ContactState;
+
+/// The parts of a [`NeighbourList`] a step of the pair contacts reads and
+/// writes, borrowed apart ([`NeighbourList::step_view`]).
+pub struct StepView<'a> {
+    pub pairs: &'a [(u32, u32)],
+    pub j_slot: &'a [u32],
+    pub gaps: &'a mut [f64],
+    pub states: &'a mut [ContactState],
+}
 
 /// Verlet pair list with per-pair contact history.
 #[derive(Debug, Clone, Default)]
@@ -37,11 +51,13 @@ pub struct NeighbourList {
     /// negative: the gap. Always current.
     pub gaps: Vec<f64>,
     skin_m: f64,
-    /// Pairs of particle `p`: `adjacency[adjacency_start[p]..adjacency_start[p + 1]]`,
-    /// each `2 k + side` for pair `k` (side 0: `p` is its `i`, 1: its `j`),
-    /// in increasing `k`.
-    adjacency_start: Vec<u32>,
-    adjacency: Vec<u32>,
+    /// Pairs `(p, j)` of particle `p`: `row_start[p]..row_start[p + 1]`.
+    row_start: Vec<u32>,
+    /// Pairs `(i, p)` of particle `p`, in increasing pair order, as slots
+    /// `j_start[p]..j_start[p + 1]` of an array with one slot per pair.
+    j_start: Vec<u32>,
+    /// The slot of each pair in that array (see [`Self::j_slot`]).
+    j_slot: Vec<u32>,
     reference: Vec<DVec3>,
     rebuilds: u64,
     // Scratch reused between rebuilds.
@@ -80,12 +96,36 @@ impl NeighbourList {
         self.rebuilds
     }
 
-    /// The pairs particle `p` belongs to, in increasing pair order: `2 k` when
-    /// it is pair `k`'s `i`, `2 k + 1` when it is its `j`.
+    /// What a step reads and writes of the list, borrowed apart: the pairs
+    /// and their j slots, and the gaps and contact states it advances.
+    pub fn step_view(&mut self) -> StepView<'_> {
+        StepView {
+            pairs: &self.pairs,
+            j_slot: &self.j_slot,
+            gaps: &mut self.gaps,
+            states: &mut self.states,
+        }
+    }
+
+    /// The pairs `(p, j)` of particle `p`: a run of the pair list.
     #[inline]
-    pub fn pairs_of(&self, p: usize) -> &[u32] {
-        let (s, e) = (self.adjacency_start[p], self.adjacency_start[p + 1]);
-        &self.adjacency[s as usize..e as usize]
+    pub fn row(&self, p: usize) -> std::ops::Range<usize> {
+        self.row_start[p] as usize..self.row_start[p + 1] as usize
+    }
+
+    /// The slots of the pairs `(i, p)` of particle `p`, in increasing pair
+    /// order: a run of an array with one slot per pair, laid out by
+    /// [`Self::j_slot`].
+    #[inline]
+    pub fn j_side(&self, p: usize) -> std::ops::Range<usize> {
+        self.j_start[p] as usize..self.j_start[p + 1] as usize
+    }
+
+    /// The slot of pair `k` among the j sides ([`Self::j_side`] of its
+    /// second particle).
+    #[inline]
+    pub fn j_slot(&self, k: usize) -> usize {
+        self.j_slot[k] as usize
     }
 
     /// Where the particles were when the list was last built: a particle
@@ -113,29 +153,29 @@ impl NeighbourList {
                 .any(|(p, r)| (*p - *r).length_squared() > limit_sq)
     }
 
-    /// Lays out the pairs of every particle (see [`Self::pairs_of`]): a
-    /// counting sort of the pair ends, filled in pair order.
+    /// Lays out the rows and the j sides of every particle (see
+    /// [`Self::row`], [`Self::j_side`]): counting sorts of the pair ends,
+    /// filled in pair order.
     fn build_adjacency(&mut self, n: usize) {
-        self.adjacency_start.clear();
-        self.adjacency_start.resize(n + 1, 0);
+        self.row_start.clear();
+        self.row_start.resize(n + 1, 0);
+        self.j_start.clear();
+        self.j_start.resize(n + 1, 0);
         for &(i, j) in &self.pairs {
-            self.adjacency_start[i as usize + 1] += 1;
-            self.adjacency_start[j as usize + 1] += 1;
+            self.row_start[i as usize + 1] += 1;
+            self.j_start[j as usize + 1] += 1;
         }
         for p in 0..n {
-            self.adjacency_start[p + 1] += self.adjacency_start[p];
+            self.row_start[p + 1] += self.row_start[p];
+            self.j_start[p + 1] += self.j_start[p];
         }
-        self.adjacency.clear();
-        self.adjacency.resize(2 * self.pairs.len(), 0);
+        self.j_slot.clear();
         self.fill.clear();
-        self.fill.extend_from_slice(&self.adjacency_start[..n]);
-        for (k, &(i, j)) in self.pairs.iter().enumerate() {
-            let k = k as u32;
-            for (p, side) in [(i, 0), (j, 1)] {
-                let at = &mut self.fill[p as usize];
-                self.adjacency[*at as usize] = 2 * k + side;
-                *at += 1;
-            }
+        self.fill.extend_from_slice(&self.j_start[..n]);
+        for &(_, j) in &self.pairs {
+            let at = &mut self.fill[j as usize];
+            self.j_slot.push(*at);
+            *at += 1;
         }
     }
 
@@ -307,21 +347,23 @@ mod tests {
     }
 
     #[test]
-    fn pairs_of_a_particle_are_listed_in_pair_order() {
+    fn rows_and_j_sides_list_each_particles_pairs_in_pair_order() {
         let pos = scattered(300, 0.03, 5);
         let radii = vec![0.0025; 300];
         let mut list = NeighbourList::new(0.0005);
         list.rebuild(&pos, &radii);
+        let slot_of_pair: Vec<usize> = (0..list.pairs.len()).map(|k| list.j_slot(k)).collect();
         for p in 0..pos.len() {
-            let expect: Vec<u32> = (0..list.pairs.len() as u32)
-                .filter_map(|k| {
-                    let (i, j) = list.pairs[k as usize];
-                    (i as usize == p)
-                        .then_some(2 * k)
-                        .or((j as usize == p).then_some(2 * k + 1))
-                })
+            let as_i: Vec<usize> = (0..list.pairs.len())
+                .filter(|&k| list.pairs[k].0 as usize == p)
                 .collect();
-            assert_eq!(list.pairs_of(p), &expect[..], "particle {p}");
+            let as_j: Vec<usize> = (0..list.pairs.len())
+                .filter(|&k| list.pairs[k].1 as usize == p)
+                .collect();
+            assert_eq!(list.row(p).collect::<Vec<_>>(), as_i, "particle {p}");
+            // The j side holds p's pairs (i, p) in increasing pair order.
+            let slots: Vec<usize> = as_j.iter().map(|&k| slot_of_pair[k]).collect();
+            assert_eq!(slots, list.j_side(p).collect::<Vec<_>>(), "particle {p}");
         }
     }
 

@@ -31,6 +31,8 @@
 //! kept per block and summed afterwards on one thread in contact order. Both
 //! ways give the same bits; the tests compare them.
 
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -41,7 +43,7 @@ use super::error::DemError;
 use super::hertz_theory;
 use super::ledger::{EnergyState, Ledger, LedgerBalance, LedgerSnapshot};
 use super::material::{effective_mass_kg, effective_radius_m};
-use super::neighbours::NeighbourList;
+use super::neighbours::{NeighbourList, StepView as NeighbourStep};
 use super::particles::Particles;
 use super::walls::{WallShape, Walls};
 
@@ -730,7 +732,7 @@ impl World {
         let g = self.gravity;
         let p = &mut self.particles;
         let list = &self.neighbours;
-        let slots = (&self.scratch.pair_acts[..], &self.scratch.pair_force[..]);
+        let slots = &self.scratch.pair_slots;
         let gather_into = |c: usize, f: &mut [DVec3], t: &mut [DVec3]| match gather {
             Some(true) => gather_block::<true>(list, slots, c * PARTICLE_BLOCK, f, t),
             Some(false) => gather_block::<false>(list, slots, c * PARTICLE_BLOCK, f, t),
@@ -875,29 +877,42 @@ impl World {
         let nl = &mut self.neighbours;
         let sc = &mut self.scratch;
         let n_pairs = nl.pairs.len();
-        sc.pair_force.resize(n_pairs, PairForce::default());
-        sc.pair_acts.resize(n_pairs, false);
+        sc.pair_slots.resize(n_pairs);
         let n_blocks = n_pairs.div_ceil(PAIR_BLOCK);
         if sc.pair_books.len() < n_blocks {
             sc.pair_books.resize_with(n_blocks, Vec::new);
         }
         sc.pair_blocks = n_blocks;
-        nl.pairs
+        let NeighbourStep {
+            pairs,
+            j_slot,
+            gaps,
+            states,
+        } = nl.step_view();
+        let PairSlots {
+            row_acts,
+            row_force,
+            j_side,
+        } = &mut sc.pair_slots;
+        let j_side = &*j_side;
+        pairs
             .par_chunks(PAIR_BLOCK)
-            .zip(nl.gaps.par_chunks_mut(PAIR_BLOCK))
-            .zip(nl.states.par_chunks_mut(PAIR_BLOCK))
-            .zip(sc.pair_acts.par_chunks_mut(PAIR_BLOCK))
-            .zip(sc.pair_force.par_chunks_mut(PAIR_BLOCK))
+            .zip(gaps.par_chunks_mut(PAIR_BLOCK))
+            .zip(states.par_chunks_mut(PAIR_BLOCK))
+            .zip(row_acts.par_chunks_mut(PAIR_BLOCK))
+            .zip(row_force.par_chunks_mut(PAIR_BLOCK))
             .zip(sc.pair_books[..n_blocks].par_iter_mut())
             .enumerate()
             .for_each(|(c, (((((pairs, gaps), states), acts), forces), books))| {
+                let start = c * PAIR_BLOCK;
+                let j_slot = &j_slot[start..start + pairs.len()];
                 pair_block::<D, F>(
                     &law,
                     &bodies,
-                    c * PAIR_BLOCK,
+                    start,
                     pairs,
                     (gaps, states),
-                    (acts, forces),
+                    (acts, forces, j_slot, j_side),
                     books,
                     dt,
                 );
@@ -957,13 +972,76 @@ enum Refusal {
     Escaped,
 }
 
-/// What a pair contributes to the forces, kept for the gather of the
-/// parallel step.
+/// What a pair contributes to its first particle, kept for the gather of
+/// the parallel step.
 #[derive(Debug, Clone, Copy, Default)]
-struct PairForce {
+struct RowForce {
     force_i: DVec3,
     torque_i: DVec3,
-    torque_j: DVec3,
+}
+
+/// Where the pairs of a parallel step leave their forces for the gather:
+/// the first particle's share in pair order (its row of the list), the
+/// second particle's in the j-side slots of [`NeighbourList::j_slot`], so
+/// that the gather reads each particle's pairs as two runs of memory. A
+/// slot is written by its one pair and read after the pair loop has ended;
+/// the atomics (relaxed: plain loads and stores) let the pair blocks write
+/// the j sides, which are not theirs alone, without `unsafe`.
+#[derive(Debug, Default)]
+struct PairSlots {
+    /// Per pair: whether it acts this step (touches, or stopped touching:
+    /// the pairs the serial loop adds), and what it does to its first
+    /// particle, written only when it acts.
+    row_acts: Vec<bool>,
+    row_force: Vec<RowForce>,
+    /// Per j slot: the same for the second particle.
+    j_side: JSide,
+}
+
+/// The second particle's share of each pair, by j slot.
+#[derive(Debug, Default)]
+struct JSide {
+    acts: Vec<AtomicBool>,
+    /// The force on the first particle, as bits (the second gets minus it).
+    force_i: Vec<[AtomicU64; 3]>,
+    /// The torque on the second particle, as bits.
+    torque_j: Vec<[AtomicU64; 3]>,
+}
+
+impl PairSlots {
+    fn resize(&mut self, n_pairs: usize) {
+        self.row_acts.resize(n_pairs, false);
+        self.row_force.resize(n_pairs, RowForce::default());
+        let j = &mut self.j_side;
+        j.acts.resize_with(n_pairs, AtomicBool::default);
+        j.force_i.resize_with(n_pairs, Default::default);
+        j.torque_j.resize_with(n_pairs, Default::default);
+    }
+}
+
+impl JSide {
+    #[inline]
+    fn store(v: &[AtomicU64; 3], x: DVec3) {
+        for (a, c) in v.iter().zip(x.to_array()) {
+            a.store(c.to_bits(), Ordering::Relaxed);
+        }
+    }
+
+    #[inline]
+    fn load(v: &[AtomicU64; 3]) -> DVec3 {
+        DVec3::new(
+            f64::from_bits(v[0].load(Ordering::Relaxed)),
+            f64::from_bits(v[1].load(Ordering::Relaxed)),
+            f64::from_bits(v[2].load(Ordering::Relaxed)),
+        )
+    }
+}
+
+/// Scratch buffers are not state: a copy of a world starts with none.
+impl Clone for PairSlots {
+    fn clone(&self) -> Self {
+        PairSlots::default()
+    }
 }
 
 /// A touching wall contact of the step, for the books.
@@ -984,11 +1062,8 @@ struct StepScratch {
     block_sums: Vec<KickSums>,
     /// Per particle block: its touching wall contacts.
     wall_books: Vec<Vec<WallBooked>>,
-    /// Per pair: its forces (parallel step), written only when it acts.
-    pair_force: Vec<PairForce>,
-    /// Per pair: whether it acts this step (touches, or stopped touching:
-    /// the pairs the serial loop adds).
-    pair_acts: Vec<bool>,
+    /// Where the pairs leave their forces (parallel step).
+    pair_slots: PairSlots,
     /// Per pair block: its touching pairs (parallel step).
     pair_books: Vec<Vec<(u32, ContactResult)>>,
     /// Pair blocks of the current step (parallel step).
@@ -1253,7 +1328,8 @@ fn wall_block<const D: bool, const F: bool>(
 }
 
 /// The pair contacts `start..` of one block: states advanced, whether each
-/// pair acts written and, when it does, its forces; those listed in `books`.
+/// pair acts written on both its sides and, when it does, its forces; those
+/// listed in `books`.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn pair_block<const D: bool, const F: bool>(
@@ -1262,22 +1338,29 @@ fn pair_block<const D: bool, const F: bool>(
     start: usize,
     pairs: &[(u32, u32)],
     (gaps, states): (&mut [f64], &mut [ContactState]),
-    (acts, forces): (&mut [bool], &mut [PairForce]),
+    (acts, forces, j_slot, j_side): (&mut [bool], &mut [RowForce], &[u32], &JSide),
     books: &mut Vec<(u32, ContactResult)>,
     dt: f64,
 ) {
     books.clear();
     let slots = gaps.iter_mut().zip(states);
-    let outs = acts.iter_mut().zip(forces);
-    for (m, ((&(i, j), (gap, st)), (act, f))) in pairs.iter().zip(slots).zip(outs).enumerate() {
+    let outs = acts.iter_mut().zip(forces).zip(j_slot);
+    for (m, ((&(i, j), (gap, st)), ((act, f), &js))) in
+        pairs.iter().zip(slots).zip(outs).enumerate()
+    {
         let out = pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, gap, st);
+        let js = js as usize;
         *act = out.is_some();
+        j_side.acts[js].store(*act, Ordering::Relaxed);
         if let Some(out) = out {
-            *f = PairForce {
+            *f = RowForce {
                 force_i: out.force_i,
                 torque_i: out.torque_i,
-                torque_j: out.torque_j,
             };
+            JSide::store(&j_side.force_i[js], out.force_i);
+            if F {
+                JSide::store(&j_side.torque_j[js], out.torque_j);
+            }
             books.push(((start + m) as u32, out));
         }
     }
@@ -1290,29 +1373,34 @@ fn pair_block<const D: bool, const F: bool>(
 #[inline]
 fn gather_block<const F: bool>(
     list: &NeighbourList,
-    (acts, pair_force): (&[bool], &[PairForce]),
+    slots: &PairSlots,
     start: usize,
     force: &mut [DVec3],
     torque: &mut [DVec3],
 ) {
+    let js = &slots.j_side;
     for (m, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
+        let p = start + m;
         let (mut fa, mut ta) = (*f, *t);
-        for &e in list.pairs_of(start + m) {
-            let k = (e >> 1) as usize;
-            if !acts[k] {
+        // Pairs (i, p), i < p, come first in pair order: the j side.
+        for s in list.j_side(p) {
+            if !js.acts[s].load(Ordering::Relaxed) {
                 continue;
             }
-            let c = &pair_force[k];
-            if e & 1 == 0 {
-                fa += c.force_i;
-                if F {
-                    ta += c.torque_i;
-                }
-            } else {
-                fa -= c.force_i;
-                if F {
-                    ta += c.torque_j;
-                }
+            fa -= JSide::load(&js.force_i[s]);
+            if F {
+                ta += JSide::load(&js.torque_j[s]);
+            }
+        }
+        // Then pairs (p, j): the row.
+        for k in list.row(p) {
+            if !slots.row_acts[k] {
+                continue;
+            }
+            let c = &slots.row_force[k];
+            fa += c.force_i;
+            if F {
+                ta += c.torque_i;
             }
         }
         *f = fa;
