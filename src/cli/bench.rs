@@ -2,14 +2,19 @@
 //! (particles × time steps / wall seconds of the stepping loop) on the thesis
 //! scene, for pouring/settling (a dense, quasi-static bed) and for the drive at
 //! 40 Hz, Γ 20, with one thread and with all threads, and the same drive
-//! frictionless (μ = 0: no tangential force, no rotation); one step of lattice
+//! frictionless (μ = 0: no tangential force, no rotation); steps of lattice
 //! beds of many spheres (`--beds`, see `vlab::dem::testbed`) on one thread and
 //! on all; the time to analyse a 5 s, 40 kHz two-channel trace with Yang's
 //! method; and the peak memory.
 //!
-//! Each row also gives the rate per CPU second the process used (user +
-//! system): on a machine shared with other work the wall-clock rate falls
-//! with the load, the CPU rate much less.
+//! A virtual machine shares its cores with other work, so one timing is a
+//! sample of the load as much as of the code. Every configuration is timed
+//! `--repeats` times, the thread counts taking turns, and reported by its
+//! median and its fastest run; the speed-ups (all threads over one,
+//! frictionless over the thesis contacts) are given as the ratio of the
+//! fastest runs (the least disturbed) and as the median of the paired
+//! ratios. Each row also gives the rate per CPU second the process used
+//! (user + system), which falls much less with the load than the wall rate.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -24,26 +29,30 @@ use vlab::dem::testbed::lattice_bed;
 use vlab::rig::SineMotion;
 use vlab::scene::damper::{DriveLength, DrivePlan, NoObserver, run_drive};
 use vlab::scene::file::Scene;
-use vlab::scene::settle::{prepare_drive, settle_bed};
+use vlab::scene::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::signals::bench_yang_power;
 
 use super::progress::ProgressLine;
 
 #[derive(Debug, Clone, Args)]
 pub struct BenchArgs {
-    /// Drive cycles timed per configuration (40 Hz: 25 000 steps each).
+    /// Drive cycles timed per run of the thesis scene (40 Hz: 20 500 steps each).
     #[arg(long, default_value = "2")]
     cycles: u32,
+    /// Times each configuration is run (thread counts taking turns); rows give
+    /// the median and the fastest run.
+    #[arg(long, default_value = "3", value_parser = clap::value_parser!(u32).range(1..=100))]
+    repeats: u32,
     /// Also write the figures to this CSV file.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
     /// Print the figures as JSON.
     #[arg(long)]
     json: bool,
-    /// Lattice beds to time, by number of spheres (comma-separated; none: "").
-    #[arg(long, value_delimiter = ',', default_value = "5000,20000")]
-    beds: Vec<usize>,
-    /// Steps timed per lattice bed and thread count.
+    /// Lattice beds to time, by number of spheres, comma-separated ("none": no beds).
+    #[arg(long, default_value = "5000,20000", value_parser = parse_beds)]
+    beds: BedSizes,
+    /// Steps timed per run of a lattice bed.
     #[arg(long, default_value = "300")]
     bed_steps: u32,
     /// Leave out the thesis scene (and Yang's method): time the beds only,
@@ -52,33 +61,118 @@ pub struct BenchArgs {
     beds_only: bool,
 }
 
+/// The lattice beds asked for (sphere counts).
+#[derive(Debug, Clone)]
+pub struct BedSizes(Vec<usize>);
+
+/// `--beds`: sphere counts separated by commas, each at least 2; "none" or
+/// nothing for no beds.
+fn parse_beds(s: &str) -> Result<BedSizes, String> {
+    let s = s.trim();
+    if s.is_empty() || s.eq_ignore_ascii_case("none") {
+        return Ok(BedSizes(Vec::new()));
+    }
+    s.split(',')
+        .map(|x| match x.trim().parse::<usize>() {
+            Ok(n) if n >= 2 => Ok(n),
+            _ => Err(format!(
+                "'{x}' is not a bed size: a number of spheres of at least 2 (or \"none\")"
+            )),
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(BedSizes)
+}
+
+/// One configuration (case, thread count) over its repeated runs.
 #[derive(Debug, Serialize)]
 struct BenchRow {
     case: String,
     threads: usize,
+    /// Whether the step ran on all the threads (a small bed stays on one core
+    /// whatever the pool: see `vlab::dem::AUTO_PARALLEL_MIN_PAIRS`).
+    split_across_threads: bool,
     particles: usize,
+    /// Steps timed per run.
     steps: u64,
+    runs: usize,
+    /// Median and fastest wall time of a run (s).
     wall_s: f64,
+    fastest_wall_s: f64,
+    /// Particle-steps per wall second: median run and fastest run.
     particle_steps_per_s: f64,
-    /// CPU seconds (user + system) the process used over the row.
+    fastest_particle_steps_per_s: f64,
+    /// CPU seconds (user + system) of the median run.
     cpu_s: f64,
-    /// Particle-steps per CPU second.
+    /// Particle-steps per CPU second, median over the runs.
     particle_steps_per_cpu_s: f64,
+    /// Wall time of each run (s), in the order they ran.
+    run_wall_s: Vec<f64>,
+}
+
+/// One timed run: wall and CPU seconds.
+#[derive(Debug, Clone, Copy)]
+struct Run {
+    wall_s: f64,
+    cpu_s: f64,
 }
 
 impl BenchRow {
-    fn new(case: String, threads: usize, particles: usize, steps: u64, clock: Clock) -> Self {
-        let (wall_s, cpu_s) = clock.elapsed();
+    fn new(
+        case: &str,
+        threads: usize,
+        split: bool,
+        particles: usize,
+        steps: u64,
+        runs: &[Run],
+    ) -> Self {
         let work = (particles as u64 * steps) as f64;
+        let walls: Vec<f64> = runs.iter().map(|r| r.wall_s).collect();
+        let cpu_rates: Vec<f64> = runs.iter().map(|r| work / r.cpu_s).collect();
+        let wall_s = median(&walls);
+        let fastest_wall_s = walls.iter().copied().fold(f64::INFINITY, f64::min);
+        let cpus: Vec<f64> = runs.iter().map(|r| r.cpu_s).collect();
         BenchRow {
-            case,
+            case: case.into(),
             threads,
+            split_across_threads: split,
             particles,
             steps,
+            runs: runs.len(),
             wall_s,
+            fastest_wall_s,
             particle_steps_per_s: work / wall_s,
-            cpu_s,
-            particle_steps_per_cpu_s: work / cpu_s,
+            fastest_particle_steps_per_s: work / fastest_wall_s,
+            cpu_s: median(&cpus),
+            particle_steps_per_cpu_s: median(&cpu_rates),
+            run_wall_s: walls,
+        }
+    }
+}
+
+/// How much faster one configuration ran than another of the same work.
+#[derive(Debug, Serialize)]
+struct Speedup {
+    what: String,
+    particles: usize,
+    /// Fastest run of the base over fastest run of the other.
+    fastest: f64,
+    /// Median over the repeats of the paired ratios (run k against run k).
+    median_paired: f64,
+}
+
+impl Speedup {
+    fn between(what: String, base: &BenchRow, other: &BenchRow) -> Self {
+        let paired: Vec<f64> = base
+            .run_wall_s
+            .iter()
+            .zip(&other.run_wall_s)
+            .map(|(b, o)| b / o)
+            .collect();
+        Speedup {
+            what,
+            particles: base.particles,
+            fastest: base.fastest_wall_s / other.fastest_wall_s,
+            median_paired: median(&paired),
         }
     }
 }
@@ -98,24 +192,26 @@ impl Clock {
         }
     }
 
-    /// (wall, CPU) seconds since the start.
-    fn elapsed(&self) -> (f64, f64) {
-        (
-            self.wall.elapsed().as_secs_f64(),
-            process_cpu_s() - self.cpu_s,
-        )
+    fn stop(&self) -> Run {
+        Run {
+            wall_s: self.wall.elapsed().as_secs_f64(),
+            cpu_s: process_cpu_s() - self.cpu_s,
+        }
     }
 }
 
 #[derive(Debug, Serialize)]
 struct BenchReport {
     rows: Vec<BenchRow>,
+    speedups: Vec<Speedup>,
     /// Yang's method on a 5 s, 40 kHz, two-channel trace, planning the FFT (ms).
     yang_power_5s_40khz_ms: Option<f64>,
     /// The same with the FFT plan reused (ms).
     yang_power_5s_40khz_reused_plan_ms: Option<f64>,
     peak_memory_mib: Option<f64>,
     cores: usize,
+    /// Load average over the last minute when the bench ended (Linux).
+    load_average_1min: Option<f64>,
 }
 
 pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
@@ -132,8 +228,8 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     if !a.beds_only {
         thesis_rows(&scene, &a, &configs, &mut progress, &mut rows)?;
     }
-    for &n in &a.beds {
-        bed_rows(n, a.bed_steps, &configs, &mut rows)?;
+    for &n in &a.beds.0 {
+        bed_rows(n, &a, &configs, &mut rows)?;
     }
     progress.finish();
     let yang = if a.beds_only {
@@ -142,74 +238,147 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
         Some(bench_yang_power(5.0, 40_000.0, 40.0, 20).context("timing Yang's method")?)
     };
     let report = BenchReport {
+        speedups: speedups(&rows),
         rows,
         yang_power_5s_40khz_ms: yang.as_ref().map(|y| y.fresh_median_s * 1e3),
         yang_power_5s_40khz_reused_plan_ms: yang.as_ref().map(|y| y.reused_median_s * 1e3),
         peak_memory_mib: peak_memory_mib(),
         cores,
+        load_average_1min: load_average(),
     };
     if let Some(path) = &a.out {
-        write_atomic(path, |w| {
-            use std::io::Write;
-            writeln!(
-                w,
-                "case [],threads [],particles [],steps [],wall [s],particle_steps_per_s [1/s],cpu [s],particle_steps_per_cpu_s [1/s]"
-            )?;
-            for r in &report.rows {
-                writeln!(
-                    w,
-                    "{},{},{},{},{},{},{},{}",
-                    r.case,
-                    r.threads,
-                    r.particles,
-                    r.steps,
-                    r.wall_s,
-                    r.particle_steps_per_s,
-                    r.cpu_s,
-                    r.particle_steps_per_cpu_s
-                )?;
-            }
-            Ok(())
-        })
-        .with_context(|| format!("writing {}", path.display()))?;
+        write_csv(path, &report).with_context(|| format!("writing {}", path.display()))?;
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        println!(
-            "thesis scene at dt {:.1e} s and lattice beds of 2 mm spheres; {} cores",
-            scene.drive_dt_s(40.0, 20.0),
-            cores
-        );
-        for r in &report.rows {
-            println!(
-                "  {:48} {:6} particles {} thread{:1} {:6.2} M particle-steps/s ({:6.2} M per CPU s; {} steps, {:.2} s)",
-                r.case,
-                r.particles,
-                r.threads,
-                if r.threads == 1 { " " } else { "s" },
-                r.particle_steps_per_s / 1e6,
-                r.particle_steps_per_cpu_s / 1e6,
-                r.steps,
-                r.wall_s
-            );
-        }
-        if let Some(y) = &yang {
-            println!(
-                "  Yang's method on a 5 s, 40 kHz two-channel trace: {:.2} ms ({:.2} ms with the FFT plan reused)",
-                y.fresh_median_s * 1e3,
-                y.reused_median_s * 1e3
-            );
-        }
-        if let Some(m) = report.peak_memory_mib {
-            println!("  peak memory {m:.1} MiB");
-        }
+        print_report(&report, &scene, a.repeats);
     }
     Ok(())
 }
 
-/// The thesis scene: pour and settle on one thread, then the drive at
-/// 40 Hz, Γ 20 on each thread count, with the scene's friction and without.
+fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
+    write_atomic(path, |w| {
+        let mut out = csv::Writer::from_writer(w);
+        out.write_record([
+            "case []",
+            "threads []",
+            "split_across_threads []",
+            "particles []",
+            "steps []",
+            "runs []",
+            "wall [s]",
+            "fastest_wall [s]",
+            "particle_steps_per_s [1/s]",
+            "fastest_particle_steps_per_s [1/s]",
+            "cpu [s]",
+            "particle_steps_per_cpu_s [1/s]",
+        ])?;
+        for r in &report.rows {
+            out.write_record([
+                r.case.clone(),
+                r.threads.to_string(),
+                r.split_across_threads.to_string(),
+                r.particles.to_string(),
+                r.steps.to_string(),
+                r.runs.to_string(),
+                r.wall_s.to_string(),
+                r.fastest_wall_s.to_string(),
+                r.particle_steps_per_s.to_string(),
+                r.fastest_particle_steps_per_s.to_string(),
+                r.cpu_s.to_string(),
+                r.particle_steps_per_cpu_s.to_string(),
+            ])?;
+        }
+        out.flush()?;
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
+    println!(
+        "thesis scene at dt {:.1e} s and lattice beds of 2 mm spheres; {} cores{}; each row: median and fastest of {} runs",
+        scene.drive_dt_s(40.0, 20.0),
+        report.cores,
+        report
+            .load_average_1min
+            .map_or(String::new(), |l| format!(", load average {l:.2}")),
+        repeats
+    );
+    for r in &report.rows {
+        let how = match (r.threads, r.split_across_threads) {
+            (1, _) => "1 thread ".to_string(),
+            (t, true) => format!("{t} threads"),
+            (t, false) => format!("{t} threads (step stays on one: few pairs)"),
+        };
+        println!(
+            "  {:44} {:6} particles {:10} {:6.2} M particle-steps/s, fastest {:6.2} M ({:6.2} M per CPU s; {} steps, {:.2} s)",
+            r.case,
+            r.particles,
+            how,
+            r.particle_steps_per_s / 1e6,
+            r.fastest_particle_steps_per_s / 1e6,
+            r.particle_steps_per_cpu_s / 1e6,
+            r.steps,
+            r.wall_s
+        );
+    }
+    for s in &report.speedups {
+        println!(
+            "  speed-up, {} ({} particles): x{:.2} fastest against fastest, x{:.2} median of paired runs",
+            s.what, s.particles, s.fastest, s.median_paired
+        );
+    }
+    if let Some(y) = report.yang_power_5s_40khz_ms {
+        println!(
+            "  Yang's method on a 5 s, 40 kHz two-channel trace: {:.2} ms ({:.2} ms with the FFT plan reused)",
+            y,
+            report
+                .yang_power_5s_40khz_reused_plan_ms
+                .unwrap_or(f64::NAN)
+        );
+    }
+    if let Some(m) = report.peak_memory_mib {
+        println!("  peak memory {m:.1} MiB");
+    }
+}
+
+/// All threads against one for every case that ran both, and the
+/// frictionless thesis drive against the thesis drive on one thread.
+fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
+    let mut out = Vec::new();
+    for base in rows.iter().filter(|r| r.threads == 1) {
+        for other in rows.iter().filter(|r| {
+            r.threads > 1
+                && r.case == base.case
+                && r.particles == base.particles
+                && r.split_across_threads
+        }) {
+            out.push(Speedup::between(
+                format!("{} threads over 1, {}", other.threads, base.case),
+                base,
+                other,
+            ));
+        }
+    }
+    let one = |case: &str| rows.iter().find(|r| r.threads == 1 && r.case == case);
+    if let (Some(base), Some(other)) = (one(THESIS_DRIVE), one(FRICTIONLESS_DRIVE)) {
+        out.push(Speedup::between(
+            "frictionless over the thesis contacts, 1 thread".into(),
+            base,
+            other,
+        ));
+    }
+    out
+}
+
+const THESIS_DRIVE: &str = "thesis: drive 40 Hz Gamma 20";
+const FRICTIONLESS_DRIVE: &str = "thesis frictionless: drive 40 Hz Gamma 20";
+
+/// The thesis scene: pour and settle on one thread (once), then the drive at
+/// 40 Hz, Γ 20 on each thread count, with the scene's friction and without,
+/// `--repeats` times from the same settled bed.
 fn thesis_rows(
     scene: &Scene,
     a: &BenchArgs,
@@ -224,69 +393,103 @@ fn thesis_rows(
         .context("settling the thesis bed")?;
     let n = bed.world.particles.len();
     rows.push(BenchRow::new(
-        "thesis: pour and settle (dense bed)".into(),
+        "thesis: pour and settle (dense bed)",
         1,
+        false,
         n,
         bed.settle_steps,
-        clock,
+        &[clock.stop()],
     ));
     let mut frictionless = scene.clone();
     frictionless.contact.particle_particle.friction = 0.0;
     frictionless.contact.particle_wall.friction = 0.0;
-    for (case, scene) in [
-        ("thesis: drive 40 Hz Gamma 20", scene),
-        ("thesis frictionless: drive 40 Hz Gamma 20", &frictionless),
-    ] {
-        for &threads in configs {
-            let pool = single_pool(threads)?;
-            let mut world: World = prepare_drive(&bed, scene, scene.drive_dt_s(40.0, 20.0))?;
-            let plan = DrivePlan {
-                freq_hz: 40.0,
-                gamma: 20.0,
-                gravity_mps2: scene.simulation.gravity_mps2,
-                length: DriveLength::Fixed {
-                    cycles: a.cycles.max(1),
-                    steady_cycles: 1,
-                },
-            };
-            let mut drive = SineMotion::new(plan.freq_hz, plan.gamma, plan.gravity_mps2);
-            let clock = Clock::start();
-            let out = pool
-                .install(|| {
-                    run_drive(&mut world, &plan, &mut drive, &mut NoObserver, &mut |p| {
-                        progress.update(p)
-                    })
-                })
-                .context("driving the thesis bed")?;
-            rows.push(BenchRow::new(case.into(), threads, n, out.steps, clock));
+    let pools = configs
+        .iter()
+        .map(|&t| single_pool(t))
+        .collect::<Result<Vec<_>>>()?;
+    for (case, scene) in [(THESIS_DRIVE, scene), (FRICTIONLESS_DRIVE, &frictionless)] {
+        let mut runs = vec![Vec::new(); configs.len()];
+        let mut steps = 0;
+        let mut split = vec![false; configs.len()];
+        for _ in 0..a.repeats {
+            for (k, pool) in pools.iter().enumerate() {
+                let (run, s, sp) = pool
+                    .install(|| drive_once(&bed, scene, a.cycles, progress))
+                    .context("driving the thesis bed")?;
+                runs[k].push(run);
+                steps = s;
+                split[k] = sp;
+            }
+        }
+        for (k, &threads) in configs.iter().enumerate() {
+            rows.push(BenchRow::new(case, threads, split[k], n, steps, &runs[k]));
         }
     }
     Ok(())
 }
 
-/// A lattice bed of `n` spheres: `steps` steps on each thread count, after
-/// 20 steps that let the lists and buffers grow.
-fn bed_rows(n: usize, steps: u32, configs: &[usize], rows: &mut Vec<BenchRow>) -> Result<()> {
-    for &threads in configs {
-        let pool = single_pool(threads)?;
-        let row = pool.install(|| -> Result<BenchRow> {
-            let mut world = lattice_bed(n, 0.52, 1).context("building the lattice bed")?;
-            for _ in 0..20 {
-                world.step(0.0)?;
-            }
-            let clock = Clock::start();
-            for _ in 0..steps {
-                world.step(0.0)?;
-            }
-            Ok(BenchRow::new(
-                "lattice bed, mu 0.52: one step".into(),
-                threads,
-                n,
-                u64::from(steps),
-                clock,
-            ))
-        })?;
-        rows.push(row);
+/// One timed drive of `cycles` at 40 Hz, Γ 20 from the settled bed: the run,
+/// its steps, and whether its steps ran on all threads.
+fn drive_once(
+    bed: &SettledBed,
+    scene: &Scene,
+    cycles: u32,
+    progress: &mut ProgressLine,
+) -> Result<(Run, u64, bool)> {
+    let mut world: World = prepare_drive(bed, scene, scene.drive_dt_s(40.0, 20.0))?;
+    let plan = DrivePlan {
+        freq_hz: 40.0,
+        gamma: 20.0,
+        gravity_mps2: scene.simulation.gravity_mps2,
+        length: DriveLength::Fixed {
+            cycles: cycles.max(1),
+            steady_cycles: 1,
+        },
+    };
+    let mut drive = SineMotion::new(plan.freq_hz, plan.gamma, plan.gravity_mps2);
+    let clock = Clock::start();
+    let out = run_drive(&mut world, &plan, &mut drive, &mut NoObserver, &mut |p| {
+        progress.update(p)
+    })?;
+    Ok((clock.stop(), out.steps, world.splits_across_threads()))
+}
+
+/// A lattice bed of `n` spheres: `--bed-steps` steps on each thread count,
+/// `--repeats` times, each run from a new bed after 20 steps that let the
+/// lists and buffers grow.
+fn bed_rows(n: usize, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow>) -> Result<()> {
+    let pools = configs
+        .iter()
+        .map(|&t| single_pool(t))
+        .collect::<Result<Vec<_>>>()?;
+    let mut runs = vec![Vec::new(); configs.len()];
+    let mut split = vec![false; configs.len()];
+    for _ in 0..a.repeats {
+        for (k, pool) in pools.iter().enumerate() {
+            let (run, sp) = pool.install(|| -> Result<(Run, bool)> {
+                let mut world = lattice_bed(n, 0.52, 1).context("building the lattice bed")?;
+                for _ in 0..20 {
+                    world.step(0.0)?;
+                }
+                let clock = Clock::start();
+                for _ in 0..a.bed_steps {
+                    world.step(0.0)?;
+                }
+                Ok((clock.stop(), world.splits_across_threads()))
+            })?;
+            runs[k].push(run);
+            split[k] = sp;
+        }
+    }
+    for (k, &threads) in configs.iter().enumerate() {
+        rows.push(BenchRow::new(
+            "lattice bed, mu 0.52: steps",
+            threads,
+            split[k],
+            n,
+            u64::from(a.bed_steps),
+            &runs[k],
+        ));
     }
     Ok(())
 }
@@ -318,4 +521,22 @@ fn peak_memory_mib() -> Option<f64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib / 1024.0)
+}
+
+/// The load average over the last minute, from /proc on Linux.
+fn load_average() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/loadavg").ok()?;
+    s.split_whitespace().next()?.parse().ok()
+}
+
+/// The median of timings (the mean of the middle two for an even count).
+fn median(xs: &[f64]) -> f64 {
+    let mut v = xs.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => f64::NAN,
+        _ if n % 2 == 1 => v[n / 2],
+        _ => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
 }

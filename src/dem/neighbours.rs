@@ -9,29 +9,55 @@
 //! hands the states of surviving pairs over to the new list. Pairs are sorted by
 //! `(i, j)`, so everything built from the list is independent of thread count.
 //!
-//! Each rebuild also lays out, for every particle, the pairs it belongs to in
-//! increasing pair order ([`NeighbourList::pairs_of`]): a thread that owns a
-//! particle can then gather its pair forces in exactly the order a serial loop
-//! over the pairs would have added them, which keeps the parallel force sums
-//! bit-identical to the serial ones.
+//! The overlap of every pair at the previous step (negative: the gap) is also
+//! kept on its own, in [`NeighbourList::gaps`]: a step asks of most listed
+//! pairs only whether they are still apart, and reads 8 bytes for it instead
+//! of the whole 88-byte contact state.
+//!
+//! Each rebuild also lays out, for every particle, where its pairs are in
+//! the order a serial loop over the pairs adds them to it: first the pairs
+//! in which it is the second particle (`(i, p)`, `i < p`: its *j side*,
+//! [`NeighbourList::j_side`]), then those in which it is the first (its row
+//! of the sorted list, [`NeighbourList::row`]). A thread that owns a
+//! particle can then gather its pair forces in exactly that order, which
+//! keeps the parallel force sums bit-identical to the serial ones. Each pair
+//! also knows its place among its second particle's j side
+//! ([`NeighbourList::j_slot`]), so the parallel step can leave the force
+//! there and the gather reads both sides of a particle as runs of memory.
 
 use glam::DVec3;
 
 use super::contact::ContactState;
+
+/// The parts of a [`NeighbourList`] a step of the pair contacts reads and
+/// writes, borrowed apart ([`NeighbourList::step_view`]).
+pub struct StepView<'a> {
+    pub pairs: &'a [(u32, u32)],
+    pub j_slot: &'a [u32],
+    pub gaps: &'a mut [f64],
+    pub states: &'a mut [ContactState],
+}
 
 /// Verlet pair list with per-pair contact history.
 #[derive(Debug, Clone, Default)]
 pub struct NeighbourList {
     /// Pairs `(i, j)` with `i < j`, sorted.
     pub pairs: Vec<(u32, u32)>,
-    /// Contact state of each pair, same order as `pairs`.
+    /// Contact state of each pair, same order as `pairs`. Its `delta_prev`
+    /// is current only while the pair touches (`gaps[k] > 0`); a pair apart
+    /// has the state of [`ContactState::apart`] and its gap in `gaps`.
     pub states: Vec<ContactState>,
+    /// Overlap of each pair at the previous step (m), same order as `pairs`;
+    /// negative: the gap. Always current.
+    pub gaps: Vec<f64>,
     skin_m: f64,
-    /// Pairs of particle `p`: `adjacency[adjacency_start[p]..adjacency_start[p + 1]]`,
-    /// each `2 k + side` for pair `k` (side 0: `p` is its `i`, 1: its `j`),
-    /// in increasing `k`.
-    adjacency_start: Vec<u32>,
-    adjacency: Vec<u32>,
+    /// Pairs `(p, j)` of particle `p`: `row_start[p]..row_start[p + 1]`.
+    row_start: Vec<u32>,
+    /// Pairs `(i, p)` of particle `p`, in increasing pair order, as slots
+    /// `j_start[p]..j_start[p + 1]` of an array with one slot per pair.
+    j_start: Vec<u32>,
+    /// The slot of each pair in that array (see [`Self::j_slot`]).
+    j_slot: Vec<u32>,
     reference: Vec<DVec3>,
     rebuilds: u64,
     // Scratch reused between rebuilds.
@@ -41,6 +67,7 @@ pub struct NeighbourList {
     fill: Vec<u32>,
     new_pairs: Vec<(u32, u32)>,
     new_states: Vec<ContactState>,
+    new_gaps: Vec<f64>,
     row: Vec<u32>,
 }
 
@@ -69,58 +96,86 @@ impl NeighbourList {
         self.rebuilds
     }
 
-    /// The pairs particle `p` belongs to, in increasing pair order: `2 k` when
-    /// it is pair `k`'s `i`, `2 k + 1` when it is its `j`.
+    /// What a step reads and writes of the list, borrowed apart: the pairs
+    /// and their j slots, and the gaps and contact states it advances.
+    pub fn step_view(&mut self) -> StepView<'_> {
+        StepView {
+            pairs: &self.pairs,
+            j_slot: &self.j_slot,
+            gaps: &mut self.gaps,
+            states: &mut self.states,
+        }
+    }
+
+    /// The pairs `(p, j)` of particle `p`: a run of the pair list.
     #[inline]
-    pub fn pairs_of(&self, p: usize) -> &[u32] {
-        let (s, e) = (self.adjacency_start[p], self.adjacency_start[p + 1]);
-        &self.adjacency[s as usize..e as usize]
+    pub fn row(&self, p: usize) -> std::ops::Range<usize> {
+        self.row_start[p] as usize..self.row_start[p + 1] as usize
     }
 
-    /// True when some particle moved more than half the skin since the last build
-    /// (or the particle count changed), so that a new contact could be missed.
-    /// `parallel`: look with all threads (the answer is the same).
-    pub fn needs_rebuild(&self, positions: &[DVec3], parallel: bool) -> bool {
-        use rayon::prelude::*;
-        if positions.len() != self.reference.len() {
-            return true;
-        }
-        let limit_sq = 0.25 * self.skin_m * self.skin_m;
-        let moved = |(p, r): (&DVec3, &DVec3)| (*p - *r).length_squared() > limit_sq;
-        if parallel {
-            positions
-                .par_iter()
+    /// The slots of the pairs `(i, p)` of particle `p`, in increasing pair
+    /// order: a run of an array with one slot per pair, laid out by
+    /// [`Self::j_slot`].
+    #[inline]
+    pub fn j_side(&self, p: usize) -> std::ops::Range<usize> {
+        self.j_start[p] as usize..self.j_start[p + 1] as usize
+    }
+
+    /// The slot of pair `k` among the j sides ([`Self::j_side`] of its
+    /// second particle).
+    #[inline]
+    pub fn j_slot(&self, k: usize) -> usize {
+        self.j_slot[k] as usize
+    }
+
+    /// Where the particles were when the list was last built: a particle
+    /// that has travelled more than half the skin from there
+    /// ([`Self::rebuild_travel_sq_m2`]) may meet a pair not listed.
+    pub fn reference(&self) -> &[DVec3] {
+        &self.reference
+    }
+
+    /// The squared travel (m²) from [`Self::reference`] beyond which the list
+    /// must be rebuilt: (skin / 2)².
+    pub fn rebuild_travel_sq_m2(&self) -> f64 {
+        0.25 * self.skin_m * self.skin_m
+    }
+
+    /// True when some particle moved more than half the skin since the last
+    /// build (or the particle count changed), so that a new contact could be
+    /// missed. A step asks this of each particle as it moves it instead.
+    pub fn needs_rebuild(&self, positions: &[DVec3]) -> bool {
+        let limit_sq = self.rebuild_travel_sq_m2();
+        positions.len() != self.reference.len()
+            || positions
+                .iter()
                 .zip(&self.reference)
-                .with_min_len(1024)
-                .any(moved)
-        } else {
-            positions.iter().zip(&self.reference).any(moved)
-        }
+                .any(|(p, r)| (*p - *r).length_squared() > limit_sq)
     }
 
-    /// Lays out the pairs of every particle (see [`Self::pairs_of`]): a
-    /// counting sort of the pair ends, filled in pair order.
+    /// Lays out the rows and the j sides of every particle (see
+    /// [`Self::row`], [`Self::j_side`]): counting sorts of the pair ends,
+    /// filled in pair order.
     fn build_adjacency(&mut self, n: usize) {
-        self.adjacency_start.clear();
-        self.adjacency_start.resize(n + 1, 0);
+        self.row_start.clear();
+        self.row_start.resize(n + 1, 0);
+        self.j_start.clear();
+        self.j_start.resize(n + 1, 0);
         for &(i, j) in &self.pairs {
-            self.adjacency_start[i as usize + 1] += 1;
-            self.adjacency_start[j as usize + 1] += 1;
+            self.row_start[i as usize + 1] += 1;
+            self.j_start[j as usize + 1] += 1;
         }
         for p in 0..n {
-            self.adjacency_start[p + 1] += self.adjacency_start[p];
+            self.row_start[p + 1] += self.row_start[p];
+            self.j_start[p + 1] += self.j_start[p];
         }
-        self.adjacency.clear();
-        self.adjacency.resize(2 * self.pairs.len(), 0);
+        self.j_slot.clear();
         self.fill.clear();
-        self.fill.extend_from_slice(&self.adjacency_start[..n]);
-        for (k, &(i, j)) in self.pairs.iter().enumerate() {
-            let k = k as u32;
-            for (p, side) in [(i, 0), (j, 1)] {
-                let at = &mut self.fill[p as usize];
-                self.adjacency[*at as usize] = 2 * k + side;
-                *at += 1;
-            }
+        self.fill.extend_from_slice(&self.j_start[..n]);
+        for &(_, j) in &self.pairs {
+            let at = &mut self.fill[j as usize];
+            self.j_slot.push(*at);
+            *at += 1;
         }
     }
 
@@ -133,9 +188,11 @@ impl NeighbourList {
         self.reference.extend_from_slice(positions);
         self.new_pairs.clear();
         self.new_states.clear();
+        self.new_gaps.clear();
         if n < 2 {
             self.pairs.clear();
             self.states.clear();
+            self.gaps.clear();
             self.build_adjacency(n);
             return;
         }
@@ -217,19 +274,21 @@ impl NeighbourList {
                 while old < self.pairs.len() && self.pairs[old] < key {
                     old += 1;
                 }
-                let state = if old < self.pairs.len() && self.pairs[old] == key {
-                    self.states[old]
+                let (state, overlap) = if old < self.pairs.len() && self.pairs[old] == key {
+                    (self.states[old], self.gaps[old])
                 } else {
                     let ju = j as usize;
                     let gap = (positions[ju] - pi).length() - radii[i] - radii[ju];
-                    ContactState::apart(-gap)
+                    (ContactState::apart(-gap), -gap)
                 };
                 self.new_pairs.push(key);
                 self.new_states.push(state);
+                self.new_gaps.push(overlap);
             }
         }
         std::mem::swap(&mut self.pairs, &mut self.new_pairs);
         std::mem::swap(&mut self.states, &mut self.new_states);
+        std::mem::swap(&mut self.gaps, &mut self.new_gaps);
         self.build_adjacency(n);
     }
 }
@@ -288,21 +347,23 @@ mod tests {
     }
 
     #[test]
-    fn pairs_of_a_particle_are_listed_in_pair_order() {
+    fn rows_and_j_sides_list_each_particles_pairs_in_pair_order() {
         let pos = scattered(300, 0.03, 5);
         let radii = vec![0.0025; 300];
         let mut list = NeighbourList::new(0.0005);
         list.rebuild(&pos, &radii);
+        let slot_of_pair: Vec<usize> = (0..list.pairs.len()).map(|k| list.j_slot(k)).collect();
         for p in 0..pos.len() {
-            let expect: Vec<u32> = (0..list.pairs.len() as u32)
-                .filter_map(|k| {
-                    let (i, j) = list.pairs[k as usize];
-                    (i as usize == p)
-                        .then_some(2 * k)
-                        .or((j as usize == p).then_some(2 * k + 1))
-                })
+            let as_i: Vec<usize> = (0..list.pairs.len())
+                .filter(|&k| list.pairs[k].0 as usize == p)
                 .collect();
-            assert_eq!(list.pairs_of(p), &expect[..], "particle {p}");
+            let as_j: Vec<usize> = (0..list.pairs.len())
+                .filter(|&k| list.pairs[k].1 as usize == p)
+                .collect();
+            assert_eq!(list.row(p).collect::<Vec<_>>(), as_i, "particle {p}");
+            // The j side holds p's pairs (i, p) in increasing pair order.
+            let slots: Vec<usize> = as_j.iter().map(|&k| slot_of_pair[k]).collect();
+            assert_eq!(slots, list.j_side(p).collect::<Vec<_>>(), "particle {p}");
         }
     }
 

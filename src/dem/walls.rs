@@ -29,15 +29,33 @@ impl WallShape {
     /// the wall body.
     #[inline]
     pub fn distance_and_normal(&self, p: DVec3, offset: DVec3) -> (f64, DVec3) {
+        (self.distance_m(p, offset), self.normal_from(p))
+    }
+
+    /// The signed distance of [`Self::distance_and_normal`] alone: all a step
+    /// needs of the many particles far from a wall.
+    #[inline]
+    pub fn distance_m(&self, p: DVec3, offset: DVec3) -> f64 {
         match *self {
-            WallShape::Plane { origin, normal } => ((p - origin - offset).dot(normal), -normal),
-            WallShape::CylinderInside { radius_m } => {
-                let rho_sq = p.x * p.x + p.y * p.y;
-                let rho = rho_sq.sqrt();
+            WallShape::Plane { origin, normal } => (p - origin - offset).dot(normal),
+            // On the axis (ρ = 0) this is the radius, as it should be.
+            WallShape::CylinderInside { radius_m } => radius_m - (p.x * p.x + p.y * p.y).sqrt(),
+        }
+    }
+
+    /// The normal of [`Self::distance_and_normal`] alone: the unit vector from
+    /// `p` towards the surface (on the cylinder's axis, any radial direction:
+    /// +x).
+    #[inline]
+    pub fn normal_from(&self, p: DVec3) -> DVec3 {
+        match *self {
+            WallShape::Plane { normal, .. } => -normal,
+            WallShape::CylinderInside { .. } => {
+                let rho = (p.x * p.x + p.y * p.y).sqrt();
                 if rho > 0.0 {
-                    (radius_m - rho, DVec3::new(p.x / rho, p.y / rho, 0.0))
+                    DVec3::new(p.x / rho, p.y / rho, 0.0)
                 } else {
-                    (radius_m, DVec3::X)
+                    DVec3::X
                 }
             }
         }

@@ -31,6 +31,8 @@
 //! kept per block and summed afterwards on one thread in contact order. Both
 //! ways give the same bits; the tests compare them.
 
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -41,7 +43,7 @@ use super::error::DemError;
 use super::hertz_theory;
 use super::ledger::{EnergyState, Ledger, LedgerBalance, LedgerSnapshot};
 use super::material::{effective_mass_kg, effective_radius_m};
-use super::neighbours::NeighbourList;
+use super::neighbours::{NeighbourList, StepView as NeighbourStep};
 use super::particles::Particles;
 use super::walls::{WallShape, Walls};
 
@@ -180,8 +182,13 @@ pub struct World {
     neighbours: NeighbourList,
     /// Change of the energy stored in the contacts over the current step (J).
     step_stored_change_j: f64,
-    /// Contact state of particle `i` with wall `w` at `i * n_walls + w`.
+    /// Contact state of particle `i` with wall `w` at `i * n_walls + w`; as
+    /// for the pairs ([`NeighbourList::gaps`]), its `delta_prev` is current
+    /// only while they touch.
     wall_states: Vec<ContactState>,
+    /// Overlap of particle `i` with wall `w` at the previous step (m), at
+    /// `i * n_walls + w`; negative: the gap. Always current.
+    wall_gaps: Vec<f64>,
     /// Scratch of the parallel step, kept from step to step.
     scratch: StepScratch,
     /// Total force of the walls on the particles at the current step (N).
@@ -231,6 +238,7 @@ impl World {
             neighbours: NeighbourList::new(skin),
             step_stored_change_j: 0.0,
             wall_states: Vec::new(),
+            wall_gaps: Vec::new(),
             scratch: StepScratch::default(),
             wall_force: DVec3::ZERO,
             baseline: LedgerSnapshot::default(),
@@ -286,12 +294,13 @@ impl World {
         let n_walls = self.walls.len();
         let offset = self.walls.offset();
         self.wall_states.clear();
+        self.wall_gaps.clear();
         for i in 0..self.particles.len() {
             for w in 0..n_walls {
-                let (dist, _) =
-                    self.walls.shapes[w].distance_and_normal(self.particles.position[i], offset);
-                self.wall_states
-                    .push(ContactState::apart(self.particles.radius[i] - dist));
+                let dist = self.walls.shapes[w].distance_m(self.particles.position[i], offset);
+                let overlap = self.particles.radius[i] - dist;
+                self.wall_states.push(ContactState::apart(overlap));
+                self.wall_gaps.push(overlap);
             }
         }
     }
@@ -343,14 +352,13 @@ impl World {
     pub fn refresh_wall_gaps(&mut self) {
         let n_walls = self.walls.len();
         let offset = self.walls.offset();
-        for (k, st) in self.wall_states.iter_mut().enumerate() {
-            if st.delta_prev > 0.0 {
+        for (k, gap) in self.wall_gaps.iter_mut().enumerate() {
+            if *gap > 0.0 {
                 continue;
             }
             let (i, w) = (k / n_walls, k % n_walls);
-            let (dist, _) =
-                self.walls.shapes[w].distance_and_normal(self.particles.position[i], offset);
-            st.delta_prev = self.particles.radius[i] - dist;
+            let dist = self.walls.shapes[w].distance_m(self.particles.position[i], offset);
+            *gap = self.particles.radius[i] - dist;
         }
     }
 
@@ -383,30 +391,21 @@ impl World {
             .neighbours
             .pairs
             .iter()
-            .zip(&self.neighbours.states)
-            .map(|(&(i, j), st)| st.delta_prev / p.radius[i as usize].min(p.radius[j as usize]));
+            .zip(&self.neighbours.gaps)
+            .map(|(&(i, j), &d)| d / p.radius[i as usize].min(p.radius[j as usize]));
         let n_walls = self.walls.len().max(1);
         let walls = self
-            .wall_states
+            .wall_gaps
             .iter()
             .enumerate()
-            .map(|(k, st)| st.delta_prev / p.radius[k / n_walls]);
+            .map(|(k, &d)| d / p.radius[k / n_walls]);
         pairs.chain(walls).fold(0.0, f64::max)
     }
 
     /// Number of particle-particle and particle-wall contacts now.
     pub fn contact_counts(&self) -> (usize, usize) {
-        let pp = self
-            .neighbours
-            .states
-            .iter()
-            .filter(|s| s.delta_prev > 0.0)
-            .count();
-        let pw = self
-            .wall_states
-            .iter()
-            .filter(|s| s.delta_prev > 0.0)
-            .count();
+        let pp = self.neighbours.gaps.iter().filter(|&&d| d > 0.0).count();
+        let pw = self.wall_gaps.iter().filter(|&&d| d > 0.0).count();
         (pp, pw)
     }
 
@@ -416,15 +415,15 @@ impl World {
         let n = self.particles.len();
         counts.clear();
         counts.resize(n, 0);
-        for (&(i, j), st) in self.neighbours.pairs.iter().zip(&self.neighbours.states) {
-            if st.delta_prev > 0.0 {
+        for (&(i, j), &d) in self.neighbours.pairs.iter().zip(&self.neighbours.gaps) {
+            if d > 0.0 {
                 counts[i as usize] += 1;
                 counts[j as usize] += 1;
             }
         }
         let n_walls = self.walls.len().max(1);
-        for (k, st) in self.wall_states.iter().enumerate() {
-            if st.delta_prev > 0.0 {
+        for (k, &d) in self.wall_gaps.iter().enumerate() {
+            if d > 0.0 {
                 counts[k / n_walls] += 1;
             }
         }
@@ -481,6 +480,13 @@ impl World {
         }
     }
 
+    /// Whether a step now runs on all threads of the current pool (several
+    /// threads, and enough listed pairs to pay for waking them); the
+    /// results are the same bits either way.
+    pub fn splits_across_threads(&self) -> bool {
+        self.parallel()
+    }
+
     /// Whether this step runs on all threads: several threads, and enough
     /// listed pairs to pay for waking them ([`AUTO_PARALLEL_MIN_PAIRS`]).
     /// Either way the results are the same bits.
@@ -505,8 +511,9 @@ impl World {
         // Work the contact forces do on the particles over the step, as velocity
         // Verlet applies them: the trapezoid of the forces (gravity taken out)
         // at both ends on the drift `v_half dt` (rotation: `ω_half dt`).
-        let (kicked_work, nonfinite) = self.half_kick(Pass::KickDrift, 0.0, parallel);
-        if let Some(i) = nonfinite {
+        let drift = self.half_kick(Pass::KickDrift, 0.0, parallel);
+        let kicked_work = drift.work;
+        if let Some(i) = drift.nonfinite {
             return Err(DemError::NonFinite {
                 time_s: self.time_s + dt,
                 step: self.steps + 1,
@@ -520,10 +527,7 @@ impl World {
         self.walls.velocity_mps = du / dt;
         let axial_before = self.wall_force.dot(self.walls.axis);
 
-        if self
-            .neighbours
-            .needs_rebuild(&self.particles.position, parallel)
-        {
+        if drift.moved_far || self.neighbours.reference().len() != self.particles.len() {
             self.neighbours
                 .rebuild(&self.particles.position, &self.particles.radius);
         }
@@ -531,7 +535,7 @@ impl World {
         self.step_stored_change_j = 0.0;
         self.compute_forces(dt)?;
 
-        let (mut contact_work_j, _) = self.half_kick(Pass::Kick, kicked_work, parallel);
+        let mut contact_work_j = self.half_kick(Pass::Kick, kicked_work, parallel).work;
         contact_work_j *= half;
         // Trapezoidal work of the walls on the particles over the step.
         let work_in_j = 0.5 * (axial_before + self.wall_force.dot(self.walls.axis)) * du;
@@ -556,16 +560,21 @@ impl World {
     /// in fixed blocks. Returns the sum of the contact power terms
     /// `(F - m g)·v + τ·ω` over the particles, added to `carry` in particle
     /// order (block by block, so the same for any thread count; for one block
-    /// the order of a plain loop), and the first particle whose position is
-    /// not finite.
-    fn half_kick(&mut self, pass: Pass, carry: f64, parallel: bool) -> (f64, Option<usize>) {
+    /// the order of a plain loop), the first particle whose position is not
+    /// finite, and whether some particle drifted far enough from where the
+    /// pair list was built for the list to be rebuilt.
+    fn half_kick(&mut self, pass: Pass, carry: f64, parallel: bool) -> KickSums {
+        let reference = self.neighbours.reference();
         let kick = Kick {
             pass,
             dt: self.numerics.dt_s,
             gravity: self.gravity,
             rotation: self.rotates(),
+            travel_sq_m2: self.neighbours.rebuild_travel_sq_m2(),
         };
         let p = &mut self.particles;
+        // A list built for other particles is rebuilt anyway (by the caller).
+        let reference = (reference.len() == p.len()).then_some(reference);
         let (force, torque, mass) = (&p.force, &p.torque, &p.mass);
         let (inv_mass, inv_inertia) = (&p.inv_mass, &p.inv_inertia);
         type Block<'b> = (usize, ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [DVec3]));
@@ -579,8 +588,12 @@ impl World {
                 inv_mass: &inv_mass[s..e],
                 inv_inertia: &inv_inertia[s..e],
             };
-            let (work, bad) = kick.block(&loads, x, v, w, if c == 0 { carry } else { 0.0 });
-            (work, bad.map(|k| s + k))
+            let built_at = reference.map(|r| &r[s..e]);
+            let sums = kick.block(&loads, x, v, w, built_at, if c == 0 { carry } else { 0.0 });
+            KickSums {
+                nonfinite: sums.nonfinite.map(|k| s + k),
+                ..sums
+            }
         };
         let sums = &mut self.scratch.block_sums;
         if parallel {
@@ -602,13 +615,17 @@ impl World {
                     .map(block),
             );
         }
-        let mut total = if sums.is_empty() { carry } else { 0.0 };
-        let mut nonfinite = None;
-        for &(work, bad) in sums.iter() {
-            total += work;
-            nonfinite = nonfinite.or(bad);
+        let mut total = KickSums {
+            work: if sums.is_empty() { carry } else { 0.0 },
+            nonfinite: None,
+            moved_far: false,
+        };
+        for b in sums.iter() {
+            total.work += b.work;
+            total.nonfinite = total.nonfinite.or(b.nonfinite);
+            total.moved_far |= b.moved_far;
         }
-        (total, nonfinite)
+        total
     }
 
     /// Human-readable name of a contact, for diagnoses.
@@ -663,41 +680,75 @@ impl World {
     /// Forces and torques at the current positions. `dt` is the step over which the
     /// tangential springs advance and the ledger accumulates (0 for a pure
     /// evaluation that changes no history).
+    ///
+    /// On one core: gravity and the walls, then each pair added to both its
+    /// particles as it is evaluated. On all threads: the pairs first, each
+    /// leaving its force in its own slot, then one pass over the particles
+    /// that sets gravity, adds the walls and gathers the pair forces in pair
+    /// order (the order of the serial loop, so the same bits), then the
+    /// books, walls first as on one core.
     fn compute_forces(&mut self, dt: f64) -> Result<(), DemError> {
-        let parallel = self.parallel();
         self.wall_force = DVec3::ZERO;
-        match law_kind(&self.pw_law) {
-            (true, true) => self.wall_contacts::<true, true>(dt, parallel),
-            (true, false) => self.wall_contacts::<true, false>(dt, parallel),
-            (false, true) => self.wall_contacts::<false, true>(dt, parallel),
-            (false, false) => self.wall_contacts::<false, false>(dt, parallel),
-        }?;
-        match (law_kind(&self.pp_law), parallel) {
-            ((true, true), false) => self.pair_contacts::<true, true>(dt),
-            ((true, false), false) => self.pair_contacts::<true, false>(dt),
-            ((false, true), false) => self.pair_contacts::<false, true>(dt),
-            ((false, false), false) => self.pair_contacts::<false, false>(dt),
-            ((true, true), true) => self.pair_contacts_parallel::<true, true>(dt),
-            ((true, false), true) => self.pair_contacts_parallel::<true, false>(dt),
-            ((false, true), true) => self.pair_contacts_parallel::<false, true>(dt),
-            ((false, false), true) => self.pair_contacts_parallel::<false, false>(dt),
+        if !self.parallel() {
+            match law_kind(&self.pw_law) {
+                (true, true) => self.wall_contacts::<true, true>(dt, None),
+                (true, false) => self.wall_contacts::<true, false>(dt, None),
+                (false, true) => self.wall_contacts::<false, true>(dt, None),
+                (false, false) => self.wall_contacts::<false, false>(dt, None),
+            }?;
+            return match law_kind(&self.pp_law) {
+                (true, true) => self.pair_contacts::<true, true>(dt),
+                (true, false) => self.pair_contacts::<true, false>(dt),
+                (false, true) => self.pair_contacts::<false, true>(dt),
+                (false, false) => self.pair_contacts::<false, false>(dt),
+            };
         }
+        match law_kind(&self.pp_law) {
+            (true, true) => self.pair_blocks::<true, true>(dt),
+            (true, false) => self.pair_blocks::<true, false>(dt),
+            (false, true) => self.pair_blocks::<false, true>(dt),
+            (false, false) => self.pair_blocks::<false, false>(dt),
+        }
+        let gather = Some(self.pp_law.has_friction());
+        match law_kind(&self.pw_law) {
+            (true, true) => self.wall_contacts::<true, true>(dt, gather),
+            (true, false) => self.wall_contacts::<true, false>(dt, gather),
+            (false, true) => self.wall_contacts::<false, true>(dt, gather),
+            (false, false) => self.wall_contacts::<false, false>(dt, gather),
+        }?;
+        self.book_pair_blocks(dt)
     }
 
-    /// Gravity and the wall contacts, particle by particle in fixed blocks
-    /// (on all threads when `parallel`); what the contacts book is then
-    /// added up on one thread in contact order.
+    /// Gravity and the wall contacts, particle by particle in fixed blocks;
+    /// what the contacts book is then added up on one thread in contact
+    /// order. `gather: Some(torques)`: the step runs on all threads, and each
+    /// block then also adds its particles' pair forces (and torques, when
+    /// `torques`), which [`Self::pair_blocks`] left one per pair.
     fn wall_contacts<const D: bool, const F: bool>(
         &mut self,
         dt: f64,
-        parallel: bool,
+        gather: Option<bool>,
     ) -> Result<(), DemError> {
         let g = self.gravity;
         let p = &mut self.particles;
+        let list = &self.neighbours;
+        let slots = &self.scratch.pair_slots;
+        let gather_into = |c: usize, f: &mut [DVec3], t: &mut [DVec3]| match gather {
+            Some(true) => gather_block::<true>(list, slots, c * PARTICLE_BLOCK, f, t),
+            Some(false) => gather_block::<false>(list, slots, c * PARTICLE_BLOCK, f, t),
+            None => {}
+        };
         if self.walls.is_empty() {
             for (f, (t, m)) in p.force.iter_mut().zip(p.torque.iter_mut().zip(&p.mass)) {
                 *f = g * *m;
                 *t = DVec3::ZERO;
+            }
+            if gather.is_some() {
+                p.force
+                    .par_chunks_mut(PARTICLE_BLOCK)
+                    .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
+                    .enumerate()
+                    .for_each(|(c, (f, t))| gather_into(c, f, t));
             }
             return Ok(());
         }
@@ -717,11 +768,14 @@ impl World {
         type Block<'b> = (
             usize,
             (
-                ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [ContactState]),
+                (
+                    ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [ContactState]),
+                    &'b mut [f64],
+                ),
                 &'b mut Vec<WallBooked>,
             ),
         );
-        let block = |(c, (((f, t), st), bk)): Block<'_>| {
+        let block = |(c, ((((f, t), st), gaps), bk)): Block<'_>| {
             wall_block::<D, F>(
                 &law,
                 &walls,
@@ -730,17 +784,20 @@ impl World {
                 c * PARTICLE_BLOCK,
                 f,
                 t,
-                st,
+                (st, gaps),
                 bk,
                 dt,
             );
+            gather_into(c, f, t);
         };
-        let states = &mut self.wall_states;
-        if parallel {
+        let (states, gaps) = (&mut self.wall_states, &mut self.wall_gaps);
+        let chunk = PARTICLE_BLOCK * n_walls;
+        if gather.is_some() {
             p.force
                 .par_chunks_mut(PARTICLE_BLOCK)
                 .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
-                .zip(states.par_chunks_mut(PARTICLE_BLOCK * n_walls))
+                .zip(states.par_chunks_mut(chunk))
+                .zip(gaps.par_chunks_mut(chunk))
                 .zip(books[..n_blocks].par_iter_mut())
                 .enumerate()
                 .for_each(block);
@@ -748,7 +805,8 @@ impl World {
             p.force
                 .chunks_mut(PARTICLE_BLOCK)
                 .zip(p.torque.chunks_mut(PARTICLE_BLOCK))
-                .zip(states.chunks_mut(PARTICLE_BLOCK * n_walls))
+                .zip(states.chunks_mut(chunk))
+                .zip(gaps.chunks_mut(chunk))
                 .zip(books[..n_blocks].iter_mut())
                 .enumerate()
                 .for_each(block);
@@ -786,9 +844,10 @@ impl World {
         let (force, torque) = (&mut p.force, &mut p.torque);
         let nl = &mut self.neighbours;
         let mut refused = None;
-        for (&(i, j), st) in nl.pairs.iter().zip(nl.states.iter_mut()) {
+        let slots = nl.gaps.iter_mut().zip(nl.states.iter_mut());
+        for (&(i, j), (gap, st)) in nl.pairs.iter().zip(slots) {
             let (i, j) = (i as usize, j as usize);
-            let Some(out) = pair_contact::<D, F>(&law, &bodies, i, j, dt, st) else {
+            let Some(out) = pair_contact::<D, F>(&law, &bodies, i, j, dt, gap, st) else {
                 continue;
             };
             if let Err(why) = tally.pair(&out, dt, i, j) {
@@ -808,56 +867,66 @@ impl World {
         }
     }
 
-    /// The pair contacts on all threads: pairs in fixed blocks (each writes
-    /// its own states and forces), then each particle gathers its pair forces
-    /// in pair order, then the ledger is added up on one thread in pair
-    /// order. The same bits as [`Self::pair_contacts`].
-    fn pair_contacts_parallel<const D: bool, const F: bool>(
-        &mut self,
-        dt: f64,
-    ) -> Result<(), DemError> {
+    /// The pair contacts on all threads, in fixed blocks: each pair advances
+    /// its state and leaves its forces in its own slot (zero when apart), and
+    /// each block lists its touching pairs for the books.
+    fn pair_blocks<const D: bool, const F: bool>(&mut self, dt: f64) {
         let law = self.pp_law;
-        let p = &mut self.particles;
+        let p = &self.particles;
         let bodies = bodies!(p);
         let nl = &mut self.neighbours;
         let sc = &mut self.scratch;
         let n_pairs = nl.pairs.len();
-        sc.pair_force.resize(n_pairs, PairForce::default());
+        sc.pair_slots.resize(n_pairs);
         let n_blocks = n_pairs.div_ceil(PAIR_BLOCK);
         if sc.pair_books.len() < n_blocks {
             sc.pair_books.resize_with(n_blocks, Vec::new);
         }
-        nl.pairs
+        sc.pair_blocks = n_blocks;
+        let NeighbourStep {
+            pairs,
+            j_slot,
+            gaps,
+            states,
+        } = nl.step_view();
+        let PairSlots {
+            row_acts,
+            row_force,
+            j_side,
+        } = &mut sc.pair_slots;
+        let j_side = &*j_side;
+        pairs
             .par_chunks(PAIR_BLOCK)
-            .zip(nl.states.par_chunks_mut(PAIR_BLOCK))
-            .zip(sc.pair_force.par_chunks_mut(PAIR_BLOCK))
+            .zip(gaps.par_chunks_mut(PAIR_BLOCK))
+            .zip(states.par_chunks_mut(PAIR_BLOCK))
+            .zip(row_acts.par_chunks_mut(PAIR_BLOCK))
+            .zip(row_force.par_chunks_mut(PAIR_BLOCK))
             .zip(sc.pair_books[..n_blocks].par_iter_mut())
             .enumerate()
-            .for_each(|(c, (((pairs, states), forces), books))| {
+            .for_each(|(c, (((((pairs, gaps), states), acts), forces), books))| {
+                let start = c * PAIR_BLOCK;
+                let j_slot = &j_slot[start..start + pairs.len()];
                 pair_block::<D, F>(
                     &law,
                     &bodies,
-                    c * PAIR_BLOCK,
+                    start,
                     pairs,
-                    states,
-                    forces,
+                    (gaps, states),
+                    (acts, forces, j_slot, j_side),
                     books,
                     dt,
                 );
             });
-        let list = &*nl;
-        let pair_force = &sc.pair_force;
-        p.force
-            .par_chunks_mut(PARTICLE_BLOCK)
-            .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
-            .enumerate()
-            .for_each(|(c, (f, t))| {
-                gather_block::<F>(list, pair_force, c * PARTICLE_BLOCK, f, t);
-            });
+    }
 
+    /// Books the touching pairs [`Self::pair_blocks`] listed, on one thread
+    /// in pair order, as the serial loop books them.
+    fn book_pair_blocks(&mut self, dt: f64) -> Result<(), DemError> {
         let mut tally = tally!(self);
+        let list = &self.neighbours;
+        let sc = &self.scratch;
         let mut refused = None;
-        'books: for bk in &sc.pair_books[..n_blocks] {
+        'books: for bk in &sc.pair_books[..sc.pair_blocks] {
             for (k, out) in bk {
                 let (i, j) = list.pairs[*k as usize];
                 if let Err(why) = tally.pair(out, dt, i as usize, j as usize) {
@@ -903,13 +972,76 @@ enum Refusal {
     Escaped,
 }
 
-/// What a pair contributes to the forces, kept for the gather of the
-/// parallel step.
+/// What a pair contributes to its first particle, kept for the gather of
+/// the parallel step.
 #[derive(Debug, Clone, Copy, Default)]
-struct PairForce {
+struct RowForce {
     force_i: DVec3,
     torque_i: DVec3,
-    torque_j: DVec3,
+}
+
+/// Where the pairs of a parallel step leave their forces for the gather:
+/// the first particle's share in pair order (its row of the list), the
+/// second particle's in the j-side slots of [`NeighbourList::j_slot`], so
+/// that the gather reads each particle's pairs as two runs of memory. A
+/// slot is written by its one pair and read after the pair loop has ended;
+/// the atomics (relaxed: plain loads and stores) let the pair blocks write
+/// the j sides, which are not theirs alone, without `unsafe`.
+#[derive(Debug, Default)]
+struct PairSlots {
+    /// Per pair: whether it acts this step (touches, or stopped touching:
+    /// the pairs the serial loop adds), and what it does to its first
+    /// particle, written only when it acts.
+    row_acts: Vec<bool>,
+    row_force: Vec<RowForce>,
+    /// Per j slot: the same for the second particle.
+    j_side: JSide,
+}
+
+/// The second particle's share of each pair, by j slot.
+#[derive(Debug, Default)]
+struct JSide {
+    acts: Vec<AtomicBool>,
+    /// The force on the first particle, as bits (the second gets minus it).
+    force_i: Vec<[AtomicU64; 3]>,
+    /// The torque on the second particle, as bits.
+    torque_j: Vec<[AtomicU64; 3]>,
+}
+
+impl PairSlots {
+    fn resize(&mut self, n_pairs: usize) {
+        self.row_acts.resize(n_pairs, false);
+        self.row_force.resize(n_pairs, RowForce::default());
+        let j = &mut self.j_side;
+        j.acts.resize_with(n_pairs, AtomicBool::default);
+        j.force_i.resize_with(n_pairs, Default::default);
+        j.torque_j.resize_with(n_pairs, Default::default);
+    }
+}
+
+impl JSide {
+    #[inline]
+    fn store(v: &[AtomicU64; 3], x: DVec3) {
+        for (a, c) in v.iter().zip(x.to_array()) {
+            a.store(c.to_bits(), Ordering::Relaxed);
+        }
+    }
+
+    #[inline]
+    fn load(v: &[AtomicU64; 3]) -> DVec3 {
+        DVec3::new(
+            f64::from_bits(v[0].load(Ordering::Relaxed)),
+            f64::from_bits(v[1].load(Ordering::Relaxed)),
+            f64::from_bits(v[2].load(Ordering::Relaxed)),
+        )
+    }
+}
+
+/// Scratch buffers are not state: a copy of a world starts with none.
+impl Clone for PairSlots {
+    fn clone(&self) -> Self {
+        PairSlots::default()
+    }
 }
 
 /// A touching wall contact of the step, for the books.
@@ -926,15 +1058,16 @@ struct WallBooked {
 /// nothing once they have grown.
 #[derive(Debug, Clone, Default)]
 struct StepScratch {
-    /// Per particle block: its share of the contact power and its first
-    /// non-finite particle.
-    block_sums: Vec<(f64, Option<usize>)>,
+    /// Per particle block: what its half kick found.
+    block_sums: Vec<KickSums>,
     /// Per particle block: its touching wall contacts.
     wall_books: Vec<Vec<WallBooked>>,
-    /// Per pair: its forces (parallel step).
-    pair_force: Vec<PairForce>,
+    /// Where the pairs leave their forces (parallel step).
+    pair_slots: PairSlots,
     /// Per pair block: its touching pairs (parallel step).
     pair_books: Vec<Vec<(u32, ContactResult)>>,
+    /// Pair blocks of the current step (parallel step).
+    pair_blocks: usize,
 }
 
 /// The state a step borrows to book contacts, apart from the particles.
@@ -1040,6 +1173,21 @@ struct Kick {
     gravity: DVec3,
     /// Integrate the spin too (some law has friction).
     rotation: bool,
+    /// Squared travel from where the pair list was built beyond which it
+    /// must be rebuilt (m²).
+    travel_sq_m2: f64,
+}
+
+/// What a half kick found, over a block or over all particles.
+#[derive(Debug, Clone, Copy, Default)]
+struct KickSums {
+    /// `carry` plus the contact power `(F - m g)·v + τ·ω`, summed in order.
+    work: f64,
+    /// The first particle whose position is not finite (drift only).
+    nonfinite: Option<usize>,
+    /// Some particle travelled more than half the skin since the pair list
+    /// was built (drift only).
+    moved_far: bool,
 }
 
 /// The loads and inertia of a block of particles.
@@ -1052,10 +1200,12 @@ struct Loads<'a> {
 }
 
 impl Kick {
-    /// The pass over one block of positions `x`, velocities `v` and spins `w`:
-    /// returns `carry` plus the contact power `(F - m g)·v + τ·ω` summed over
-    /// the block in order, and the first particle of the block whose position
-    /// is not finite (first pass only).
+    /// The pass over one block of positions `x`, velocities `v` and spins `w`
+    /// (`built_at`: where the pair list was built for them): returns `carry`
+    /// plus the contact power `(F - m g)·v + τ·ω` summed over the block in
+    /// order, and on the first pass the first particle of the block whose
+    /// position is not finite and whether one drifted far enough to need a
+    /// new pair list.
     #[inline]
     fn block(
         &self,
@@ -1063,8 +1213,9 @@ impl Kick {
         x: &mut [DVec3],
         v: &mut [DVec3],
         w: &mut [DVec3],
+        built_at: Option<&[DVec3]>,
         carry: f64,
-    ) -> (f64, Option<usize>) {
+    ) -> KickSums {
         let half = 0.5 * self.dt;
         let g = self.gravity;
         let mut work = carry;
@@ -1092,11 +1243,22 @@ impl Kick {
                 }
             }
         }
-        let bad = match self.pass {
-            Pass::KickDrift => x.iter().position(|p| !p.is_finite()),
-            Pass::Kick => None,
+        let (nonfinite, moved_far) = match (self.pass, built_at) {
+            (Pass::Kick, _) => (None, false),
+            (Pass::KickDrift, built_at) => (
+                x.iter().position(|p| !p.is_finite()),
+                built_at.is_some_and(|r| {
+                    x.iter()
+                        .zip(r)
+                        .any(|(p, q)| (*p - *q).length_squared() > self.travel_sq_m2)
+                }),
+            ),
         };
-        (work, bad)
+        KickSums {
+            work,
+            nonfinite,
+            moved_far,
+        }
     }
 }
 
@@ -1114,7 +1276,7 @@ fn wall_block<const D: bool, const F: bool>(
     start: usize,
     force: &mut [DVec3],
     torque: &mut [DVec3],
-    states: &mut [ContactState],
+    (states, gaps): (&mut [ContactState], &mut [f64]),
     books: &mut Vec<WallBooked>,
     dt: f64,
 ) {
@@ -1125,13 +1287,20 @@ fn wall_block<const D: bool, const F: bool>(
         *f = g * bodies.mass[i];
         *t = DVec3::ZERO;
         let r = bodies.radius[i];
+        let x = bodies.position[i];
         for (w, shape) in walls.shapes.iter().enumerate() {
-            let st = &mut states[m * n_walls + w];
-            let (dist, normal) = shape.distance_and_normal(bodies.position[i], walls.offset);
-            if r - dist <= 0.0 && st.delta_prev <= 0.0 {
-                st.delta_prev = r - dist;
+            let gap = &mut gaps[m * n_walls + w];
+            let dist = shape.distance_m(x, walls.offset);
+            if r - dist <= 0.0 && *gap <= 0.0 {
+                *gap = r - dist;
                 continue;
             }
+            let st = &mut states[m * n_walls + w];
+            if *gap <= 0.0 {
+                // Opening: the contact's books start from the gap.
+                st.delta_prev = *gap;
+            }
+            let normal = shape.normal_from(x);
             let (particle, wall) = (i as u32, w as u32);
             if dist <= 0.0 {
                 books.push(WallBooked {
@@ -1143,6 +1312,7 @@ fn wall_block<const D: bool, const F: bool>(
                 return;
             }
             let out = wall_contact::<D, F>(law, bodies, i, dist, normal, walls.v_wall, dt, st);
+            *gap = st.delta_prev;
             *f += out.force_i;
             if F {
                 *t += out.torque_i;
@@ -1157,8 +1327,9 @@ fn wall_block<const D: bool, const F: bool>(
     }
 }
 
-/// The pair contacts `start..` of one block: states advanced, each pair's
-/// forces written (zero when apart), the touching ones listed in `books`.
+/// The pair contacts `start..` of one block: states advanced, whether each
+/// pair acts written on both its sides and, when it does, its forces; those
+/// listed in `books`.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn pair_block<const D: bool, const F: bool>(
@@ -1166,52 +1337,70 @@ fn pair_block<const D: bool, const F: bool>(
     bodies: &Bodies,
     start: usize,
     pairs: &[(u32, u32)],
-    states: &mut [ContactState],
-    forces: &mut [PairForce],
+    (gaps, states): (&mut [f64], &mut [ContactState]),
+    (acts, forces, j_slot, j_side): (&mut [bool], &mut [RowForce], &[u32], &JSide),
     books: &mut Vec<(u32, ContactResult)>,
     dt: f64,
 ) {
     books.clear();
-    for (m, ((&(i, j), st), f)) in pairs.iter().zip(states).zip(forces).enumerate() {
-        match pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, st) {
-            None => *f = PairForce::default(),
-            Some(out) => {
-                *f = PairForce {
-                    force_i: out.force_i,
-                    torque_i: out.torque_i,
-                    torque_j: out.torque_j,
-                };
-                books.push(((start + m) as u32, out));
+    let slots = gaps.iter_mut().zip(states);
+    let outs = acts.iter_mut().zip(forces).zip(j_slot);
+    for (m, ((&(i, j), (gap, st)), ((act, f), &js))) in
+        pairs.iter().zip(slots).zip(outs).enumerate()
+    {
+        let out = pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, gap, st);
+        let js = js as usize;
+        *act = out.is_some();
+        j_side.acts[js].store(*act, Ordering::Relaxed);
+        if let Some(out) = out {
+            *f = RowForce {
+                force_i: out.force_i,
+                torque_i: out.torque_i,
+            };
+            JSide::store(&j_side.force_i[js], out.force_i);
+            if F {
+                JSide::store(&j_side.torque_j[js], out.torque_j);
             }
+            books.push(((start + m) as u32, out));
         }
     }
 }
 
 /// Adds to the forces and torques of the particles `start..` of one block
-/// their pair forces, each particle's in pair order: the order, and so the
-/// rounding, of the serial loop that adds each pair to both its particles.
+/// the forces of their acting pairs, each particle's in pair order: the
+/// pairs, the order, and so the rounding, of the serial loop that adds each
+/// acting pair to both its particles.
 #[inline]
 fn gather_block<const F: bool>(
     list: &NeighbourList,
-    pair_force: &[PairForce],
+    slots: &PairSlots,
     start: usize,
     force: &mut [DVec3],
     torque: &mut [DVec3],
 ) {
+    let js = &slots.j_side;
     for (m, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
+        let p = start + m;
         let (mut fa, mut ta) = (*f, *t);
-        for &e in list.pairs_of(start + m) {
-            let c = &pair_force[(e >> 1) as usize];
-            if e & 1 == 0 {
-                fa += c.force_i;
-                if F {
-                    ta += c.torque_i;
-                }
-            } else {
-                fa -= c.force_i;
-                if F {
-                    ta += c.torque_j;
-                }
+        // Pairs (i, p), i < p, come first in pair order: the j side.
+        for s in list.j_side(p) {
+            if !js.acts[s].load(Ordering::Relaxed) {
+                continue;
+            }
+            fa -= JSide::load(&js.force_i[s]);
+            if F {
+                ta += JSide::load(&js.torque_j[s]);
+            }
+        }
+        // Then pairs (p, j): the row.
+        for k in list.row(p) {
+            if !slots.row_acts[k] {
+                continue;
+            }
+            let c = &slots.row_force[k];
+            fa += c.force_i;
+            if F {
+                ta += c.torque_i;
             }
         }
         *f = fa;
@@ -1322,8 +1511,9 @@ fn wall_contact<const D: bool, const F: bool>(
 }
 
 /// One particle-particle contact (thesis eq. 3.1–3.8, 3.26–3.27); `None`
-/// when the particles are apart and were apart (the gap is remembered for
-/// the trapezoid at contact onset).
+/// when the particles are apart and were apart. `gap` is the pair's overlap
+/// at the previous step (negative: the gap), remembered for the trapezoid
+/// at contact onset and updated here; `st` is read only when they touch.
 #[inline(always)]
 fn pair_contact<const D: bool, const F: bool>(
     law: &ContactLaw,
@@ -1331,15 +1521,20 @@ fn pair_contact<const D: bool, const F: bool>(
     i: usize,
     j: usize,
     dt: f64,
+    gap: &mut f64,
     st: &mut ContactState,
 ) -> Option<ContactResult> {
     let d = b.position[j] - b.position[i];
     let (ri, rj) = (b.radius[i], b.radius[j]);
     let dist_sq = d.length_squared();
     let reach = ri + rj;
-    if dist_sq >= reach * reach && st.delta_prev <= 0.0 {
-        st.delta_prev = reach - dist_sq.sqrt();
+    if dist_sq >= reach * reach && *gap <= 0.0 {
+        *gap = reach - dist_sq.sqrt();
         return None;
+    }
+    if *gap <= 0.0 {
+        // Opening: the contact's books start from the gap.
+        st.delta_prev = *gap;
     }
     let dist = dist_sq.sqrt();
     let n = d / dist;
@@ -1362,12 +1557,7 @@ fn pair_contact<const D: bool, const F: bool>(
         normal: n,
         v_rel,
     };
-    Some(resolve_contact::<D, F>(
-        law,
-        &geometry,
-        arms,
-        ri.min(rj),
-        dt,
-        st,
-    ))
+    let out = resolve_contact::<D, F>(law, &geometry, arms, ri.min(rj), dt, st);
+    *gap = st.delta_prev;
+    Some(out)
 }
