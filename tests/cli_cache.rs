@@ -85,7 +85,14 @@ fn a_cached_bed_gives_the_same_run_and_a_damaged_one_is_rebuilt() {
     let warm_out = shake(&dir, "warm", &[]);
     let warm = json(&dir.path("warm/summary.json"));
     assert_eq!(warm["bed_from_cache"], true);
-    assert!(stderr(&warm_out).is_empty(), "{}", stderr(&warm_out));
+    // No word about the cache (--quiet still prints the run's own warnings,
+    // such as this short drive's unsteadiness).
+    let err = stderr(&warm_out);
+    assert!(
+        err.lines()
+            .all(|l| !l.contains("cache") && !l.contains("was not used")),
+        "{err}"
+    );
     assert_eq!(physics(&dir, "cold"), physics(&dir, "warm"));
     assert_eq!(physics(&dir, "plain"), physics(&dir, "warm"));
     let read = |out: &str| std::fs::read(dir.path(&format!("{out}/kinematics.csv"))).expect("csv");
