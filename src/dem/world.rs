@@ -38,8 +38,6 @@
 //! the walls on the particles, which drives an electrodynamic shaker, is
 //! still summed contact by contact in order.
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -873,33 +871,24 @@ impl World {
         sc.pair_blocks = n_blocks;
         let NeighbourStep {
             pairs,
-            j_slot,
             gaps,
             states,
         } = nl.step_view();
-        let PairSlots {
-            row_acts,
-            row_force,
-            j_side,
-        } = &mut sc.pair_slots;
-        let j_side = &*j_side;
+        let PairSlots { acts, force } = &mut sc.pair_slots;
         pairs
             .par_chunks(PAIR_BLOCK)
             .zip(gaps.par_chunks_mut(PAIR_BLOCK))
             .zip(states.par_chunks_mut(PAIR_BLOCK))
-            .zip(row_acts.par_chunks_mut(PAIR_BLOCK))
-            .zip(row_force.par_chunks_mut(PAIR_BLOCK))
+            .zip(acts.par_chunks_mut(PAIR_BLOCK))
+            .zip(force.par_chunks_mut(PAIR_BLOCK))
             .zip(sc.pair_books[..n_blocks].par_iter_mut())
-            .enumerate()
-            .for_each(|(c, (((((pairs, gaps), states), acts), forces), books))| {
-                let start = c * PAIR_BLOCK;
-                let j_slot = &j_slot[start..start + pairs.len()];
+            .for_each(|(((((pairs, gaps), states), acts), forces), books)| {
                 pair_block::<D, F>(
                     &law,
                     &bodies,
                     pairs,
                     (gaps, states),
-                    (acts, forces, j_slot, j_side),
+                    (acts, forces),
                     (&limits, books),
                     dt,
                 );
@@ -994,75 +983,31 @@ enum Refusal {
     Escaped,
 }
 
-/// What a pair contributes to its first particle, kept for the gather of
-/// the parallel step.
+/// What a pair contributes to the forces, kept for the gather of the
+/// parallel step.
 #[derive(Debug, Clone, Copy, Default)]
-struct RowForce {
+struct PairForce {
     force_i: DVec3,
     torque_i: DVec3,
+    torque_j: DVec3,
 }
 
-/// Where the pairs of a parallel step leave their forces for the gather:
-/// the first particle's share in pair order (its row of the list), the
-/// second particle's in the j-side slots of [`NeighbourList::j_slot`], so
-/// that the gather reads each particle's pairs as two runs of memory. A
-/// slot is written by its one pair and read after the pair loop has ended;
-/// the atomics (relaxed: plain loads and stores) let the pair blocks write
-/// the j sides, which are not theirs alone, without `unsafe`.
-#[derive(Debug, Default)]
+/// Where the pairs of a parallel step leave their forces for the gather,
+/// each pair in its own slot (a block writes only its own slots, so no two
+/// threads write the same cache line but at a block's ends).
+#[derive(Debug, Clone, Default)]
 struct PairSlots {
     /// Per pair: whether it acts this step (touches, or stopped touching:
-    /// the pairs the serial loop adds), and what it does to its first
-    /// particle, written only when it acts.
-    row_acts: Vec<bool>,
-    row_force: Vec<RowForce>,
-    /// Per j slot: the same for the second particle.
-    j_side: JSide,
-}
-
-/// The second particle's share of each pair, by j slot.
-#[derive(Debug, Default)]
-struct JSide {
-    acts: Vec<AtomicBool>,
-    /// The force on the first particle, as bits (the second gets minus it).
-    force_i: Vec<[AtomicU64; 3]>,
-    /// The torque on the second particle, as bits.
-    torque_j: Vec<[AtomicU64; 3]>,
+    /// the pairs the serial loop adds).
+    acts: Vec<bool>,
+    /// Per pair: its forces, written only when it acts.
+    force: Vec<PairForce>,
 }
 
 impl PairSlots {
     fn resize(&mut self, n_pairs: usize) {
-        self.row_acts.resize(n_pairs, false);
-        self.row_force.resize(n_pairs, RowForce::default());
-        let j = &mut self.j_side;
-        j.acts.resize_with(n_pairs, AtomicBool::default);
-        j.force_i.resize_with(n_pairs, Default::default);
-        j.torque_j.resize_with(n_pairs, Default::default);
-    }
-}
-
-impl JSide {
-    #[inline]
-    fn store(v: &[AtomicU64; 3], x: DVec3) {
-        for (a, c) in v.iter().zip(x.to_array()) {
-            a.store(c.to_bits(), Ordering::Relaxed);
-        }
-    }
-
-    #[inline]
-    fn load(v: &[AtomicU64; 3]) -> DVec3 {
-        DVec3::new(
-            f64::from_bits(v[0].load(Ordering::Relaxed)),
-            f64::from_bits(v[1].load(Ordering::Relaxed)),
-            f64::from_bits(v[2].load(Ordering::Relaxed)),
-        )
-    }
-}
-
-/// Scratch buffers are not state: a copy of a world starts with none.
-impl Clone for PairSlots {
-    fn clone(&self) -> Self {
-        PairSlots::default()
+        self.acts.resize(n_pairs, false);
+        self.force.resize(n_pairs, PairForce::default());
     }
 }
 
@@ -1122,8 +1067,11 @@ impl Limits {
 }
 
 /// What the contacts of one block book over a step, summed in contact order
-/// ([`World::book`] adds the blocks to the ledger in block order).
+/// ([`World::book`] adds the blocks to the ledger in block order). Aligned
+/// to two cache lines, so that threads adding up neighbouring blocks never
+/// write the same line.
 #[derive(Debug, Clone)]
+#[repr(align(128))]
 struct BlockBooks {
     normal_j: f64,
     tangential_j: f64,
@@ -1388,30 +1336,25 @@ fn pair_block<const D: bool, const F: bool>(
     bodies: &Bodies,
     pairs: &[(u32, u32)],
     (gaps, states): (&mut [f64], &mut [ContactState]),
-    (acts, forces, j_slot, j_side): (&mut [bool], &mut [RowForce], &[u32], &JSide),
+    (acts, forces): (&mut [bool], &mut [PairForce]),
     (limits, books): (&Limits, &mut BlockBooks),
     dt: f64,
 ) {
     books.clear();
     let slots = gaps.iter_mut().zip(states);
-    let outs = acts.iter_mut().zip(forces).zip(j_slot);
-    for ((&(i, j), (gap, st)), ((act, f), &js)) in pairs.iter().zip(slots).zip(outs) {
+    let outs = acts.iter_mut().zip(forces);
+    for ((&(i, j), (gap, st)), (act, f)) in pairs.iter().zip(slots).zip(outs) {
         let out = pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, gap, st);
-        let js = js as usize;
         *act = out.is_some();
-        j_side.acts[js].store(*act, Ordering::Relaxed);
         if let Some(out) = out {
             if !books.add(limits, ContactAt::Pair(i as usize, j as usize), &out, dt) {
                 return;
             }
-            *f = RowForce {
+            *f = PairForce {
                 force_i: out.force_i,
                 torque_i: out.torque_i,
+                torque_j: out.torque_j,
             };
-            JSide::store(&j_side.force_i[js], out.force_i);
-            if F {
-                JSide::store(&j_side.torque_j[js], out.torque_j);
-            }
         }
     }
 }
@@ -1428,26 +1371,27 @@ fn gather_block<const F: bool>(
     force: &mut [DVec3],
     torque: &mut [DVec3],
 ) {
-    let js = &slots.j_side;
     for (m, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
         let p = start + m;
         let (mut fa, mut ta) = (*f, *t);
         // Pairs (i, p), i < p, come first in pair order: the j side.
-        for s in list.j_side(p) {
-            if !js.acts[s].load(Ordering::Relaxed) {
+        for &k in list.j_side_pairs(p) {
+            let k = k as usize;
+            if !slots.acts[k] {
                 continue;
             }
-            fa -= JSide::load(&js.force_i[s]);
+            let c = &slots.force[k];
+            fa -= c.force_i;
             if F {
-                ta += JSide::load(&js.torque_j[s]);
+                ta += c.torque_j;
             }
         }
         // Then pairs (p, j): the row.
         for k in list.row(p) {
-            if !slots.row_acts[k] {
+            if !slots.acts[k] {
                 continue;
             }
-            let c = &slots.row_force[k];
+            let c = &slots.force[k];
             fa += c.force_i;
             if F {
                 ta += c.torque_i;
