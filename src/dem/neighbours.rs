@@ -14,16 +14,14 @@
 //! pairs only whether they are still apart, and reads 8 bytes for it instead
 //! of the whole 88-byte contact state.
 //!
-//! Each rebuild also lays out, for every particle, where its pairs are in
-//! the order a serial loop over the pairs adds them to it: first the pairs
-//! in which it is the second particle (`(i, p)`, `i < p`: its *j side*,
-//! [`NeighbourList::j_side`]), then those in which it is the first (its row
-//! of the sorted list, [`NeighbourList::row`]). A thread that owns a
-//! particle can then gather its pair forces in exactly that order, which
-//! keeps the parallel force sums bit-identical to the serial ones. Each pair
-//! also knows its place among its second particle's j side
-//! ([`NeighbourList::j_slot`]), so the parallel step can leave the force
-//! there and the gather reads both sides of a particle as runs of memory.
+//! Each rebuild also lays out, for every particle, its pairs in the order a
+//! serial loop over the pairs adds them to it: first the pairs in which it
+//! is the second particle (`(i, p)`, `i < p`: its *j side*,
+//! [`NeighbourList::j_side_pairs`], in increasing pair order), then those
+//! in which it is the first (its row of the sorted list,
+//! [`NeighbourList::row`]). A thread that owns a particle can then gather
+//! its pair forces in exactly that order, which keeps the parallel force
+//! sums bit-identical to the serial ones.
 
 use glam::DVec3;
 
@@ -33,7 +31,6 @@ use super::contact::ContactState;
 /// writes, borrowed apart ([`NeighbourList::step_view`]).
 pub struct StepView<'a> {
     pub pairs: &'a [(u32, u32)],
-    pub j_slot: &'a [u32],
     pub gaps: &'a mut [f64],
     pub states: &'a mut [ContactState],
 }
@@ -53,11 +50,10 @@ pub struct NeighbourList {
     skin_m: f64,
     /// Pairs `(p, j)` of particle `p`: `row_start[p]..row_start[p + 1]`.
     row_start: Vec<u32>,
-    /// Pairs `(i, p)` of particle `p`, in increasing pair order, as slots
-    /// `j_start[p]..j_start[p + 1]` of an array with one slot per pair.
+    /// Pairs `(i, p)` of particle `p`, in increasing pair order:
+    /// `j_pairs[j_start[p]..j_start[p + 1]]`.
     j_start: Vec<u32>,
-    /// The slot of each pair in that array (see [`Self::j_slot`]).
-    j_slot: Vec<u32>,
+    j_pairs: Vec<u32>,
     reference: Vec<DVec3>,
     rebuilds: u64,
     // Scratch reused between rebuilds.
@@ -101,7 +97,6 @@ impl NeighbourList {
     pub fn step_view(&mut self) -> StepView<'_> {
         StepView {
             pairs: &self.pairs,
-            j_slot: &self.j_slot,
             gaps: &mut self.gaps,
             states: &mut self.states,
         }
@@ -113,19 +108,11 @@ impl NeighbourList {
         self.row_start[p] as usize..self.row_start[p + 1] as usize
     }
 
-    /// The slots of the pairs `(i, p)` of particle `p`, in increasing pair
-    /// order: a run of an array with one slot per pair, laid out by
-    /// [`Self::j_slot`].
+    /// The pairs `(i, p)` of particle `p` (its j side), in increasing pair
+    /// order.
     #[inline]
-    pub fn j_side(&self, p: usize) -> std::ops::Range<usize> {
-        self.j_start[p] as usize..self.j_start[p + 1] as usize
-    }
-
-    /// The slot of pair `k` among the j sides ([`Self::j_side`] of its
-    /// second particle).
-    #[inline]
-    pub fn j_slot(&self, k: usize) -> usize {
-        self.j_slot[k] as usize
+    pub fn j_side_pairs(&self, p: usize) -> &[u32] {
+        &self.j_pairs[self.j_start[p] as usize..self.j_start[p + 1] as usize]
     }
 
     /// Where the particles were when the list was last built: a particle
@@ -154,7 +141,7 @@ impl NeighbourList {
     }
 
     /// Lays out the rows and the j sides of every particle (see
-    /// [`Self::row`], [`Self::j_side`]): counting sorts of the pair ends,
+    /// [`Self::row`], [`Self::j_side_pairs`]): counting sorts of the pair ends,
     /// filled in pair order.
     fn build_adjacency(&mut self, n: usize) {
         self.row_start.clear();
@@ -169,12 +156,13 @@ impl NeighbourList {
             self.row_start[p + 1] += self.row_start[p];
             self.j_start[p + 1] += self.j_start[p];
         }
-        self.j_slot.clear();
+        self.j_pairs.clear();
+        self.j_pairs.resize(self.pairs.len(), 0);
         self.fill.clear();
         self.fill.extend_from_slice(&self.j_start[..n]);
-        for &(_, j) in &self.pairs {
+        for (k, &(_, j)) in self.pairs.iter().enumerate() {
             let at = &mut self.fill[j as usize];
-            self.j_slot.push(*at);
+            self.j_pairs[*at as usize] = k as u32;
             *at += 1;
         }
     }
@@ -352,18 +340,15 @@ mod tests {
         let radii = vec![0.0025; 300];
         let mut list = NeighbourList::new(0.0005);
         list.rebuild(&pos, &radii);
-        let slot_of_pair: Vec<usize> = (0..list.pairs.len()).map(|k| list.j_slot(k)).collect();
         for p in 0..pos.len() {
             let as_i: Vec<usize> = (0..list.pairs.len())
                 .filter(|&k| list.pairs[k].0 as usize == p)
                 .collect();
-            let as_j: Vec<usize> = (0..list.pairs.len())
-                .filter(|&k| list.pairs[k].1 as usize == p)
+            let as_j: Vec<u32> = (0..list.pairs.len() as u32)
+                .filter(|&k| list.pairs[k as usize].1 as usize == p)
                 .collect();
             assert_eq!(list.row(p).collect::<Vec<_>>(), as_i, "particle {p}");
-            // The j side holds p's pairs (i, p) in increasing pair order.
-            let slots: Vec<usize> = as_j.iter().map(|&k| slot_of_pair[k]).collect();
-            assert_eq!(slots, list.j_side(p).collect::<Vec<_>>(), "particle {p}");
+            assert_eq!(list.j_side_pairs(p), &as_j[..], "particle {p}");
         }
     }
 

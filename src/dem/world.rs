@@ -27,11 +27,16 @@
 //! drift, gravity and walls: each particle's own), the pair loop (contact
 //! states and pair forces, each pair's own), then a gather in which each
 //! particle sums its pair forces in pair order, which is exactly the order
-//! the serial loop adds them in. What the contacts book into the ledger is
-//! kept per block and summed afterwards on one thread in contact order. Both
-//! ways give the same bits; the tests compare them.
-
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+//! the serial loop adds them in. Both ways give the same bits; the tests
+//! compare them.
+//!
+//! **The books.** What the contacts dissipate and store is summed per fixed
+//! block of contacts (the walls of [`PARTICLE_BLOCK`] particles, or
+//! [`PAIR_BLOCK`] pairs), in contact order within a block, and the block sums
+//! are added to the ledger in block order, on one core and on many alike:
+//! no thread waits for a sum over every contact of the step. The force of
+//! the walls on the particles, which drives an electrodynamic shaker, is
+//! still summed contact by contact in order.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -68,22 +73,6 @@ macro_rules! bodies {
             angular_velocity: &$p.angular_velocity,
             radius: &$p.radius,
             mass: &$p.mass,
-        }
-    };
-}
-
-/// What the contacts of a step book into, borrowed field by field from the
-/// world `$w` so that its particles and lists stay free.
-macro_rules! tally {
-    ($w:expr) => {
-        Tally {
-            numerics: &$w.numerics,
-            ledger: &mut $w.ledger,
-            impact_speeds: &mut $w.impact_speeds,
-            fewest_steps_per_contact: &mut $w.fewest_steps_per_contact,
-            step_stored_change_j: &mut $w.step_stored_change_j,
-            wall_force: &mut $w.wall_force,
-            particle_dissipation_j: $w.particle_dissipation_j.as_deref_mut(),
         }
     };
 }
@@ -128,7 +117,7 @@ impl Numerics {
 
 /// What one contact contributed over a step, before it is booked: forces,
 /// energies, and what the stability checks read. Pair and wall contacts both
-/// produce one, and [`World::book`] checks and accumulates both the same way.
+/// produce one, and [`BlockBooks::add`] checks and books both the same way.
 #[derive(Debug, Clone, Copy, Default)]
 struct ContactResult {
     /// Force on particle `i` (N); particle `j` of a pair gets the opposite.
@@ -763,7 +752,7 @@ impl World {
         let n_blocks = p.force.len().div_ceil(PARTICLE_BLOCK);
         let books = &mut self.scratch.wall_books;
         if books.len() < n_blocks {
-            books.resize_with(n_blocks, Vec::new);
+            books.resize_with(n_blocks, BlockBooks::default);
         }
         type Block<'b> = (
             usize,
@@ -772,9 +761,10 @@ impl World {
                     ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [ContactState]),
                     &'b mut [f64],
                 ),
-                &'b mut Vec<WallBooked>,
+                &'b mut BlockBooks,
             ),
         );
+        let limits = Limits::of(&self.numerics, self.particle_dissipation_j.is_some());
         let block = |(c, ((((f, t), st), gaps), bk)): Block<'_>| {
             wall_block::<D, F>(
                 &law,
@@ -785,7 +775,7 @@ impl World {
                 f,
                 t,
                 (st, gaps),
-                bk,
+                (limits, bk),
                 dt,
             );
             gather_into(c, f, t);
@@ -812,66 +802,62 @@ impl World {
                 .for_each(block);
         }
 
-        let mut tally = tally!(self);
-        let mut refused = None;
-        'books: for bk in &books[..n_blocks] {
-            for b in bk {
-                let at = ContactAt::Wall(b.particle as usize, b.wall as usize);
-                let booked = if b.escaped {
-                    Err(Refusal::Escaped)
-                } else {
-                    tally.wall(&b.out, dt, b.particle as usize)
-                };
-                if let Err(why) = booked {
-                    refused = Some((at, b.out, why));
-                    break 'books;
-                }
-            }
-        }
-        match refused {
-            Some((at, out, why)) => Err(self.refusal(at, &out, why, dt)),
-            None => Ok(()),
-        }
+        let books = std::mem::take(&mut self.scratch.wall_books);
+        let booked = self.book(Kind::Wall, &books[..n_blocks], dt);
+        self.scratch.wall_books = books;
+        booked
     }
 
-    /// The pair contacts on one thread, each added to the forces and the
-    /// ledger as soon as it is evaluated, in pair order.
+    /// The pair contacts on one thread, each added to the forces as soon as
+    /// it is evaluated, in pair order; the books block by block.
     fn pair_contacts<const D: bool, const F: bool>(&mut self, dt: f64) -> Result<(), DemError> {
         let law = self.pp_law;
-        let mut tally = tally!(self);
+        let limits = Limits::of(&self.numerics, self.particle_dissipation_j.is_some());
         let p = &mut self.particles;
         let bodies = bodies!(p);
         let (force, torque) = (&mut p.force, &mut p.torque);
         let nl = &mut self.neighbours;
-        let mut refused = None;
-        let slots = nl.gaps.iter_mut().zip(nl.states.iter_mut());
-        for (&(i, j), (gap, st)) in nl.pairs.iter().zip(slots) {
-            let (i, j) = (i as usize, j as usize);
-            let Some(out) = pair_contact::<D, F>(&law, &bodies, i, j, dt, gap, st) else {
-                continue;
-            };
-            if let Err(why) = tally.pair(&out, dt, i, j) {
-                refused = Some((ContactAt::Pair(i, j), out, why));
-                break;
-            }
-            force[i] += out.force_i;
-            force[j] -= out.force_i;
-            if F {
-                torque[i] += out.torque_i;
-                torque[j] += out.torque_j;
+        let n_blocks = nl.pairs.len().div_ceil(PAIR_BLOCK);
+        let books = &mut self.scratch.pair_books;
+        if books.len() < n_blocks {
+            books.resize_with(n_blocks, BlockBooks::default);
+        }
+        let blocks = nl
+            .pairs
+            .chunks(PAIR_BLOCK)
+            .zip(nl.gaps.chunks_mut(PAIR_BLOCK))
+            .zip(nl.states.chunks_mut(PAIR_BLOCK))
+            .zip(books.iter_mut());
+        'blocks: for (((pairs, gaps), states), bk) in blocks {
+            bk.clear();
+            for (&(i, j), (gap, st)) in pairs.iter().zip(gaps.iter_mut().zip(states.iter_mut())) {
+                let (i, j) = (i as usize, j as usize);
+                let Some(out) = pair_contact::<D, F>(&law, &bodies, i, j, dt, gap, st) else {
+                    continue;
+                };
+                if !bk.add(&limits, ContactAt::Pair(i, j), &out, dt) {
+                    break 'blocks;
+                }
+                force[i] += out.force_i;
+                force[j] -= out.force_i;
+                if F {
+                    torque[i] += out.torque_i;
+                    torque[j] += out.torque_j;
+                }
             }
         }
-        match refused {
-            Some((at, out, why)) => Err(self.refusal(at, &out, why, dt)),
-            None => Ok(()),
-        }
+        let books = std::mem::take(&mut self.scratch.pair_books);
+        let booked = self.book(Kind::Pair, &books[..n_blocks], dt);
+        self.scratch.pair_books = books;
+        booked
     }
 
     /// The pair contacts on all threads, in fixed blocks: each pair advances
-    /// its state and leaves its forces in its own slot (zero when apart), and
-    /// each block lists its touching pairs for the books.
+    /// its state and leaves its forces in its own slots, and each block sums
+    /// its books.
     fn pair_blocks<const D: bool, const F: bool>(&mut self, dt: f64) {
         let law = self.pp_law;
+        let limits = Limits::of(&self.numerics, self.particle_dissipation_j.is_some());
         let p = &self.particles;
         let bodies = bodies!(p);
         let nl = &mut self.neighbours;
@@ -880,65 +866,90 @@ impl World {
         sc.pair_slots.resize(n_pairs);
         let n_blocks = n_pairs.div_ceil(PAIR_BLOCK);
         if sc.pair_books.len() < n_blocks {
-            sc.pair_books.resize_with(n_blocks, Vec::new);
+            sc.pair_books.resize_with(n_blocks, BlockBooks::default);
         }
         sc.pair_blocks = n_blocks;
         let NeighbourStep {
             pairs,
-            j_slot,
             gaps,
             states,
         } = nl.step_view();
-        let PairSlots {
-            row_acts,
-            row_force,
-            j_side,
-        } = &mut sc.pair_slots;
-        let j_side = &*j_side;
+        let PairSlots { acts, force } = &mut sc.pair_slots;
         pairs
             .par_chunks(PAIR_BLOCK)
             .zip(gaps.par_chunks_mut(PAIR_BLOCK))
             .zip(states.par_chunks_mut(PAIR_BLOCK))
-            .zip(row_acts.par_chunks_mut(PAIR_BLOCK))
-            .zip(row_force.par_chunks_mut(PAIR_BLOCK))
+            .zip(acts.par_chunks_mut(PAIR_BLOCK))
+            .zip(force.par_chunks_mut(PAIR_BLOCK))
             .zip(sc.pair_books[..n_blocks].par_iter_mut())
-            .enumerate()
-            .for_each(|(c, (((((pairs, gaps), states), acts), forces), books))| {
-                let start = c * PAIR_BLOCK;
-                let j_slot = &j_slot[start..start + pairs.len()];
+            .for_each(|(((((pairs, gaps), states), acts), forces), books)| {
                 pair_block::<D, F>(
                     &law,
                     &bodies,
-                    start,
                     pairs,
                     (gaps, states),
-                    (acts, forces, j_slot, j_side),
-                    books,
+                    (acts, forces),
+                    (&limits, books),
                     dt,
                 );
             });
     }
 
-    /// Books the touching pairs [`Self::pair_blocks`] listed, on one thread
-    /// in pair order, as the serial loop books them.
+    /// Books the blocks [`Self::pair_blocks`] summed, in block order.
     fn book_pair_blocks(&mut self, dt: f64) -> Result<(), DemError> {
-        let mut tally = tally!(self);
-        let list = &self.neighbours;
-        let sc = &self.scratch;
-        let mut refused = None;
-        'books: for bk in &sc.pair_books[..sc.pair_blocks] {
-            for (k, out) in bk {
-                let (i, j) = list.pairs[*k as usize];
-                if let Err(why) = tally.pair(out, dt, i as usize, j as usize) {
-                    refused = Some((ContactAt::Pair(i as usize, j as usize), *out, why));
-                    break 'books;
+        let books = std::mem::take(&mut self.scratch.pair_books);
+        let booked = self.book(Kind::Pair, &books[..self.scratch.pair_blocks], dt);
+        self.scratch.pair_books = books;
+        booked
+    }
+
+    /// Adds the books of the blocks of one kind of contact to the ledger, in
+    /// block order, and stops the run at the first contact a block refused.
+    fn book(&mut self, kind: Kind, blocks: &[BlockBooks], dt: f64) -> Result<(), DemError> {
+        for b in blocks {
+            if dt > 0.0 {
+                let (normal, tangential) = match kind {
+                    Kind::Pair => {
+                        let d = &mut self.ledger.dissipated;
+                        (&mut d.pp_normal, &mut d.pp_tangential)
+                    }
+                    Kind::Wall => {
+                        let d = &mut self.ledger.dissipated;
+                        (&mut d.pw_normal, &mut d.pw_tangential)
+                    }
+                };
+                *normal += b.normal_j;
+                *tangential += b.tangential_j;
+                self.ledger.stiffness_work_j += b.stiffness_work_j;
+                self.ledger.integrator_j += b.integrator_j;
+                self.step_stored_change_j += b.stored_change_j;
+            }
+            let fastest = match kind {
+                Kind::Pair => &mut self.impact_speeds.particle_particle_mps,
+                Kind::Wall => &mut self.impact_speeds.particle_wall_mps,
+            };
+            *fastest = fastest.max(b.fastest_onset_mps);
+            self.fewest_steps_per_contact = self.fewest_steps_per_contact.min(b.fewest_steps);
+            if kind == Kind::Wall {
+                for &f in &b.wall_forces {
+                    self.wall_force += f;
                 }
             }
+            if let (Some(per), true) = (self.particle_dissipation_j.as_deref_mut(), dt > 0.0) {
+                for &(i, j, e) in &b.dissipation {
+                    if kind == Kind::Pair {
+                        per[i as usize] += 0.5 * e;
+                        per[j as usize] += 0.5 * e;
+                    } else {
+                        per[i as usize] += e;
+                    }
+                }
+            }
+            if let Some((at, out, why)) = b.refused {
+                return Err(self.refusal(at, &out, why, dt));
+            }
         }
-        match refused {
-            Some((at, out, why)) => Err(self.refusal(at, &out, why, dt)),
-            None => Ok(()),
-        }
+        Ok(())
     }
 }
 
@@ -972,86 +983,32 @@ enum Refusal {
     Escaped,
 }
 
-/// What a pair contributes to its first particle, kept for the gather of
-/// the parallel step.
+/// What a pair contributes to the forces, kept for the gather of the
+/// parallel step.
 #[derive(Debug, Clone, Copy, Default)]
-struct RowForce {
+struct PairForce {
     force_i: DVec3,
     torque_i: DVec3,
+    torque_j: DVec3,
 }
 
-/// Where the pairs of a parallel step leave their forces for the gather:
-/// the first particle's share in pair order (its row of the list), the
-/// second particle's in the j-side slots of [`NeighbourList::j_slot`], so
-/// that the gather reads each particle's pairs as two runs of memory. A
-/// slot is written by its one pair and read after the pair loop has ended;
-/// the atomics (relaxed: plain loads and stores) let the pair blocks write
-/// the j sides, which are not theirs alone, without `unsafe`.
-#[derive(Debug, Default)]
+/// Where the pairs of a parallel step leave their forces for the gather,
+/// each pair in its own slot (a block writes only its own slots, so no two
+/// threads write the same cache line but at a block's ends).
+#[derive(Debug, Clone, Default)]
 struct PairSlots {
     /// Per pair: whether it acts this step (touches, or stopped touching:
-    /// the pairs the serial loop adds), and what it does to its first
-    /// particle, written only when it acts.
-    row_acts: Vec<bool>,
-    row_force: Vec<RowForce>,
-    /// Per j slot: the same for the second particle.
-    j_side: JSide,
-}
-
-/// The second particle's share of each pair, by j slot.
-#[derive(Debug, Default)]
-struct JSide {
-    acts: Vec<AtomicBool>,
-    /// The force on the first particle, as bits (the second gets minus it).
-    force_i: Vec<[AtomicU64; 3]>,
-    /// The torque on the second particle, as bits.
-    torque_j: Vec<[AtomicU64; 3]>,
+    /// the pairs the serial loop adds).
+    acts: Vec<bool>,
+    /// Per pair: its forces, written only when it acts.
+    force: Vec<PairForce>,
 }
 
 impl PairSlots {
     fn resize(&mut self, n_pairs: usize) {
-        self.row_acts.resize(n_pairs, false);
-        self.row_force.resize(n_pairs, RowForce::default());
-        let j = &mut self.j_side;
-        j.acts.resize_with(n_pairs, AtomicBool::default);
-        j.force_i.resize_with(n_pairs, Default::default);
-        j.torque_j.resize_with(n_pairs, Default::default);
+        self.acts.resize(n_pairs, false);
+        self.force.resize(n_pairs, PairForce::default());
     }
-}
-
-impl JSide {
-    #[inline]
-    fn store(v: &[AtomicU64; 3], x: DVec3) {
-        for (a, c) in v.iter().zip(x.to_array()) {
-            a.store(c.to_bits(), Ordering::Relaxed);
-        }
-    }
-
-    #[inline]
-    fn load(v: &[AtomicU64; 3]) -> DVec3 {
-        DVec3::new(
-            f64::from_bits(v[0].load(Ordering::Relaxed)),
-            f64::from_bits(v[1].load(Ordering::Relaxed)),
-            f64::from_bits(v[2].load(Ordering::Relaxed)),
-        )
-    }
-}
-
-/// Scratch buffers are not state: a copy of a world starts with none.
-impl Clone for PairSlots {
-    fn clone(&self) -> Self {
-        PairSlots::default()
-    }
-}
-
-/// A touching wall contact of the step, for the books.
-#[derive(Debug, Clone, Copy)]
-struct WallBooked {
-    particle: u32,
-    wall: u32,
-    /// The particle's centre is past the wall (and `out` is empty).
-    escaped: bool,
-    out: ContactResult,
 }
 
 /// Buffers of the step, kept from step to step so that the step allocates
@@ -1060,91 +1017,140 @@ struct WallBooked {
 struct StepScratch {
     /// Per particle block: what its half kick found.
     block_sums: Vec<KickSums>,
-    /// Per particle block: its touching wall contacts.
-    wall_books: Vec<Vec<WallBooked>>,
+    /// Per particle block: the books of its wall contacts.
+    wall_books: Vec<BlockBooks>,
     /// Where the pairs leave their forces (parallel step).
     pair_slots: PairSlots,
-    /// Per pair block: its touching pairs (parallel step).
-    pair_books: Vec<Vec<(u32, ContactResult)>>,
+    /// Per pair block: the books of its contacts.
+    pair_books: Vec<BlockBooks>,
     /// Pair blocks of the current step (parallel step).
     pair_blocks: usize,
 }
 
-/// The state a step borrows to book contacts, apart from the particles.
-struct Tally<'a> {
-    numerics: &'a Numerics,
-    ledger: &'a mut Ledger,
-    impact_speeds: &'a mut ImpactSpeeds,
-    fewest_steps_per_contact: &'a mut f64,
-    step_stored_change_j: &'a mut f64,
-    wall_force: &'a mut DVec3,
-    /// Opt-in dissipation per particle (a pair's split evenly).
-    particle_dissipation_j: Option<&'a mut [f64]>,
+/// Which kind of contact a block of books holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Pair,
+    Wall,
 }
 
-impl Tally<'_> {
-    /// Checks a contact's result: a collision resolved in too few steps or an
-    /// excessive overlap stops the run.
+/// What the stability checks refuse, and whether dissipation is booked per
+/// particle, for the contacts of a step.
+#[derive(Debug, Clone, Copy)]
+struct Limits {
+    min_steps_per_collision: f64,
+    max_overlap_ratio: f64,
+    per_particle: bool,
+}
+
+impl Limits {
+    fn of(n: &Numerics, per_particle: bool) -> Self {
+        Limits {
+            min_steps_per_collision: n.min_steps_per_collision,
+            max_overlap_ratio: n.max_overlap_ratio,
+            per_particle,
+        }
+    }
+
+    /// A collision resolved in too few steps or an excessive overlap stops
+    /// the run.
     #[inline(always)]
     fn check(&self, out: &ContactResult) -> Result<(), Refusal> {
-        if out.steps_per_collision < self.numerics.min_steps_per_collision {
+        if out.steps_per_collision < self.min_steps_per_collision {
             Err(Refusal::Unresolved)
-        } else if out.overlap_ratio > self.numerics.max_overlap_ratio {
+        } else if out.overlap_ratio > self.max_overlap_ratio {
             Err(Refusal::Overlap)
         } else {
             Ok(())
         }
     }
+}
 
-    /// Books what every contact books: the fewest steps and the energies.
-    #[inline(always)]
-    fn common(&mut self, out: &ContactResult, dt: f64) {
-        *self.fewest_steps_per_contact = self.fewest_steps_per_contact.min(out.steps_per_collision);
-        if dt > 0.0 {
-            self.ledger.stiffness_work_j += out.stiffness_work_j;
-            self.ledger.integrator_j += out.integrator_j;
-            *self.step_stored_change_j += out.stored_change_j;
+/// What the contacts of one block book over a step, summed in contact order
+/// ([`World::book`] adds the blocks to the ledger in block order). Aligned
+/// to two cache lines, so that threads adding up neighbouring blocks never
+/// write the same line.
+#[derive(Debug, Clone)]
+#[repr(align(128))]
+struct BlockBooks {
+    normal_j: f64,
+    tangential_j: f64,
+    stiffness_work_j: f64,
+    integrator_j: f64,
+    stored_change_j: f64,
+    /// Fastest approach at contact onset (m/s).
+    fastest_onset_mps: f64,
+    /// Fewest steps an opening collision takes.
+    fewest_steps: f64,
+    /// Walls: each touching contact's force on its particle, in order (their
+    /// sum, the force of the walls, is taken contact by contact).
+    wall_forces: Vec<DVec3>,
+    /// While dissipation is booked per particle: each contact's particles
+    /// (the second unused for a wall) and dissipation (J), in order.
+    dissipation: Vec<(u32, u32, f64)>,
+    /// The first contact of the block that stops the run.
+    refused: Option<(ContactAt, ContactResult, Refusal)>,
+}
+
+impl Default for BlockBooks {
+    fn default() -> Self {
+        BlockBooks {
+            normal_j: 0.0,
+            tangential_j: 0.0,
+            stiffness_work_j: 0.0,
+            integrator_j: 0.0,
+            stored_change_j: 0.0,
+            fastest_onset_mps: 0.0,
+            fewest_steps: f64::INFINITY,
+            wall_forces: Vec::new(),
+            dissipation: Vec::new(),
+            refused: None,
         }
     }
+}
 
-    /// Checks and books a pair contact (its forces are added by the caller).
-    #[inline(always)]
-    fn pair(&mut self, out: &ContactResult, dt: f64, i: usize, j: usize) -> Result<(), Refusal> {
-        self.check(out)?;
-        if let (Some(per), true) = (self.particle_dissipation_j.as_deref_mut(), dt > 0.0) {
-            let e = out.dissipated_normal_j + out.dissipated_tangential_j;
-            per[i] += 0.5 * e;
-            per[j] += 0.5 * e;
-        }
-        let fastest = &mut self.impact_speeds.particle_particle_mps;
-        *fastest = fastest.max(out.onset_speed_mps);
-        if dt > 0.0 {
-            let d = &mut self.ledger.dissipated;
-            d.pp_normal += out.dissipated_normal_j;
-            d.pp_tangential += out.dissipated_tangential_j;
-        }
-        self.common(out, dt);
-        Ok(())
+impl BlockBooks {
+    /// Empties the books for a new step, keeping the buffers.
+    fn clear(&mut self) {
+        let (mut forces, mut dissipation) = (
+            std::mem::take(&mut self.wall_forces),
+            std::mem::take(&mut self.dissipation),
+        );
+        forces.clear();
+        dissipation.clear();
+        *self = BlockBooks {
+            wall_forces: forces,
+            dissipation,
+            ..BlockBooks::default()
+        };
     }
 
-    /// Checks and books a wall contact, and adds its force to the force of
-    /// the walls (its forces on the particle are added by the caller).
+    /// Checks contact `at` and books it; false (and the contact kept as the
+    /// block's refusal) when it stops the run.
     #[inline(always)]
-    fn wall(&mut self, out: &ContactResult, dt: f64, i: usize) -> Result<(), Refusal> {
-        self.check(out)?;
-        if let (Some(per), true) = (self.particle_dissipation_j.as_deref_mut(), dt > 0.0) {
-            per[i] += out.dissipated_normal_j + out.dissipated_tangential_j;
+    fn add(&mut self, limits: &Limits, at: ContactAt, out: &ContactResult, dt: f64) -> bool {
+        if let Err(why) = limits.check(out) {
+            self.refused = Some((at, *out, why));
+            return false;
         }
-        *self.wall_force += out.force_i;
-        let fastest = &mut self.impact_speeds.particle_wall_mps;
-        *fastest = fastest.max(out.onset_speed_mps);
+        self.fastest_onset_mps = self.fastest_onset_mps.max(out.onset_speed_mps);
+        self.fewest_steps = self.fewest_steps.min(out.steps_per_collision);
         if dt > 0.0 {
-            let d = &mut self.ledger.dissipated;
-            d.pw_normal += out.dissipated_normal_j;
-            d.pw_tangential += out.dissipated_tangential_j;
+            self.normal_j += out.dissipated_normal_j;
+            self.tangential_j += out.dissipated_tangential_j;
+            self.stiffness_work_j += out.stiffness_work_j;
+            self.integrator_j += out.integrator_j;
+            self.stored_change_j += out.stored_change_j;
+            if limits.per_particle {
+                let e = out.dissipated_normal_j + out.dissipated_tangential_j;
+                let (i, j) = match at {
+                    ContactAt::Pair(i, j) => (i as u32, j as u32),
+                    ContactAt::Wall(i, _) => (i as u32, u32::MAX),
+                };
+                self.dissipation.push((i, j, e));
+            }
         }
-        self.common(out, dt);
-        Ok(())
+        true
     }
 }
 
@@ -1264,8 +1270,8 @@ impl Kick {
 
 /// Gravity and the wall contacts of the particles `start..` of one block:
 /// their forces and torques are set, the wall states advanced, and the
-/// touching contacts listed in `books` for the ledger, in (particle, wall)
-/// order; an escaped particle ends the block.
+/// touching contacts booked in `books`, in (particle, wall) order; a
+/// contact that stops the run (an escaped particle, say) ends the block.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn wall_block<const D: bool, const F: bool>(
@@ -1277,7 +1283,7 @@ fn wall_block<const D: bool, const F: bool>(
     force: &mut [DVec3],
     torque: &mut [DVec3],
     (states, gaps): (&mut [ContactState], &mut [f64]),
-    books: &mut Vec<WallBooked>,
+    (limits, books): (Limits, &mut BlockBooks),
     dt: f64,
 ) {
     books.clear();
@@ -1301,67 +1307,54 @@ fn wall_block<const D: bool, const F: bool>(
                 st.delta_prev = *gap;
             }
             let normal = shape.normal_from(x);
-            let (particle, wall) = (i as u32, w as u32);
+            let at = ContactAt::Wall(i, w);
             if dist <= 0.0 {
-                books.push(WallBooked {
-                    particle,
-                    wall,
-                    escaped: true,
-                    out: ContactResult::default(),
-                });
+                books.refused = Some((at, ContactResult::default(), Refusal::Escaped));
                 return;
             }
             let out = wall_contact::<D, F>(law, bodies, i, dist, normal, walls.v_wall, dt, st);
             *gap = st.delta_prev;
+            if !books.add(&limits, at, &out, dt) {
+                return;
+            }
+            books.wall_forces.push(out.force_i);
             *f += out.force_i;
             if F {
                 *t += out.torque_i;
             }
-            books.push(WallBooked {
-                particle,
-                wall,
-                escaped: false,
-                out,
-            });
         }
     }
 }
 
 /// The pair contacts `start..` of one block: states advanced, whether each
-/// pair acts written on both its sides and, when it does, its forces; those
-/// listed in `books`.
+/// pair acts written on both its sides and, when it does, its forces, and
+/// its books in `books`; a contact that stops the run ends the block.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn pair_block<const D: bool, const F: bool>(
     law: &ContactLaw,
     bodies: &Bodies,
-    start: usize,
     pairs: &[(u32, u32)],
     (gaps, states): (&mut [f64], &mut [ContactState]),
-    (acts, forces, j_slot, j_side): (&mut [bool], &mut [RowForce], &[u32], &JSide),
-    books: &mut Vec<(u32, ContactResult)>,
+    (acts, forces): (&mut [bool], &mut [PairForce]),
+    (limits, books): (&Limits, &mut BlockBooks),
     dt: f64,
 ) {
     books.clear();
     let slots = gaps.iter_mut().zip(states);
-    let outs = acts.iter_mut().zip(forces).zip(j_slot);
-    for (m, ((&(i, j), (gap, st)), ((act, f), &js))) in
-        pairs.iter().zip(slots).zip(outs).enumerate()
-    {
+    let outs = acts.iter_mut().zip(forces);
+    for ((&(i, j), (gap, st)), (act, f)) in pairs.iter().zip(slots).zip(outs) {
         let out = pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, gap, st);
-        let js = js as usize;
         *act = out.is_some();
-        j_side.acts[js].store(*act, Ordering::Relaxed);
         if let Some(out) = out {
-            *f = RowForce {
+            if !books.add(limits, ContactAt::Pair(i as usize, j as usize), &out, dt) {
+                return;
+            }
+            *f = PairForce {
                 force_i: out.force_i,
                 torque_i: out.torque_i,
+                torque_j: out.torque_j,
             };
-            JSide::store(&j_side.force_i[js], out.force_i);
-            if F {
-                JSide::store(&j_side.torque_j[js], out.torque_j);
-            }
-            books.push(((start + m) as u32, out));
         }
     }
 }
@@ -1378,26 +1371,27 @@ fn gather_block<const F: bool>(
     force: &mut [DVec3],
     torque: &mut [DVec3],
 ) {
-    let js = &slots.j_side;
     for (m, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
         let p = start + m;
         let (mut fa, mut ta) = (*f, *t);
         // Pairs (i, p), i < p, come first in pair order: the j side.
-        for s in list.j_side(p) {
-            if !js.acts[s].load(Ordering::Relaxed) {
+        for &k in list.j_side_pairs(p) {
+            let k = k as usize;
+            if !slots.acts[k] {
                 continue;
             }
-            fa -= JSide::load(&js.force_i[s]);
+            let c = &slots.force[k];
+            fa -= c.force_i;
             if F {
-                ta += JSide::load(&js.torque_j[s]);
+                ta += c.torque_j;
             }
         }
         // Then pairs (p, j): the row.
         for k in list.row(p) {
-            if !slots.row_acts[k] {
+            if !slots.acts[k] {
                 continue;
             }
-            let c = &slots.row_force[k];
+            let c = &slots.force[k];
             fa += c.force_i;
             if F {
                 ta += c.torque_i;
