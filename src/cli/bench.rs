@@ -15,8 +15,16 @@
 //! fastest runs (the least disturbed) and as the median of the paired
 //! ratios. Each row also gives the rate per CPU second the process used
 //! (user + system), which falls much less with the load than the wall rate.
+//!
+//! What one bed on all cores can reach depends on the host as much as on
+//! vlab: a virtual machine's cores may share a physical core, caches and
+//! memory bandwidth. With more than one core, each bed is therefore also run
+//! as independent 1-thread copies at once, one per core, work that shares
+//! nothing: their rate over one copy's is the speed-up the host gives, and
+//! the all-threads step is reported against it as well.
 
 use std::path::PathBuf;
+use std::sync::Barrier;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -91,6 +99,9 @@ struct BenchRow {
     /// Whether the step ran on all the threads (a small bed stays on one core
     /// whatever the pool: see `vlab::dem::AUTO_PARALLEL_MIN_PAIRS`).
     split_across_threads: bool,
+    /// Independent copies of the work run at once, each on its own thread
+    /// (1 but for the host reference; see [`independent_copies`]).
+    copies: usize,
     particles: usize,
     /// Steps timed per run.
     steps: u64,
@@ -98,7 +109,8 @@ struct BenchRow {
     /// Median and fastest wall time of a run (s).
     wall_s: f64,
     fastest_wall_s: f64,
-    /// Particle-steps per wall second: median run and fastest run.
+    /// Particle-steps per wall second (of all copies): median run and
+    /// fastest run.
     particle_steps_per_s: f64,
     fastest_particle_steps_per_s: f64,
     /// CPU seconds (user + system) of the median run.
@@ -107,6 +119,9 @@ struct BenchRow {
     particle_steps_per_cpu_s: f64,
     /// Wall time of each run (s), in the order they ran.
     run_wall_s: Vec<f64>,
+    /// Particle-steps of each run (all copies).
+    #[serde(skip)]
+    work: f64,
 }
 
 /// One timed run: wall and CPU seconds.
@@ -125,7 +140,20 @@ impl BenchRow {
         steps: u64,
         runs: &[Run],
     ) -> Self {
-        let work = (particles as u64 * steps) as f64;
+        Self::copies(case, threads, split, 1, particles, steps, runs)
+    }
+
+    /// A row of `copies` independent runs of the same work at once.
+    fn copies(
+        case: &str,
+        threads: usize,
+        split: bool,
+        copies: usize,
+        particles: usize,
+        steps: u64,
+        runs: &[Run],
+    ) -> Self {
+        let work = (copies as u64 * particles as u64 * steps) as f64;
         let walls: Vec<f64> = runs.iter().map(|r| r.wall_s).collect();
         let cpu_rates: Vec<f64> = runs.iter().map(|r| work / r.cpu_s).collect();
         let wall_s = median(&walls);
@@ -135,6 +163,7 @@ impl BenchRow {
             case: case.into(),
             threads,
             split_across_threads: split,
+            copies,
             particles,
             steps,
             runs: runs.len(),
@@ -145,16 +174,23 @@ impl BenchRow {
             cpu_s: median(&cpus),
             particle_steps_per_cpu_s: median(&cpu_rates),
             run_wall_s: walls,
+            work,
         }
+    }
+
+    /// Particle-steps per wall second of each run.
+    fn run_rates(&self) -> impl Iterator<Item = f64> + '_ {
+        self.run_wall_s.iter().map(|w| self.work / w)
     }
 }
 
-/// How much faster one configuration ran than another of the same work.
+/// How much faster one configuration ran than another, in particle-steps
+/// per second.
 #[derive(Debug, Serialize)]
 struct Speedup {
     what: String,
     particles: usize,
-    /// Fastest run of the base over fastest run of the other.
+    /// Rate of the other's fastest run over the base's fastest.
     fastest: f64,
     /// Median over the repeats of the paired ratios (run k against run k).
     median_paired: f64,
@@ -163,15 +199,14 @@ struct Speedup {
 impl Speedup {
     fn between(what: String, base: &BenchRow, other: &BenchRow) -> Self {
         let paired: Vec<f64> = base
-            .run_wall_s
-            .iter()
-            .zip(&other.run_wall_s)
-            .map(|(b, o)| b / o)
+            .run_rates()
+            .zip(other.run_rates())
+            .map(|(b, o)| o / b)
             .collect();
         Speedup {
             what,
             particles: base.particles,
-            fastest: base.fastest_wall_s / other.fastest_wall_s,
+            fastest: other.fastest_particle_steps_per_s / base.fastest_particle_steps_per_s,
             median_paired: median(&paired),
         }
     }
@@ -264,6 +299,7 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
             "case []",
             "threads []",
             "split_across_threads []",
+            "copies []",
             "particles []",
             "steps []",
             "runs []",
@@ -279,6 +315,7 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
                 r.case.clone(),
                 r.threads.to_string(),
                 r.split_across_threads.to_string(),
+                r.copies.to_string(),
                 r.particles.to_string(),
                 r.steps.to_string(),
                 r.runs.to_string(),
@@ -308,6 +345,7 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
     );
     for r in &report.rows {
         let how = match (r.threads, r.split_across_threads) {
+            _ if r.copies > 1 => format!("{} x 1 thread", r.copies),
             (1, _) => "1 thread ".to_string(),
             (t, true) => format!("{t} threads"),
             (t, false) => format!("{t} threads (step stays on one: few pairs)"),
@@ -351,6 +389,7 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
     for base in rows.iter().filter(|r| r.threads == 1) {
         for other in rows.iter().filter(|r| {
             r.threads > 1
+                && r.copies == 1
                 && r.case == base.case
                 && r.particles == base.particles
                 && r.split_across_threads
@@ -360,6 +399,34 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
                 base,
                 other,
             ));
+        }
+        for host in rows
+            .iter()
+            .filter(|r| r.copies > 1 && r.particles == base.particles && r.case == HOST_COPIES)
+        {
+            out.push(Speedup::between(
+                format!(
+                    "what the host gives work that shares nothing: {} 1-thread copies at once over 1",
+                    host.copies
+                ),
+                base,
+                host,
+            ));
+            for split in rows.iter().filter(|r| {
+                r.case == BED_STEPS
+                    && r.particles == base.particles
+                    && r.threads == host.copies
+                    && r.split_across_threads
+            }) {
+                out.push(Speedup::between(
+                    format!(
+                        "{} threads on one bed against {} copies at once (1 = all the host gives)",
+                        split.threads, host.copies
+                    ),
+                    host,
+                    split,
+                ));
+            }
         }
     }
     let one = |case: &str| rows.iter().find(|r| r.threads == 1 && r.case == case);
@@ -373,6 +440,8 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
     out
 }
 
+const BED_STEPS: &str = "lattice bed, mu 0.52: steps";
+const HOST_COPIES: &str = "lattice bed, mu 0.52: copies at once";
 const THESIS_DRIVE: &str = "thesis: drive 40 Hz Gamma 20";
 const FRICTIONLESS_DRIVE: &str = "thesis frictionless: drive 40 Hz Gamma 20";
 
@@ -456,34 +525,32 @@ fn drive_once(
 
 /// A lattice bed of `n` spheres: `--bed-steps` steps on each thread count,
 /// `--repeats` times, each run from a new bed after 20 steps that let the
-/// lists and buffers grow.
+/// lists and buffers grow. With more than one core, each repeat also runs
+/// as many independent 1-thread copies at once as there are cores: what the
+/// host gives to work that shares nothing, the ceiling of the speed-up of
+/// one bed over all cores on a machine that shares its cores.
 fn bed_rows(n: usize, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow>) -> Result<()> {
     let pools = configs
         .iter()
         .map(|&t| single_pool(t))
         .collect::<Result<Vec<_>>>()?;
+    let copies = configs.last().copied().unwrap_or(1);
     let mut runs = vec![Vec::new(); configs.len()];
     let mut split = vec![false; configs.len()];
+    let mut host = Vec::new();
     for _ in 0..a.repeats {
         for (k, pool) in pools.iter().enumerate() {
-            let (run, sp) = pool.install(|| -> Result<(Run, bool)> {
-                let mut world = lattice_bed(n, 0.52, 1).context("building the lattice bed")?;
-                for _ in 0..20 {
-                    world.step(0.0)?;
-                }
-                let clock = Clock::start();
-                for _ in 0..a.bed_steps {
-                    world.step(0.0)?;
-                }
-                Ok((clock.stop(), world.splits_across_threads()))
-            })?;
+            let (run, sp) = pool.install(|| bed_run(n, a.bed_steps))?;
             runs[k].push(run);
             split[k] = sp;
+        }
+        if copies > 1 {
+            host.push(independent_copies(n, a.bed_steps, copies)?);
         }
     }
     for (k, &threads) in configs.iter().enumerate() {
         rows.push(BenchRow::new(
-            "lattice bed, mu 0.52: steps",
+            BED_STEPS,
             threads,
             split[k],
             n,
@@ -491,7 +558,78 @@ fn bed_rows(n: usize, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow>
             &runs[k],
         ));
     }
+    if !host.is_empty() {
+        rows.push(BenchRow::copies(
+            HOST_COPIES,
+            copies,
+            false,
+            copies,
+            n,
+            u64::from(a.bed_steps),
+            &host,
+        ));
+    }
     Ok(())
+}
+
+/// A new lattice bed of `n` spheres after 20 untimed steps that let its
+/// lists and buffers grow.
+fn warm_bed(n: usize) -> Result<World> {
+    let mut world = lattice_bed(n, 0.52, 1).context("building the lattice bed")?;
+    for _ in 0..20 {
+        world.step(0.0)?;
+    }
+    Ok(world)
+}
+
+/// One timed run of `steps` steps of a new lattice bed of `n` spheres on
+/// the current pool: the run, and whether its steps ran on all threads.
+fn bed_run(n: usize, steps: u32) -> Result<(Run, bool)> {
+    let mut world = warm_bed(n)?;
+    let clock = Clock::start();
+    for _ in 0..steps {
+        world.step(0.0)?;
+    }
+    Ok((clock.stop(), world.splits_across_threads()))
+}
+
+/// `copies` beds of `n` spheres stepped at once, each on its own 1-thread
+/// pool: the wall time from the common start to the last one's end, and the
+/// process' CPU time over it. The beds are built before any thread starts,
+/// so that every thread reaches the start.
+fn independent_copies(n: usize, steps: u32, copies: usize) -> Result<Run> {
+    let worlds = (0..copies)
+        .map(|_| warm_bed(n))
+        .collect::<Result<Vec<_>>>()?;
+    let pools = (0..copies)
+        .map(|_| single_pool(1))
+        .collect::<Result<Vec<_>>>()?;
+    let start = Barrier::new(copies + 1);
+    std::thread::scope(|s| {
+        let handles: Vec<_> = worlds
+            .into_iter()
+            .zip(&pools)
+            .map(|(mut world, pool)| {
+                let start = &start;
+                s.spawn(move || {
+                    start.wait();
+                    pool.install(|| -> Result<()> {
+                        for _ in 0..steps {
+                            world.step(0.0)?;
+                        }
+                        Ok(())
+                    })
+                })
+            })
+            .collect();
+        start.wait();
+        let clock = Clock::start();
+        for h in handles {
+            h.join()
+                .map_err(|_| anyhow::anyhow!("a bench thread panicked"))??;
+        }
+        Ok(clock.stop())
+    })
 }
 
 fn single_pool(threads: usize) -> Result<rayon::ThreadPool> {
