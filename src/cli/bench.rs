@@ -64,9 +64,13 @@ pub struct BenchArgs {
     #[arg(long, default_value = "300")]
     bed_steps: u32,
     /// Leave out the thesis scene (and Yang's method): time the beds only,
-    /// e.g. to read one bed's peak memory.
+    /// e.g. to read one bed's peak memory (with --no-copies).
     #[arg(long)]
     beds_only: bool,
+    /// Leave out the independent 1-thread copies of each bed (the host's
+    /// reference), which hold one bed per core in memory at once.
+    #[arg(long)]
+    no_copies: bool,
 }
 
 /// The lattice beds asked for (sphere counts).
@@ -115,8 +119,9 @@ struct BenchRow {
     fastest_particle_steps_per_s: f64,
     /// CPU seconds (user + system) of the median run.
     cpu_s: f64,
-    /// Particle-steps per CPU second, median over the runs.
-    particle_steps_per_cpu_s: f64,
+    /// Particle-steps per CPU second, median over the runs whose CPU time
+    /// was measurable (the clock counts in 10 ms ticks); none if no run's was.
+    particle_steps_per_cpu_s: Option<f64>,
     /// Wall time of each run (s), in the order they ran.
     run_wall_s: Vec<f64>,
     /// Particle-steps of each run (all copies).
@@ -155,7 +160,11 @@ impl BenchRow {
     ) -> Self {
         let work = (copies as u64 * particles as u64 * steps) as f64;
         let walls: Vec<f64> = runs.iter().map(|r| r.wall_s).collect();
-        let cpu_rates: Vec<f64> = runs.iter().map(|r| work / r.cpu_s).collect();
+        let cpu_rates: Vec<f64> = runs
+            .iter()
+            .filter(|r| r.cpu_s > 0.0)
+            .map(|r| work / r.cpu_s)
+            .collect();
         let wall_s = median(&walls);
         let fastest_wall_s = walls.iter().copied().fold(f64::INFINITY, f64::min);
         let cpus: Vec<f64> = runs.iter().map(|r| r.cpu_s).collect();
@@ -172,7 +181,7 @@ impl BenchRow {
             particle_steps_per_s: work / wall_s,
             fastest_particle_steps_per_s: work / fastest_wall_s,
             cpu_s: median(&cpus),
-            particle_steps_per_cpu_s: median(&cpu_rates),
+            particle_steps_per_cpu_s: (!cpu_rates.is_empty()).then(|| median(&cpu_rates)),
             run_wall_s: walls,
             work,
         }
@@ -324,7 +333,8 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
                 r.particle_steps_per_s.to_string(),
                 r.fastest_particle_steps_per_s.to_string(),
                 r.cpu_s.to_string(),
-                r.particle_steps_per_cpu_s.to_string(),
+                r.particle_steps_per_cpu_s
+                    .map_or(String::new(), |x| x.to_string()),
             ])?;
         }
         out.flush()?;
@@ -350,14 +360,19 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
             (t, true) => format!("{t} threads"),
             (t, false) => format!("{t} threads (step stays on one: few pairs)"),
         };
+        let per_cpu = r
+            .particle_steps_per_cpu_s
+            .map_or("CPU time below the clock's 10 ms".into(), |x| {
+                format!("{:6.2} M per CPU s", x / 1e6)
+            });
         println!(
-            "  {:44} {:6} particles {:10} {:6.2} M particle-steps/s, fastest {:6.2} M ({:6.2} M per CPU s; {} steps, {:.2} s)",
+            "  {:44} {:6} particles {:10} {:6.2} M particle-steps/s, fastest {:6.2} M ({}; {} steps, {:.2} s)",
             r.case,
             r.particles,
             how,
             r.particle_steps_per_s / 1e6,
             r.fastest_particle_steps_per_s / 1e6,
-            r.particle_steps_per_cpu_s / 1e6,
+            per_cpu,
             r.steps,
             r.wall_s
         );
@@ -534,7 +549,10 @@ fn bed_rows(n: usize, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow>
         .iter()
         .map(|&t| single_pool(t))
         .collect::<Result<Vec<_>>>()?;
-    let copies = configs.last().copied().unwrap_or(1);
+    let copies = match a.no_copies {
+        true => 1,
+        false => configs.last().copied().unwrap_or(1),
+    };
     let mut runs = vec![Vec::new(); configs.len()];
     let mut split = vec![false; configs.len()];
     let mut host = Vec::new();
