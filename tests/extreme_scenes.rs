@@ -15,7 +15,7 @@ use std::sync::OnceLock;
 
 use vlab::dem::World;
 use vlab::rig::SineMotion;
-use vlab::scene::damper::{DriveLength, DriveOutcome, DrivePlan, NoObserver, run_drive};
+use vlab::scene::damper::{DriveLength, DriveOutcome, DrivePlan, NoObserver, Progress, run_drive};
 use vlab::scene::file::{Scene, SceneError};
 use vlab::scene::settle::{SettledBed, prepare_drive, settle_bed};
 
@@ -49,6 +49,17 @@ fn drive(
     cycles: u32,
     steady: u32,
 ) -> Result<(World, DriveOutcome), SceneError> {
+    drive_reporting(bed, scene, (freq_hz, gamma), (cycles, steady), &mut |_| {})
+}
+
+/// [`drive`], telling `progress` how far it is.
+fn drive_reporting(
+    bed: &SettledBed,
+    scene: &Scene,
+    (freq_hz, gamma): (f64, f64),
+    (cycles, steady): (u32, u32),
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(World, DriveOutcome), SceneError> {
     let g = scene.simulation.gravity_mps2;
     let dt = scene.drive_dt_s(freq_hz, gamma);
     let mut world = prepare_drive(bed, scene, dt)?;
@@ -62,7 +73,7 @@ fn drive(
         },
     };
     let mut motion = SineMotion::new(freq_hz, gamma, g);
-    let out = run_drive(&mut world, &plan, &mut motion, &mut NoObserver, &mut |_| {})?;
+    let out = run_drive(&mut world, &plan, &mut motion, &mut NoObserver, progress)?;
     Ok((world, out))
 }
 
@@ -238,12 +249,52 @@ fn fill_060_is_refused_with_the_numbers() {
     }
 }
 
-/// About 45 000 spheres of 1 mm at the thesis fill.
+/// Prints each whole 5 % of a phase on stderr (`--nocapture` shows it): a
+/// test that runs for most of an hour says how far it is.
+fn every_five_percent(what: &'static str) -> impl FnMut(Progress) {
+    let mut shown = (None, -1i64);
+    move |p: Progress| {
+        let step = (p.fraction * 20.0).floor() as i64;
+        if shown != (Some(p.phase), step) {
+            shown = (Some(p.phase), step);
+            eprintln!(
+                "{what}: {} {:3} %, {:.4} s simulated, {:.0} s wall, {:.1} M particle-steps/s",
+                p.phase,
+                step * 5,
+                p.sim_time_s,
+                p.wall_time_s,
+                p.particle_steps as f64 / p.wall_time_s.max(1e-9) / 1e6
+            );
+        }
+    }
+}
+
+/// About 45 000 spheres of 1 mm at the thesis fill, 3 cycles at 40 Hz, Γ 20.
 #[test]
-#[ignore = "long: tens of minutes on 2 cores"]
+#[ignore = "long: most of an hour on 2 cores"]
 fn one_millimetre_spheres() {
     let s = scene("[particles]\ncount = 44740\ndiameter_m = 0.001\n");
-    let bed = settle_bed(&s, &mut |_| {}).expect("settles");
-    let (world, out) = drive(&bed, &s, 40.0, 20.0, 3, 2).expect("completes");
+    let bed = settle_bed(&s, &mut every_five_percent("1 mm")).expect("settles");
+    eprintln!(
+        "1 mm: settled in {} steps, {:.0} s wall",
+        bed.settle_steps, bed.wall_time_s
+    );
+    let (world, out) = drive_reporting(
+        &bed,
+        &s,
+        (40.0, 20.0),
+        (3, 2),
+        &mut every_five_percent("1 mm"),
+    )
+    .expect("completes");
+    eprintln!(
+        "1 mm: drive {} steps; efficiency {:.3} +- {:.3}; ledger residual {:.1e}, integration error {:.1e}, fewest steps per collision {:.1}",
+        out.steps,
+        out.efficiency,
+        out.efficiency_stderr,
+        out.whole.residual_relative(),
+        out.whole.integrator_relative(),
+        out.fewest_steps_per_contact
+    );
     assert_sound("1 mm", &world, &out);
 }
