@@ -250,7 +250,7 @@ fn fill_060_is_refused_with_the_numbers() {
 }
 
 /// Prints each whole 5 % of a phase on stderr (`--nocapture` shows it): a
-/// test that runs for most of an hour says how far it is.
+/// test that runs for more than an hour says how far it is.
 fn every_five_percent(what: &'static str) -> impl FnMut(Progress) {
     let mut shown = (None, -1i64);
     move |p: Progress| {
@@ -271,7 +271,7 @@ fn every_five_percent(what: &'static str) -> impl FnMut(Progress) {
 
 /// About 45 000 spheres of 1 mm at the thesis fill, 3 cycles at 40 Hz, Γ 20.
 #[test]
-#[ignore = "long: most of an hour on 2 cores"]
+#[ignore = "long: about an hour and a half on 2 cores"]
 fn one_millimetre_spheres() {
     let s = scene("[particles]\ncount = 44740\ndiameter_m = 0.001\n");
     let bed = settle_bed(&s, &mut every_five_percent("1 mm")).expect("settles");
