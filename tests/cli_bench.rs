@@ -8,6 +8,34 @@ mod common;
 
 use common::{Scratch, refuses_in, stderr, vlab};
 
+/// Runs `vlab --quiet bench --beds-only --json` on one bed of `spheres`,
+/// `steps` steps, `repeats` runs, with `extra` arguments, in `dir`; the
+/// report as JSON.
+fn bench_beds_only(
+    dir: &Scratch,
+    spheres: &str,
+    steps: &str,
+    repeats: &str,
+    extra: &[&str],
+) -> serde_json::Value {
+    let mut args = vec![
+        "--quiet",
+        "bench",
+        "--beds-only",
+        "--json",
+        "--beds",
+        spheres,
+        "--bed-steps",
+        steps,
+        "--repeats",
+        repeats,
+    ];
+    args.extend_from_slice(extra);
+    let out = vlab(&dir.0, &args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    serde_json::from_slice(&out.stdout).expect("bench --json prints JSON")
+}
+
 /// A bed of 4000 spheres (enough pairs for its step to split across
 /// threads), timed twice: every row has the runs asked for and finite,
 /// positive rates; with more than one core the bed also ran as independent
@@ -15,24 +43,7 @@ use common::{Scratch, refuses_in, stderr, vlab};
 #[test]
 fn bench_of_a_small_bed_reports_its_rows_and_speed_ups() {
     let dir = Scratch::new("bench");
-    let out = vlab(
-        &dir.0,
-        &[
-            "--quiet",
-            "bench",
-            "--beds-only",
-            "--beds",
-            "4000",
-            "--bed-steps",
-            "3",
-            "--repeats",
-            "2",
-            "--json",
-        ],
-    );
-    assert!(out.status.success(), "{}", stderr(&out));
-    let report: serde_json::Value =
-        serde_json::from_slice(&out.stdout).expect("bench --json prints JSON");
+    let report = bench_beds_only(&dir, "4000", "3", "2", &[]);
     let rows = report["rows"].as_array().expect("rows");
     let cores = report["cores"].as_u64().expect("cores");
     // 1 thread, and with more cores: all threads and the host's copies.
@@ -84,26 +95,13 @@ fn bench_of_a_small_bed_reports_its_rows_and_speed_ups() {
 #[test]
 fn bench_options_are_checked() {
     let dir = Scratch::new("bench-opts");
-    let out = vlab(
-        &dir.0,
-        &[
-            "--quiet",
-            "bench",
-            "--beds-only",
-            "--beds",
-            "300",
-            "--bed-steps",
-            "2",
-            "--repeats",
-            "1",
-            "--no-copies",
-            "--json",
-            "--out",
-            "bench.csv",
-        ],
+    let report = bench_beds_only(
+        &dir,
+        "300",
+        "2",
+        "1",
+        &["--no-copies", "--out", "bench.csv"],
     );
-    assert!(out.status.success(), "{}", stderr(&out));
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     let rows = report["rows"].as_array().expect("rows");
     assert!(rows.iter().all(|r| r["copies"] == 1), "{report:#}");
     // The CSV has a row per configuration; a rate per CPU second is a
