@@ -8,7 +8,7 @@
 //!
 //! Run with `cargo run --release --example drop_sampling` (about 8 s).
 
-use vlab::scene::drop::{DropParticle, DropSetup, run_drop};
+use vlab::experiment::drop::{DropParticle, DropSetup, run_drop};
 use vlab::signals::ImpactParams;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -7,9 +7,9 @@
 //! cargo run --release --example shake_through_ideal_rig
 //! ```
 
-use vlab::scene::file::{Scene, SceneError};
-use vlab::scene::measurement::{CalibrationSource, ShakeSetup};
-use vlab::scene::shake::{resolve_rig, run_shake};
+use vlab::experiment::measurement::{CalibrationSource, ShakeSetup};
+use vlab::experiment::shake::{resolve_rig, run_shake};
+use vlab::scene::{Scene, SceneError};
 
 fn main() -> Result<(), SceneError> {
     let scene = Scene::merge_over_preset(

@@ -17,9 +17,12 @@
 
 pub mod atomic_write;
 pub mod dem;
+pub mod experiment;
+pub mod export;
 pub mod rig;
 pub mod scene;
 pub mod signals;
 pub mod stats;
+pub mod study;
 pub mod validation;
 pub mod warning;

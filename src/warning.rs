@@ -3,7 +3,7 @@
 //! A [`Warning`] is its text, in the library's words (naming keys and
 //! parameters, never command-line flags), and optionally the input `A` that
 //! would lift it (a domain's own enum, such as
-//! [`crate::scene::replay::ReplayOption`]); the `vlab` binary turns that into
+//! [`crate::experiment::replay::ReplayOption`]); the `vlab` binary turns that into
 //! the flag that gives it. Written out (`summary.json`, `--json`) a warning is
 //! its text alone.
 

@@ -1,7 +1,7 @@
 //! Single-contact physics against analytical answers (thesis Chapter 5).
 
 use vlab::dem::{Material, RestitutionMode};
-use vlab::scene::impact::{ImpactSetup, Target, run_impact};
+use vlab::experiment::impact::{ImpactSetup, Target, run_impact};
 
 fn setup(material: Material, target: Target, speed: f64, e: f64) -> ImpactSetup {
     ImpactSetup {

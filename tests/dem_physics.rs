@@ -4,9 +4,9 @@ use glam::DVec3;
 use vlab::dem::{
     ContactLaw, DemError, Material, Numerics, Particles, RestitutionMode, Walls, World,
 };
-use vlab::scene::damper::gravity_vector;
-use vlab::scene::file::Orientation;
-use vlab::scene::fill::{SceneRng, insert_in_cylinder};
+use vlab::experiment::damper::gravity_vector;
+use vlab::experiment::fill::{SceneRng, insert_in_cylinder};
+use vlab::scene::Orientation;
 
 const R: f64 = 0.0025;
 
@@ -163,7 +163,7 @@ fn energy_check_catches_what_slips_past_the_onset_check() {
 /// within a step.
 #[test]
 fn integrator_error_is_booked_and_second_order() {
-    use vlab::scene::impact::{ImpactSetup, Target, run_impact};
+    use vlab::experiment::impact::{ImpactSetup, Target, run_impact};
     let setup = |steps: f64| {
         let mut s = ImpactSetup {
             material: Material::ACRYLIC,

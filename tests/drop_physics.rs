@@ -30,7 +30,7 @@
 
 use std::sync::OnceLock;
 
-use vlab::scene::drop::{DropEstimate, DropOutcome, DropParticle, DropSetup, run_drop};
+use vlab::experiment::drop::{DropEstimate, DropOutcome, DropParticle, DropSetup, run_drop};
 use vlab::signals::ImpactParams;
 
 const HEIGHTS_M: [f64; 4] = [0.005, 0.01, 0.02, 0.05];

@@ -14,10 +14,11 @@
 use std::sync::OnceLock;
 
 use vlab::dem::World;
+use vlab::experiment::damper::{DriveOutcome, DrivePlan, NoObserver, Progress, run_drive};
+use vlab::experiment::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::rig::SineMotion;
-use vlab::scene::damper::{DriveLength, DriveOutcome, DrivePlan, NoObserver, Progress, run_drive};
-use vlab::scene::file::{Scene, SceneError};
-use vlab::scene::settle::{SettledBed, prepare_drive, settle_bed};
+use vlab::scene::DriveLength;
+use vlab::scene::{Scene, SceneError};
 
 /// The thesis scene with `text` laid over it.
 fn scene(text: &str) -> Scene {

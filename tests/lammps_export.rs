@@ -22,12 +22,12 @@ use std::process::Command;
 use common::{Scratch, json, stderr, vlab};
 use vlab::dem::restitution::exact_damping_factor;
 use vlab::dem::{Material, RestitutionMode};
+use vlab::experiment::measurement::{CalibrationSource, ShakeSetup, run_measured_shake};
+use vlab::experiment::replay::{ColumnMap, ReplayOptions, read_enclosure_record, replay_record};
+use vlab::experiment::settle::{prepare_drive, settle_bed};
+use vlab::export::lammps_deck::{LammpsExport, RECORD_FILE, lammps_deck, tsuji_restitution_for};
 use vlab::rig::{RigFile, RigSpec, ShakerKind};
-use vlab::scene::file::{Scene, material_preset};
-use vlab::scene::lammps::{LammpsExport, RECORD_FILE, lammps_deck, tsuji_restitution_for};
-use vlab::scene::measurement::{CalibrationSource, ShakeSetup, run_measured_shake};
-use vlab::scene::replay::{ColumnMap, ReplayOptions, read_enclosure_record, replay_record};
-use vlab::scene::settle::{prepare_drive, settle_bed};
+use vlab::scene::{Scene, material_preset};
 
 /// Why the LAMMPS tests are ignored unless asked for.
 const NEEDS_LMP: &str = "needs lmp (Debian package lammps) on the PATH";

@@ -19,8 +19,8 @@
 
 use std::path::Path;
 
-use vlab::scene::file::Scene;
-use vlab::scene::sweep::{RowStatus, Shard, SweepFile, SweepPlan, run_sweep};
+use vlab::scene::Scene;
+use vlab::study::sweep::{RowStatus, Shard, SweepFile, SweepPlan, run_sweep};
 
 const GAMMAS_40: [f64; 8] = [1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 20.0, 30.0];
 const GAMMAS_20: [f64; 5] = [2.0, 3.0, 5.0, 8.0, 12.0];
@@ -106,12 +106,12 @@ fn the_thesis_damper_has_its_efficiency_peaks_where_the_thesis_has_them() {
         seeds: vec![1],
         fill_ratios: vec![],
         orientations: vec![],
-        beds: vlab::scene::bed_cache::BedSource::Settle,
+        beds: vlab::experiment::bed_cache::BedSource::Settle,
     };
     let dir = std::env::temp_dir().join(format!("vlab-maps-thesis-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch folder");
     let file = run_sweep(&plan, Shard::ALL, &dir, false, &|e| {
-        if let vlab::scene::sweep::SweepEvent::ConditionDone {
+        if let vlab::study::sweep::SweepEvent::ConditionDone {
             row, done, total, ..
         } = e
         {

@@ -4,12 +4,12 @@
 
 use std::sync::OnceLock;
 
-use vlab::rig::{ACCEL_CHANNEL, RigFile, RigSpec, ShakerKind};
-use vlab::scene::file::{CyclesSpec, Scene};
-use vlab::scene::measurement::{
+use vlab::experiment::measurement::{
     CalibrationSource, ShakeExperiment, ShakeSetup, analyse, run_measured_shake,
 };
-use vlab::scene::settle::{SettledBed, prepare_drive, settle_bed};
+use vlab::experiment::settle::{SettledBed, prepare_drive, settle_bed};
+use vlab::rig::{ACCEL_CHANNEL, RigFile, RigSpec, ShakerKind};
+use vlab::scene::{CyclesSpec, Scene};
 use vlab::signals::{PhaseCorrection, read_csv, write_csv};
 
 fn bed() -> &'static (Scene, SettledBed) {

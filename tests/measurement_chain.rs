@@ -12,8 +12,8 @@ use std::path::Path;
 
 use common::{Scratch, stderr, vlab};
 use realfft::num_complex::Complex64;
+use vlab::experiment::measurement::{calibrate_rig, calibration_freqs_hz};
 use vlab::rig::{RigFile, RigSpec, ShakerKind};
-use vlab::scene::measurement::{calibrate_rig, calibration_freqs_hz};
 use vlab::signals::{
     ForcePolarity, PhaseCalibration, PhaseCorrection, PowerOptions, PowerResult, read_csv,
     write_csv, yang_power,

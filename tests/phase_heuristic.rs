@@ -9,8 +9,8 @@
 
 use std::path::Path;
 
-use vlab::scene::phases::{MotionalPhase, PhaseThresholds};
-use vlab::scene::sweep::{RowStatus, SweepFile, SweepRow};
+use vlab::study::phases::{MotionalPhase, PhaseThresholds};
+use vlab::study::sweep::{RowStatus, SweepFile, SweepRow};
 
 fn reference() -> SweepFile {
     let path =

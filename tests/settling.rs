@@ -2,8 +2,8 @@
 //! settling law, so that its packing does not depend on the contacts under
 //! test, and the test contacts then hold it.
 
-use vlab::scene::file::Scene;
-use vlab::scene::settle::{packing, prepare_drive, settle_bed};
+use vlab::experiment::settle::{packing, prepare_drive, settle_bed};
+use vlab::scene::Scene;
 
 fn scene_with_contacts(restitution: f64, friction: f64) -> Scene {
     let text = format!(

@@ -1,7 +1,7 @@
 //! `vlab accuracy`: error against wall-clock time for the DEM (time step,
 //! cycles, seeds), a single collision (steps per contact) and Yang's method
 //! (record length, noise, ADC bits, residual phase error). The work is
-//! [`vlab::scene::accuracy`]'s; this is its command line.
+//! [`vlab::study::accuracy`]'s; this is its command line.
 
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -11,10 +11,10 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
+use vlab::experiment::shake::{check_drive, resolve_rig};
 use vlab::rig::ShakerKind;
-use vlab::scene::accuracy::{AccuracyEvent, AccuracyPlan, AccuracyReport, run_accuracy};
-use vlab::scene::file::Scene;
-use vlab::scene::shake::{check_drive, resolve_rig};
+use vlab::scene::Scene;
+use vlab::study::accuracy::{AccuracyEvent, AccuracyPlan, AccuracyReport, run_accuracy};
 
 use super::args;
 

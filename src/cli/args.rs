@@ -16,8 +16,8 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::Args;
 use clap::error::{ContextKind, ContextValue, ErrorKind};
-use vlab::scene::file::{Orientation, Scene, SceneOverrides};
-use vlab::scene::measurement::CalibrationSource;
+use vlab::experiment::measurement::CalibrationSource;
+use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::signals::PhaseCalibration;
 use vlab::validation::{Bound, InvalidParameter, in_range};
 

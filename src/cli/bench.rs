@@ -34,10 +34,11 @@ use serde::Serialize;
 use vlab::atomic_write::write_atomic;
 use vlab::dem::World;
 use vlab::dem::testbed::lattice_bed;
+use vlab::experiment::damper::{DrivePlan, NoObserver, run_drive};
+use vlab::experiment::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::rig::SineMotion;
-use vlab::scene::damper::{DriveLength, DrivePlan, NoObserver, run_drive};
-use vlab::scene::file::Scene;
-use vlab::scene::settle::{SettledBed, prepare_drive, settle_bed};
+use vlab::scene::DriveLength;
+use vlab::scene::Scene;
 use vlab::signals::bench_yang_power;
 
 use super::progress::ProgressLine;

@@ -10,10 +10,10 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::Serialize;
 
+use vlab::experiment::measurement::calibrate_rig;
+use vlab::experiment::shake::resolve_rig;
 use vlab::rig::ShakerKind;
-use vlab::scene::file::Scene;
-use vlab::scene::measurement::calibrate_rig;
-use vlab::scene::shake::resolve_rig;
+use vlab::scene::Scene;
 
 use super::args;
 

@@ -18,11 +18,11 @@ use clap::{Args, ValueEnum};
 use rayon::prelude::*;
 
 use vlab::atomic_write::{OutputDir, write_atomic, write_bytes_atomic};
-use vlab::rig::{DROP_RIG, DropRigSpec, RigFile};
-use vlab::scene::drop::{
+use vlab::experiment::drop::{
     DROP_FRICTION, DROP_GRAVITY_MPS2, DropEstimate, DropNumerics, DropOutcome, DropParticle,
     DropSetup, DropSummary, millimetres, run_drop, summarise_drops,
 };
+use vlab::rig::{DROP_RIG, DropRigSpec, RigFile};
 use vlab::scene::validity::yield_warning;
 use vlab::signals::{ImpactParams, Series, SeriesStyle, plot_xy_svg, write_csv, write_wav};
 

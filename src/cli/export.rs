@@ -1,6 +1,6 @@
 //! `vlab export lammps`: the damper as a LAMMPS input deck, for beds too big
 //! for one machine or to check vlab against another DEM code. The work is
-//! [`vlab::scene::lammps`]'s; this is its command line.
+//! [`vlab::export::lammps_deck`]'s; this is its command line.
 
 use std::path::PathBuf;
 
@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
 use vlab::atomic_write::OutputDir;
-use vlab::scene::lammps::{
+use vlab::export::lammps_deck::{
     ContactTranslation, DATA_FILE, INPUT_FILE, LammpsExport, RECORD_FILE, lammps_deck,
 };
 

@@ -14,12 +14,12 @@
 
 use std::error::Error;
 
+use vlab::experiment::drop::DropError;
+use vlab::experiment::replay::ReplayOption;
 use vlab::rig::RigError;
-use vlab::scene::drop::DropError;
-use vlab::scene::file::SceneError;
-use vlab::scene::replay::ReplayOption;
-use vlab::scene::sweep::SweepError;
+use vlab::scene::SceneError;
 use vlab::signals::{CsvErrorKind, SignalsError};
+use vlab::study::sweep::SweepError;
 
 /// The flags that take the advice of `err` (of the first cause that gives
 /// advice), if any.

@@ -8,8 +8,8 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use vlab::dem::{Material, RestitutionMode};
-use vlab::scene::file::material_preset;
-use vlab::scene::impact::{ImpactOutcome, ImpactSetup, Target, run_impact};
+use vlab::experiment::impact::{ImpactOutcome, ImpactSetup, Target, run_impact};
+use vlab::scene::material_preset;
 use vlab::signals::{Trace, TraceMetadata, write_csv};
 
 use super::args;
@@ -268,7 +268,7 @@ fn write_trace(path: &std::path::Path, out: &ImpactOutcome, setup: &ImpactSetup)
         rig: "none (DEM contact history)".into(),
         ..Default::default()
     };
-    let column = |f: fn(&vlab::scene::impact::ImpactSample) -> f64| -> Vec<f64> {
+    let column = |f: fn(&vlab::experiment::impact::ImpactSample) -> f64| -> Vec<f64> {
         out.trace.iter().map(f).collect()
     };
     trace.add_channel("overlap", "m", column(|s| s.overlap_m))?;

@@ -8,9 +8,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use vlab::scene::sweep::{SWEEP_MAGIC, SweepFile};
-use vlab::scene::sweep_plot::plot_sweep;
 use vlab::signals::{Series, SeriesStyle, plot_xy_svg, read_trace};
+use vlab::study::sweep::{SWEEP_MAGIC, SweepFile};
+use vlab::study::sweep_plot::plot_sweep;
 
 #[derive(Debug, Clone, Args)]
 pub struct PlotArgs {

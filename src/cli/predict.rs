@@ -1,11 +1,11 @@
 //! `vlab predict`: the bouncing-bed onset amplitude predicted by thesis eq.
-//! 6.11–6.13 ([`vlab::scene::predict`]), with close- and loose-packing
+//! 6.11–6.13 ([`vlab::study::predict`]), with close- and loose-packing
 //! clearances.
 
 use anyhow::Result;
 use clap::Args;
 
-use vlab::scene::predict::{CLOSE_PACKING, LOOSE_PACKING, predict_bouncing_bed};
+use vlab::study::predict::{CLOSE_PACKING, LOOSE_PACKING, predict_bouncing_bed};
 
 use super::args;
 

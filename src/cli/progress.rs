@@ -5,7 +5,7 @@
 use std::io::{IsTerminal, Write};
 use std::time::Instant;
 
-use vlab::scene::damper::Progress;
+use vlab::experiment::damper::Progress;
 
 /// Throttled progress printer.
 pub struct ProgressLine {

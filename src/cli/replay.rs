@@ -1,6 +1,6 @@
 //! `vlab replay`: another DEM code's record of the enclosure's motion and
 //! the particles' force on it, put through vlab's rig and measured as `vlab
-//! shake` measures. The work is [`vlab::scene::replay`]'s; this is its
+//! shake` measures. The work is [`vlab::experiment::replay`]'s; this is its
 //! command line.
 
 use std::path::{Path, PathBuf};
@@ -9,12 +9,12 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
-use vlab::rig::{RigFile, RigSpec};
-use vlab::scene::file::Orientation;
-use vlab::scene::replay::{
+use vlab::experiment::replay::{
     ColumnMap, ReplayOptions, ReplaySummary, Source, default_out_dir, read_enclosure_record,
     replay_record,
 };
+use vlab::rig::{RigFile, RigSpec};
+use vlab::scene::Orientation;
 
 use super::{args, hints};
 

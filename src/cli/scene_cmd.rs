@@ -7,8 +7,8 @@ use anyhow::Result;
 use clap::Args;
 
 use vlab::dem::restitution::realised_restitution;
-use vlab::scene::damper::contact_laws;
-use vlab::scene::file::{
+use vlab::experiment::damper::contact_laws;
+use vlab::scene::{
     CyclesSpec, Scene, THESIS_DAMPER_TOML, THESIS_SCENE_FILE, TimeStepRule, TimeStepSpec,
 };
 
@@ -118,7 +118,7 @@ pub fn run(a: SceneArgs) -> Result<()> {
         ),
     };
     println!(
-        "  run              pour and settle with the settling law (vlab::scene::settle), then drive {drive}; seed {}",
+        "  run              pour and settle with the settling law (vlab::experiment::settle), then drive {drive}; seed {}",
         scene.simulation.seed
     );
     Ok(())

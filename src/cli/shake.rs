@@ -1,6 +1,6 @@
 //! `vlab shake`: drive the damper at one frequency and amplitude through the
 //! rig, measure it, and write what the lab records beside what the simulator
-//! knows. The work is [`vlab::scene::shake`]'s; this is its command line.
+//! knows. The work is [`vlab::experiment::shake`]'s; this is its command line.
 
 use std::path::{Path, PathBuf};
 
@@ -8,15 +8,15 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
-use vlab::rig::ShakerKind;
-use vlab::scene::damper::{Kinematics, NoObserver, StepObserver};
-use vlab::scene::dump::VtkDump;
-use vlab::scene::measurement::ShakeSetup;
-use vlab::scene::shake::{
+use vlab::experiment::damper::{Kinematics, NoObserver, StepObserver};
+use vlab::experiment::measurement::ShakeSetup;
+use vlab::experiment::shake::{
     ShakeSummary, check_drive, check_record_window, default_out_dir, resolve_rig, run_shake_from,
     run_shake_on_bed,
 };
-use vlab::scene::snapshots::PhaseSnapshots;
+use vlab::export::snapshots::PhaseSnapshots;
+use vlab::export::vtk_dump::VtkDump;
+use vlab::rig::ShakerKind;
 
 use super::args;
 use super::cache_cmd::NoCacheArg;

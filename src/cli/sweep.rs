@@ -3,7 +3,7 @@
 //! `vlab shake` runs, in parallel across conditions; `sweep.csv` is kept up to
 //! date after every condition, `--resume` finishes an interrupted sweep,
 //! `--shard I/N` runs a deterministic slice and `vlab sweep merge` joins the
-//! slices. The work is [`vlab::scene::sweep`]'s; this is its command line.
+//! slices. The work is [`vlab::study::sweep`]'s; this is its command line.
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -13,11 +13,11 @@ use clap::{Args, Subcommand};
 
 use vlab::atomic_write::OutputDir;
 use vlab::rig::ShakerKind;
-use vlab::scene::file::{Orientation, Scene, SceneOverrides};
-use vlab::scene::sweep::{
+use vlab::scene::{Orientation, Scene, SceneOverrides};
+use vlab::study::sweep::{
     RowStatus, Shard, SweepEvent, SweepFile, SweepPlan, merge_shards, run_sweep, summarise,
 };
-use vlab::scene::sweep_plot::plot_sweep;
+use vlab::study::sweep_plot::plot_sweep;
 
 use super::args;
 use super::cache_cmd::NoCacheArg;
@@ -339,7 +339,7 @@ fn relabel(r: RelabelArgs) -> Result<()> {
         r.file.clone()
     };
     let mut file = SweepFile::read(&path)?;
-    let changed = file.relabel(&vlab::scene::phases::PhaseThresholds::default());
+    let changed = file.relabel(&vlab::study::phases::PhaseThresholds::default());
     file.write(&path)?;
     let dir = path
         .parent()

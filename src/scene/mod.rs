@@ -1,26 +1,14 @@
-//! Scenes: descriptions that compose the engine into an experiment, building only
-//! what the experiment needs (a single collision has no enclosure; a damper run
-//! has particles, a cylinder and a drive; a drop test has one sphere, a plate and
-//! the drop rig; a replay has a record from another DEM code and the rig).
+//! The scene format: a damper, its particles, contacts, drive and run length, as
+//! a TOML file merged over the built-in thesis preset, validated with units and
+//! ranges before anything runs. Everything that runs a scene lives above this
+//! module (`experiment`, `study`, `export`); nothing here imports them.
 
-pub mod accuracy;
-pub mod bed_cache;
-pub mod damper;
-pub mod drop;
-pub mod dump;
-pub mod file;
-pub mod fill;
-pub mod impact;
-pub mod lammps;
-pub mod measurement;
-pub mod phases;
-pub mod predict;
-pub mod record;
-pub mod replay;
-pub mod settle;
-pub mod shake;
-pub mod snapshots;
-pub mod sweep;
-#[cfg(feature = "plot")]
-pub mod sweep_plot;
+pub mod drive_length;
+pub mod error;
+pub mod format;
+pub mod packing;
 pub mod validity;
+
+pub use drive_length::{DriveLength, SteadyCriteria, transient_cycles};
+pub use error::{ReplayOption, SceneError};
+pub use format::*;

@@ -1,4 +1,4 @@
-//! The damper experiment: drive a settled bed (see [`crate::scene::settle`]).
+//! The damper experiment: drive a settled bed (see [`crate::experiment::settle`]).
 //!
 //! The enclosure is driven along its axis, by a prescribed sine
 //! `u = Γ g / ω² sin ωt` ([`SineMotion`], thesis eq. 6.2) or by any other
@@ -27,7 +27,7 @@ use glam::DVec3;
 
 use crate::dem::{ContactLaw, Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, World};
 pub use crate::rig::{EnclosureMotion, Kinematics, SineMotion};
-use crate::scene::file::{Orientation, Scene, SceneError};
+use crate::scene::{DriveLength, Orientation, Scene, SceneError, SteadyCriteria, transient_cycles};
 use crate::stats::{MeanStderr, mean_stderr};
 
 /// Progress of a long run, for display.
@@ -90,70 +90,6 @@ pub fn gravity_vector(orientation: Orientation, g_mps2: f64) -> DVec3 {
     match orientation {
         Orientation::Vertical => DVec3::new(0.0, 0.0, -g_mps2),
         Orientation::Horizontal => DVec3::new(0.0, -g_mps2, 0.0),
-    }
-}
-
-/// How long the drive runs.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum DriveLength {
-    /// Exactly `cycles` cycles; the last `steady_cycles` are the steady window
-    /// (the thesis: 8 and 5).
-    Fixed { cycles: u32, steady_cycles: u32 },
-    /// Until steady (see [`SteadyCriteria`]), at least `min_cycles`, at most
-    /// `max_cycles`; the first 3/8 of the cycles are the transient.
-    UntilSteady {
-        min_cycles: u32,
-        max_cycles: u32,
-        criteria: SteadyCriteria,
-    },
-}
-
-impl DriveLength {
-    /// Most cycles the drive can take.
-    pub fn max_cycles(&self) -> u32 {
-        match *self {
-            DriveLength::Fixed { cycles, .. } => cycles,
-            DriveLength::UntilSteady { max_cycles, .. } => max_cycles,
-        }
-    }
-
-    /// Fewest cycles before the steady window starts: the window never begins
-    /// earlier than this.
-    pub fn min_transient_cycles(&self) -> u32 {
-        match *self {
-            DriveLength::Fixed {
-                cycles,
-                steady_cycles,
-            } => cycles - steady_cycles,
-            DriveLength::UntilSteady { min_cycles, .. } => transient_cycles(min_cycles),
-        }
-    }
-}
-
-/// The transient part of `cycles` cycles run until steady: the first 3/8 (the
-/// thesis' 3 of 8), at least one.
-pub fn transient_cycles(cycles: u32) -> u32 {
-    (3 * cycles / 8).max(1)
-}
-
-/// When a drive is steady: over the steady window the work the enclosure put
-/// in and the energy the bed dissipated agree within `balance_rel` (of the
-/// dissipation, or of `E_max` per cycle for a bed that dissipates next to
-/// nothing), and the energy per cycle has a standard error below
-/// `stderr_rel` of its mean (from the cycle-to-cycle spread, see
-/// [`crate::stats`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SteadyCriteria {
-    pub balance_rel: f64,
-    pub stderr_rel: f64,
-}
-
-impl Default for SteadyCriteria {
-    fn default() -> Self {
-        SteadyCriteria {
-            balance_rel: 0.01,
-            stderr_rel: 0.01,
-        }
     }
 }
 

@@ -4,9 +4,9 @@
 //! run leaves behind.
 //!
 //! ```no_run
-//! use vlab::scene::file::Scene;
-//! use vlab::scene::measurement::{CalibrationSource, ShakeSetup};
-//! use vlab::scene::shake::{resolve_rig, run_shake};
+//! use vlab::scene::Scene;
+//! use vlab::experiment::measurement::{CalibrationSource, ShakeSetup};
+//! use vlab::experiment::shake::{resolve_rig, run_shake};
 //!
 //! let scene = Scene::thesis();
 //! let g = scene.simulation.gravity_mps2;
@@ -20,7 +20,7 @@
 //! let mut run = run_shake(&scene, &setup, &mut |_| {})?;
 //! println!("efficiency {:.3}", run.summary.dem.efficiency);
 //! run.write(std::path::Path::new("signals/my-run"), &scene, &setup)?;
-//! # Ok::<(), vlab::scene::file::SceneError>(())
+//! # Ok::<(), vlab::scene::SceneError>(())
 //! ```
 
 use std::collections::BTreeMap;
@@ -31,15 +31,15 @@ use serde::Serialize;
 
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
-use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
-use crate::scene::bed_cache::BedSource;
-use crate::scene::damper::{DriveOutcome, NoObserver, Progress, Steadiness, StepObserver};
-use crate::scene::file::{Scene, SceneError};
-use crate::scene::measurement::{
+use crate::experiment::bed_cache::BedSource;
+use crate::experiment::damper::{DriveOutcome, NoObserver, Progress, Steadiness, StepObserver};
+use crate::experiment::measurement::{
     Measured, ShakeExperiment, ShakeSetup, run_measured_shake_observed,
 };
-use crate::scene::record::TruthSamples;
-use crate::scene::settle::{SettledBed, prepare_drive};
+use crate::experiment::record::TruthSamples;
+use crate::experiment::settle::{SettledBed, prepare_drive};
+use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
+use crate::scene::{Scene, SceneError};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
 use crate::validation::{InvalidParameter, positive, require};
 

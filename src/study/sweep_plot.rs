@@ -10,14 +10,14 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::scene::file::Orientation;
-use crate::scene::phases::MotionalPhase;
-use crate::scene::predict::predict_bouncing_bed;
-use crate::scene::sweep::{ConditionSummary, SweepFile, summarise};
+use crate::scene::Orientation;
 use crate::signals::{
     ErrorSeries, HeatCell, HeatMap, HeatOverlay, LineDash, LogXPlot, MarkerLine, RgbColor,
     SignalsError, plot_heat_map, plot_log_x,
 };
+use crate::study::phases::MotionalPhase;
+use crate::study::predict::predict_bouncing_bed;
+use crate::study::sweep::{ConditionSummary, SweepFile, summarise};
 
 /// Draws `efficiency.{svg,png}` and `map.{svg,png}` of `file` into `dir`
 /// (one pair per fill ratio and orientation, suffixed when there are
@@ -70,7 +70,7 @@ fn efficiency_curves(
     what: &str,
     freqs: &[f64],
     rows: &[&ConditionSummary],
-    prediction: Option<&crate::scene::predict::BouncingBedPrediction>,
+    prediction: Option<&crate::study::predict::BouncingBedPrediction>,
 ) -> LogXPlot {
     let mut series = Vec::new();
     let mut markers = Vec::new();
@@ -127,9 +127,9 @@ fn efficiency_curves(
 
 fn efficiency_map(
     what: &str,
-    h: &crate::scene::sweep::SweepHeader,
+    h: &crate::study::sweep::SweepHeader,
     rows: &[&ConditionSummary],
-    prediction: Option<&crate::scene::predict::BouncingBedPrediction>,
+    prediction: Option<&crate::study::predict::BouncingBedPrediction>,
 ) -> HeatMap {
     // Rows of the map: the amplitudes in ascending order.
     let mut gammas = h.gammas.clone();
@@ -220,6 +220,6 @@ fn efficiency_map(
         value_label: "efficiency".into(),
         value_range: (0.0, hi.max(0.1)),
         overlays,
-        footnote: "phase (a heuristic, vlab::scene::phases): S solid-like, LF/GF local/global fluidisation, BB bouncing bed, C convection/Leidenfrost; rig: beyond the rig".into(),
+        footnote: "phase (a heuristic, vlab::study::phases): S solid-like, LF/GF local/global fluidisation, BB bouncing bed, C convection/Leidenfrost; rig: beyond the rig".into(),
     }
 }

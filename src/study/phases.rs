@@ -39,8 +39,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::dem::World;
-use crate::scene::damper::{Kinematics, StepObserver};
-use crate::scene::record::TruthSamples;
+use crate::experiment::damper::{Kinematics, StepObserver};
+use crate::experiment::record::TruthSamples;
 
 /// DEM samples per steady cycle for the state indicators.
 pub const SAMPLES_PER_CYCLE: u32 = 64;

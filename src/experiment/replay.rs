@@ -59,15 +59,15 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::atomic_write::write_bytes_atomic;
+use crate::experiment::measurement::{
+    CalibrationRun, CalibrationSource, YangMeasurement, measure_trace, phase_calibration,
+};
+use crate::experiment::shake::write_rig_record;
 use crate::rig::{
     Daq, DaqReport, EnclosureMotion, RecordedMotion, RigSpec, ShakerKind, check_limits,
     transducer_force_n,
 };
-use crate::scene::file::{Orientation, Scene, SceneError};
-use crate::scene::measurement::{
-    CalibrationRun, CalibrationSource, YangMeasurement, measure_trace, phase_calibration,
-};
-use crate::scene::shake::write_rig_record;
+use crate::scene::{Orientation, Scene, SceneError};
 use crate::signals::lammps::strip_lammps_prefix;
 use crate::signals::{
     Channel, PhaseCalibration, Table, Trace, TraceMetadata, efficiency, max_energy_per_cycle_j,
@@ -107,37 +107,7 @@ pub struct ColumnMap {
     pub acceleration: Option<String>,
 }
 
-/// A replay option that an error or a warning asks the caller to give,
-/// named as the field of [`ReplayOptions`] that holds it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ReplayOption {
-    /// `freq_hz`.
-    FreqHz,
-    /// `particle_mass_kg`.
-    ParticleMassKg,
-    /// `columns.force`.
-    ForceColumn,
-    /// `columns.velocity` (or `displacement`, `acceleration`).
-    MotionColumn,
-}
-
-impl ReplayOption {
-    /// The field's name.
-    pub fn key(self) -> &'static str {
-        match self {
-            ReplayOption::FreqHz => "freq_hz",
-            ReplayOption::ParticleMassKg => "particle_mass_kg",
-            ReplayOption::ForceColumn => "columns.force",
-            ReplayOption::MotionColumn => "columns.velocity",
-        }
-    }
-}
-
-impl std::fmt::Display for ReplayOption {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.key())
-    }
-}
+pub use crate::scene::ReplayOption;
 
 /// A warning of a replay, and the option that would lift it.
 pub type ReplayWarning = Warning<ReplayOption>;
@@ -925,7 +895,7 @@ impl ReplayRun {
         #[cfg(feature = "plot")]
         {
             let s = &self.summary;
-            crate::scene::shake::plot_record(
+            crate::experiment::shake::plot_record(
                 &dir.join("trace.svg"),
                 &self.trace,
                 rig.enclosure.mass_kg + s.particle_mass_kg.unwrap_or(0.0),

@@ -21,7 +21,7 @@
 //!   [`crate::stats`]) and the rms deviation of disjoint blocks of `n`
 //!   cycles, an empirical check of that standard error.
 //!
-//! **(b) A single collision** ([`crate::scene::impact`]): head-on against the
+//! **(b) A single collision** ([`crate::experiment::impact`]): head-on against the
 //! wall at the drive's largest expected impact speed, resolved by 5 to 200
 //! steps per contact. An elastic collision (e = 1) against Hertz theory: the
 //! maximum overlap against Terzioglu 2023, eq. 5.8, the contact duration
@@ -33,7 +33,7 @@
 //!
 //! **(c) Yang's method** (eq. 7.8–7.12, Section 7.4.2) against the DEM truth.
 //! One DEM drive records the particles' force on the enclosure and its
-//! acceleration at the DAQ rate (see [`crate::scene::record`]); the rig's
+//! acceleration at the DAQ rate (see [`crate::experiment::record`]); the rig's
 //! chain ([`crate::rig::Daq`]: filters, skew, noise, ADC) is then re-run on
 //! that record with changed settings, without re-running the DEM: record
 //! length, noise (a factor on both channels' rms), ADC bits, and a residual
@@ -62,14 +62,15 @@ use serde::Serialize;
 
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{LedgerBalance, LedgerSnapshot, World};
-use crate::rig::{Daq, RigSpec, transducer_force_n};
-use crate::scene::damper::{
-    DriveLength, DriveOutcome, DrivePlan, Kinematics, SineMotion, StepObserver, run_drive,
+use crate::experiment::damper::{
+    DriveOutcome, DrivePlan, Kinematics, SineMotion, StepObserver, run_drive,
 };
-use crate::scene::file::{Orientation, Scene, SceneError};
-use crate::scene::impact::{ImpactSetup, Target, run_impact};
-use crate::scene::record::{TruthRecorder, TruthSamples};
-use crate::scene::settle::{SettledBed, prepare_drive, settle_bed};
+use crate::experiment::impact::{ImpactSetup, Target, run_impact};
+use crate::experiment::record::{TruthRecorder, TruthSamples};
+use crate::experiment::settle::{SettledBed, prepare_drive, settle_bed};
+use crate::rig::{Daq, RigSpec, transducer_force_n};
+use crate::scene::DriveLength;
+use crate::scene::{Orientation, Scene, SceneError};
 use crate::signals::{
     PhaseCorrection, PowerOptions, TraceMetadata, estimate_phase_error, yang_power,
 };
@@ -599,7 +600,7 @@ pub fn run_accuracy(
     progress: &(dyn Fn(AccuracyEvent) + Sync),
 ) -> Result<AccuracyReport, SceneError> {
     plan.validate()?;
-    crate::scene::shake::check_drive(scene, plan.freq_hz, plan.gamma)?;
+    crate::experiment::shake::check_drive(scene, plan.freq_hz, plan.gamma)?;
     let started = Instant::now();
 
     // Impact first: it takes milliseconds and fails fast on a bad scene.
@@ -747,7 +748,7 @@ fn drive(
         cycle_wall_s: vec![0.0],
         truth: job
             .record_truth
-            .then(|| TruthRecorder::new(crate::scene::shake::TRUTH_SAMPLE_RATE_HZ, 0.0)),
+            .then(|| TruthRecorder::new(crate::experiment::shake::TRUTH_SAMPLE_RATE_HZ, 0.0)),
     };
     let outcome = (|| {
         let mut world = prepare_drive(bed, scene, job.dt_s)?;
@@ -1529,7 +1530,7 @@ mod plots {
     use std::path::Path;
 
     use super::{AccuracyRow, AccuracySummary};
-    use crate::scene::file::SceneError;
+    use crate::scene::SceneError;
     use crate::signals::{Series, SeriesStyle, plot_xy_svg};
 
     fn select<'a>(

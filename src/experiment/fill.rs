@@ -11,7 +11,7 @@ use glam::DVec3;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use super::file::SceneError;
+use crate::scene::SceneError;
 
 /// Fill ratio of the insertion column, safely below the jamming of random
 /// sequential insertion (about 0.38).

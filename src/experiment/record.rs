@@ -7,7 +7,7 @@
 //! sample rate), and the enclosure kinematics at the step nearest to `t_k`.
 
 use crate::dem::World;
-use crate::scene::damper::{Kinematics, StepObserver};
+use crate::experiment::damper::{Kinematics, StepObserver};
 
 /// Columns of a truth record, one entry per sample.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -37,16 +37,16 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::atomic_write::write_atomic;
+use crate::experiment::bed_cache::BedSource;
+use crate::experiment::measurement::{CalibrationSource, ShakeSetup};
+use crate::experiment::settle::SettledBed;
+use crate::experiment::shake::{check_drive, check_record_window, resolve_rig, run_shake_on_bed};
 use crate::rig::{RigFile, RigSpec, ShakerKind};
-use crate::scene::bed_cache::BedSource;
-use crate::scene::file::{CyclesSpec, Orientation, Scene, SceneError};
-use crate::scene::measurement::{CalibrationSource, ShakeSetup};
-use crate::scene::phases::{
+use crate::scene::{CyclesSpec, Orientation, Scene, SceneError};
+use crate::study::phases::{
     PhaseIndicators, PhaseObserver, PhaseThresholds, classify, collective_impacts,
 };
-use crate::scene::predict::{CLOSE_PACKING, effective_clearance_m};
-use crate::scene::settle::SettledBed;
-use crate::scene::shake::{check_drive, check_record_window, resolve_rig, run_shake_on_bed};
+use crate::study::predict::{CLOSE_PACKING, effective_clearance_m};
 use crate::validation::InvalidParameter;
 
 /// First line of every sweep file.

@@ -2,9 +2,9 @@
 //!
 //! Settling is three quarters of a default shake's wall time, and its result
 //! depends only on what shapes the bed: the particles, the enclosure, the
-//! settling law ([`SETTLING_VERSION`](crate::scene::settle::SETTLING_VERSION)),
+//! settling law ([`SETTLING_VERSION`](crate::experiment::settle::SETTLING_VERSION)),
 //! gravity, the orientation and the seed — not on the contacts under test or
-//! the drive (the settling law is fixed, see [`crate::scene::settle`]). A bed
+//! the drive (the settling law is fixed, see [`crate::experiment::settle`]). A bed
 //! is stored under a key made of exactly those, plus the bed-file format and
 //! vlab's version (a new engine may settle differently).
 //!
@@ -40,9 +40,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::Particles;
-use crate::scene::damper::Progress;
-use crate::scene::file::{Scene, SceneError};
-use crate::scene::settle::{SETTLING_VERSION, SettledBed, rebuild_settled_world, settle_bed};
+use crate::experiment::damper::Progress;
+use crate::experiment::settle::{SETTLING_VERSION, SettledBed, rebuild_settled_world, settle_bed};
+use crate::scene::{Scene, SceneError};
 
 /// Version of the bed-file layout.
 pub const BED_FORMAT_VERSION: u32 = 1;
@@ -78,7 +78,7 @@ struct BedKey<'a> {
     bed_format: u32,
     settling_version: u32,
     vlab_version: &'static str,
-    particles: &'a crate::scene::file::ParticlesSpec,
+    particles: &'a crate::scene::ParticlesSpec,
     particle_material: crate::dem::material::Material,
     inner_diameter_m: f64,
     inner_length_m: f64,
@@ -493,7 +493,7 @@ mod tests {
         let mut length = base.clone();
         length.enclosure.inner_length_m *= 1.01;
         let mut turned = base.clone();
-        turned.enclosure.orientation = crate::scene::file::Orientation::Horizontal;
+        turned.enclosure.orientation = crate::scene::Orientation::Horizontal;
         let mut g = base.clone();
         g.simulation.gravity_mps2 = 1.62;
         for other in [seed, count, length, turned, g] {
@@ -561,7 +561,7 @@ mod tests {
 
     #[test]
     fn a_cached_bed_drives_to_the_same_bits_as_a_fresh_one() {
-        use crate::scene::settle::prepare_drive;
+        use crate::experiment::settle::prepare_drive;
         let scene = small_scene();
         let dir = std::env::temp_dir().join(format!("vlab-bed-cache-test-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);

@@ -9,17 +9,15 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
-use thiserror::Error;
 
 use crate::dem::material::{
     Material, effective_mass_kg, effective_radius_m, effective_youngs_pa, sphere_mass_kg,
 };
 use crate::dem::timestep::{check_time_step, rayleigh_time_step_s, shortest_contact_s};
-use crate::dem::{DemError, RestitutionMode, hertz_theory};
-use crate::rig::RigError;
-use crate::scene::damper::{DriveLength, SteadyCriteria};
+use crate::dem::{RestitutionMode, hertz_theory};
+use crate::scene::drive_length::{DriveLength, SteadyCriteria};
+use crate::scene::error::SceneError;
 use crate::scene::validity::YieldVelocities;
-use crate::signals::SignalsError;
 use crate::validation::{
     self, Bound, InvalidParameter, count_in, in_range, non_negative, positive, require,
 };
@@ -30,106 +28,7 @@ pub const THESIS_SCENE_FILE: &str = "scenes/thesis-damper.toml";
 /// The embedded thesis damper preset.
 pub const THESIS_DAMPER_TOML: &str = include_str!("../../scenes/thesis-damper.toml");
 
-/// Densest fill a random packing of spheres reaches (random close packing).
-pub const MAX_FILL: f64 = 0.64;
-
-/// Errors of scene files and scene runs.
-#[derive(Debug, Error)]
-pub enum SceneError {
-    #[error("cannot read scene file {path}")]
-    Read {
-        path: String,
-        source: std::io::Error,
-    },
-    /// Not TOML, an unknown key, a missing key or a wrong type.
-    #[error("scene file {path} is not valid: {message}")]
-    Parse { path: String, message: String },
-    /// A value of the file is out of range, or the scene it describes cannot be.
-    #[error("scene file {path} is not valid: {source}")]
-    File {
-        path: String,
-        #[source]
-        source: Box<SceneError>,
-    },
-    /// A value out of its range, named by its scene key or parameter name.
-    #[error("{0}")]
-    Invalid(#[from] InvalidParameter),
-    /// More particles than the enclosure can hold.
-    #[error(
-        "particles.count = {count} spheres of {diameter_m} m fill {fill:.3} of the enclosure, above random close packing ({MAX_FILL}): the enclosure cannot hold them (at most {max_count} fit)"
-    )]
-    Overfull {
-        count: usize,
-        diameter_m: f64,
-        fill: f64,
-        max_count: usize,
-    },
-    /// A particle as large as the enclosure.
-    #[error(
-        "the enclosure ({diameter_m} m x {length_m} m) must be larger than a particle ({particle_m} m) in both directions"
-    )]
-    ParticleTooLarge {
-        diameter_m: f64,
-        length_m: f64,
-        particle_m: f64,
-    },
-    /// Random insertion could not place every sphere in the pouring column.
-    #[error(
-        "random insertion placed only {placed} of {count} spheres in the pouring column ({column_m:.4} m high)"
-    )]
-    Insertion {
-        placed: usize,
-        count: usize,
-        column_m: f64,
-    },
-    /// The bed cannot be closed in its enclosure: the lid, lowered as a piston,
-    /// would crush it. `reached` is the packing fraction of the poured bed,
-    /// floor to the top of its highest sphere.
-    #[error(
-        "the particles do not fit: a fill of {fill:.3} needs the bed to pack at {fill:.3} from floor to lid; poured, it packs at {reached:.3} from the floor to its highest sphere, and {cause}; reduce particles.count or lengthen enclosure.inner_length_m"
-    )]
-    DoesNotFit {
-        fill: f64,
-        reached: f64,
-        cause: String,
-    },
-    /// The settling bed did not come to rest.
-    #[error(
-        "the bed did not come to rest while {phase}: after {time_s} s of settling the particles still move at {rms_speed_mps:.4} m/s RMS (at rest: below {rest_mps:.4} m/s)"
-    )]
-    NotAtRest {
-        phase: &'static str,
-        time_s: f64,
-        rms_speed_mps: f64,
-        rest_mps: f64,
-    },
-    /// An output file could not be written.
-    #[error("cannot write {}", path.display())]
-    Write {
-        path: std::path::PathBuf,
-        source: std::io::Error,
-    },
-    /// A record given to `vlab replay` that cannot be replayed.
-    #[error("record {}: {problem}", path.display())]
-    Record {
-        path: std::path::PathBuf,
-        problem: String,
-    },
-    /// A record that cannot be replayed without an option it does not
-    /// declare; `problem` says which.
-    #[error("record {}: {problem}", path.display())]
-    RecordNeeds {
-        path: std::path::PathBuf,
-        problem: String,
-        option: crate::scene::replay::ReplayOption,
-    },
-    #[error(transparent)]
-    Dem(#[from] DemError),
-    #[error(transparent)]
-    Rig(#[from] RigError),
-    #[error(transparent)]
-    Signals(#[from] SignalsError),
-}
+pub use crate::scene::packing::MAX_FILL;
 
 /// A material given by preset name or inline constants.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -633,7 +532,7 @@ impl Scene {
             TimeStepSpec::Seconds(dt) => dt,
             TimeStepSpec::Rule(TimeStepRule::Rayleigh) => rayleigh,
             TimeStepSpec::Rule(TimeStepRule::Contacts) => {
-                let laws = crate::scene::damper::contact_laws(self);
+                let laws = crate::experiment::damper::contact_laws(self);
                 let speed = self.expected_impact_speed_mps(freq_hz, gamma);
                 let t_c = shortest_contact_s(
                     &laws.particle_particle,

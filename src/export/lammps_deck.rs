@@ -7,7 +7,7 @@
 //! # What the deck holds
 //!
 //! - `units si`; spheres (`atom_style sphere`) read from `packing.data`:
-//!   vlab's settled packing ([`settle_bed`](crate::scene::settle::settle_bed)),
+//!   vlab's settled packing ([`settle_bed`](crate::experiment::settle::settle_bed)),
 //!   positions, velocities, spins, diameters and densities; enclosure axis z,
 //!   floor at z = 0, lid at the scene's inner length;
 //! - `pair_style granular`, `hertz/material` (thesis eq. 5.7 with E* of eq.
@@ -77,10 +77,11 @@ use crate::atomic_write::write_bytes_atomic;
 use crate::dem::contact::Tangential;
 use crate::dem::material::{effective_shear_pa, effective_youngs_pa};
 use crate::dem::{ContactLaw, RestitutionMode};
-use crate::scene::damper::{DriveLength, contact_laws, transient_cycles};
-use crate::scene::file::{Orientation, Scene, SceneError};
-use crate::scene::settle::SettledBed;
-use crate::scene::shake::{TRUTH_SAMPLE_RATE_HZ, check_drive};
+use crate::experiment::damper::contact_laws;
+use crate::experiment::settle::SettledBed;
+use crate::experiment::shake::{TRUTH_SAMPLE_RATE_HZ, check_drive};
+use crate::scene::{DriveLength, transient_cycles};
+use crate::scene::{Orientation, Scene, SceneError};
 use crate::validation::{InvalidParameter, count_in};
 
 /// File name of the LAMMPS input.

@@ -23,10 +23,7 @@ use serde::Serialize;
 
 use crate::validation::{Bound, InvalidParameter, in_range, positive};
 
-/// Random close packing of equal spheres: ν_max of the thesis' CP estimate.
-pub const CLOSE_PACKING: f64 = 0.64;
-/// Random loose packing: ν_max of the thesis' LP estimate.
-pub const LOOSE_PACKING: f64 = 0.55;
+pub use crate::scene::packing::{CLOSE_PACKING, LOOSE_PACKING};
 
 /// Effective clearance (m), eq. 6.13: `(1 − fill_ratio / max_fill) length_m`.
 /// Zero or negative when the bed is already at `max_fill`.

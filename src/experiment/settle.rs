@@ -8,7 +8,7 @@
 //! tall for its lid. vlab instead fills every damper the same way:
 //!
 //! 1. **Pour.** Random sequential insertion into a taller column of the
-//!    enclosure's diameter (see [`crate::scene::fill`]; the column is made
+//!    enclosure's diameter (see [`crate::experiment::fill`]; the column is made
 //!    taller until every sphere fits), then the spheres fall under the *soft*
 //!    settling law, frictionless for two fall times of the column so that they
 //!    slide into a dense bed, then with the settling friction until at rest.
@@ -63,9 +63,9 @@ use crate::dem::timestep::{rayleigh_time_step_s, shortest_contact_s};
 use crate::dem::{
     ContactLaw, ContactParams, DemError, Numerics, Particles, RestitutionMode, Walls, World,
 };
-use crate::scene::damper::{Progress, contact_laws, gravity_vector};
-use crate::scene::file::{Orientation, Scene, SceneError};
-use crate::scene::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
+use crate::experiment::damper::{Progress, contact_laws, gravity_vector};
+use crate::experiment::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
+use crate::scene::{Orientation, Scene, SceneError};
 
 /// Young's moduli of the settling law while pouring, as a fraction of the
 /// materials' own.

@@ -29,7 +29,7 @@ use vtkio::model::{
 
 use crate::atomic_write::write_atomic;
 use crate::dem::World;
-use crate::scene::damper::{Kinematics, StepObserver};
+use crate::experiment::damper::{Kinematics, StepObserver};
 
 /// Segments of the drawn cylinder.
 const SEGMENTS: usize = 32;

@@ -17,7 +17,7 @@ use crate::dem::material::{
     Material, effective_mass_kg, effective_radius_m, effective_youngs_pa, sphere_mass_kg,
 };
 use crate::dem::{ContactLaw, LedgerBalance, Numerics, Particles, RestitutionMode, Walls, World};
-use crate::scene::file::SceneError;
+use crate::scene::SceneError;
 use crate::validation::{self, Bound, InvalidParameter, finite, in_range, positive};
 
 /// What the sphere hits.

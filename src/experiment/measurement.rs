@@ -29,13 +29,13 @@ use std::f64::consts::PI;
 use serde::Serialize;
 
 use crate::dem::World;
-use crate::rig::{Daq, DaqReport, RigSpec, Shaker, ShakerKind, ShakerReport, transducer_force_n};
-use crate::rig::{EnclosureMotion, Kinematics};
-use crate::scene::damper::{
+use crate::experiment::damper::{
     DriveOutcome, DrivePlan, NoObserver, Progress, StepObserver, run_drive,
 };
-use crate::scene::file::{Orientation, Scene, SceneError};
-use crate::scene::record::{TruthRecorder, TruthSamples};
+use crate::experiment::record::{TruthRecorder, TruthSamples};
+use crate::rig::{Daq, DaqReport, RigSpec, Shaker, ShakerKind, ShakerReport, transducer_force_n};
+use crate::rig::{EnclosureMotion, Kinematics};
+use crate::scene::{Orientation, Scene, SceneError};
 use crate::signals::{
     ForcePolarity, PhaseCalibration, PhaseCorrection, PhaseErrorPoint, PowerOptions, PowerResult,
     PowerWindow, Trace, TraceMetadata, estimate_phase_error, max_energy_per_cycle_j, yang_power,

@@ -17,9 +17,9 @@ use std::path::Path;
 use glam::DVec3;
 
 use crate::dem::World;
-use crate::scene::damper::{Kinematics, StepObserver};
+use crate::experiment::damper::{Kinematics, StepObserver};
 #[cfg(feature = "plot")]
-use crate::scene::file::Orientation;
+use crate::scene::Orientation;
 #[cfg(feature = "plot")]
 use crate::signals::{CirclePanel, PanelStrip, SignalsError, plot_panel_strip};
 
