@@ -27,7 +27,7 @@
 # merge by hand: vlab sweep merge OUT/shard* --out OUT/merged
 #
 # Resources: a thesis-scene condition run until steady takes from about 20 s
-# (bouncing bed, 40 Hz) to a few minutes of one core (see README, "Maps");
+# (bouncing bed, 40 Hz) to a few minutes of one core (see docs/maps.md);
 # a task runs as many conditions at a time as it has CPUs.
 #SBATCH --job-name=vlab-sweep
 #SBATCH --cpus-per-task=2

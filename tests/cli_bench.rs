@@ -1,6 +1,6 @@
 //! `vlab bench`: the report holds what it says it times, whatever the speed
 //! of the machine (no timing is checked here: speed targets live in the
-//! bench itself and in the README, never in a test).
+//! bench itself and in docs/performance.md, never in a test).
 
 #![cfg(all(feature = "cli", feature = "plot"))]
 

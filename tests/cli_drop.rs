@@ -247,7 +247,7 @@ fn past_yield_and_coarse_sampling_warn_but_run() {
         "{err}"
     );
     // Here (50 mm, smooth) a threshold of ten noise rms finds them all again;
-    // in general it helps but also adds slow tail bounces (README).
+    // in general it helps but also adds slow tail bounces (docs/measurement.md).
     let out = vlab(
         &dir.0,
         &[

@@ -5,7 +5,7 @@
 //! The quick ones run in `cargo test`; the long ones (steel, the densest
 //! fills, a horizontal damper at fill 0.55, 1 mm spheres) are `#[ignore]`d:
 //! `cargo test --release --test extreme_scenes -- --include-ignored` runs them
-//! all (the README gives their run times).
+//! all (docs/physics.md gives their run times).
 //!
 //! "Inside" is checked twice: the engine stops a run whose particle centre
 //! crosses a wall (`DemError::Escaped`), and the test measures every
@@ -207,7 +207,7 @@ fn fill_055_vertical_and_horizontal() {
 }
 
 /// Fill 0.57 (438 spheres, 0.5703), the densest fill the lid closes on in
-/// the thesis cylinder (README, "Filling the damper"; 0.58 and denser are
+/// the thesis cylinder (docs/physics.md, "Filling the damper"; 0.58 and denser are
 /// refused): it settles, closes and drives soundly at 40 Hz, Γ 20.
 #[test]
 #[ignore = "long: about a minute on 2 cores"]

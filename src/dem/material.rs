@@ -146,7 +146,7 @@ mod tests {
 
     #[test]
     fn thesis_particle_mass() {
-        // 358 spheres of 5 mm acrylic weigh 0.0279 kg (DESIGN.md reference figures).
+        // 358 spheres of 5 mm acrylic weigh 0.0279 kg (docs/design.md, "Reference figures").
         let total = 358.0 * sphere_mass_kg(0.0025, 1190.0);
         assert!((total - 0.0279).abs() < 0.00005, "{total}");
     }

@@ -171,7 +171,7 @@ mod tests {
 
     #[test]
     fn thesis_mode_drifts_above_target_at_low_e() {
-        // DESIGN.md: with the clamp, e = 0.57 realises about 0.61.
+        // docs/design.md, "The DEM step": with the clamp, e = 0.57 realises about 0.61.
         let realised = realised_restitution(thesis_damping_factor(0.57));
         assert!(realised > 0.59 && realised < 0.63, "{realised}");
         // At high e the drift is small but present.

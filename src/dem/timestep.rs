@@ -62,7 +62,8 @@ mod tests {
 
     #[test]
     fn thesis_acrylic_rayleigh_step() {
-        // DESIGN.md: 8.3e-6 s for 5 mm acrylic (thesis Table 6.1 prints 8.4e-6 s).
+        // docs/design.md, "Reference figures": 8.3e-6 s for 5 mm acrylic
+        // (thesis Table 6.1 prints 8.4e-6 s).
         let dt = rayleigh_time_step_s(&Material::ACRYLIC, 0.0025);
         assert!((dt - 8.33e-6).abs() < 0.02e-6, "{dt}");
     }

@@ -1,4 +1,4 @@
-//! The lab hardware (thesis Sections 7.3-7.4 and 7.6; DESIGN.md "The rig"):
+//! The lab hardware (thesis Sections 7.3-7.4 and 7.6; docs/design.md, "The rig"):
 //! the shaker that moves the enclosure, the force transducer and the
 //! accelerometer on it, the signal conditioner and the digitiser.
 //!

@@ -1,5 +1,5 @@
 //! What the force transducer between shaker and enclosure reads (thesis
-//! Section 7.4.2, Fig. 7.6-7.7; DESIGN.md "The rig").
+//! Section 7.4.2, Fig. 7.6-7.7; docs/design.md, "The rig").
 //!
 //! Axis: the drive axis, positive along the accelerometer's positive axis
 //! (up, when the axis is vertical). Newton for the rigid enclosure of mass

@@ -1,8 +1,8 @@
 //! Power dissipated in a harmonically driven damper, by Yang's
 //! structure-independent method (thesis Section 7.4.2, eq. 7.8-7.12, with
-//! the DESIGN.md erratum: the factor 1/2 belongs to amplitude-normalised
-//! one-sided spectra, `|X_k| = 2 |DFT_k| / N`), and the damping efficiency
-//! of eq. 7.7 / 6.10.
+//! the erratum of docs/design.md, "Thesis errata": the factor 1/2 belongs to
+//! amplitude-normalised one-sided spectra, `|X_k| = 2 |DFT_k| / N`), and the
+//! damping efficiency of eq. 7.7 / 6.10.
 //!
 //! # Inputs and sign convention
 //!

@@ -1,5 +1,6 @@
 //! One-sided, amplitude-normalised spectra of real records (the `F_k`, `A_k`
-//! of thesis eq. 7.10-7.11, with the DESIGN.md erratum applied).
+//! of thesis eq. 7.10-7.11, with the erratum of docs/design.md,
+//! "Thesis errata", applied).
 //!
 //! # Convention (read this first)
 //!
