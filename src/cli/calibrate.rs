@@ -4,7 +4,7 @@
 //! error, averaged over the amplitudes) is what `vlab shake --calibration` and
 //! `vlab analyze --calibration` subtract.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -12,8 +12,9 @@ use serde::Serialize;
 
 use vlab::experiment::measurement::calibrate_rig;
 use vlab::experiment::shake::resolve_rig;
-use vlab::rig::ShakerKind;
+use vlab::rig::{RigSpec, ShakerKind};
 use vlab::scene::Scene;
+use vlab::signals::PhaseCalibration;
 
 use super::args;
 
@@ -68,19 +69,7 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
         );
     }
     let g = Scene::thesis().simulation.gravity_mps2;
-    // Refuse any (frequency, amplitude) the rig cannot do before running anything.
-    let mut resolved = None;
-    for &f in &a.freqs_hz {
-        for &gamma in &a.gammas {
-            resolved = Some(
-                resolve_rig(&a.rig, a.shaker, f, gamma, g)
-                    .with_context(|| format!("--rig {}", a.rig))?,
-            );
-        }
-    }
-    let Some(rig) = resolved else {
-        bail!("--freq and --gammas must name at least one value each");
-    };
+    let rig = resolve_for_all(&a, g)?;
     if a.dt_s > 1.0 / rig.daq.sample_rate_hz {
         bail!(
             "--dt-s {} is invalid: must be at most one sample period, {} s at {} Hz",
@@ -125,38 +114,61 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
     if a.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
-        println!(
-            "rig {} ({} shaker), empty enclosure of {} kg, Gamma {:?}:",
-            rig.name, rig.shaker.kind, rig.enclosure.mass_kg, a.gammas
-        );
-        println!("   freq [Hz]   phase error [deg]   spread [deg]   rig model [deg]");
-        for r in &rows {
-            println!(
-                "  {:9}   {:17.4}   {:12.5}   {:15.4}",
-                r.freq_hz,
-                r.phase_error_rad.to_degrees(),
-                r.spread_rad.to_degrees(),
-                r.rig_model_phase_error_rad.to_degrees()
-            );
-        }
-        match &table.model {
-            Some(m) => println!(
-                "  high-pass + skew fit: net high-pass corner {:.4} Hz, skew {:.3} us (rig model: {:.4} Hz, {:.3} us)",
-                m.force_high_pass_hz - m.accel_high_pass_hz,
-                1e6 * m.skew_s,
-                rig.force.high_pass_hz - rig.accelerometer.high_pass_hz,
-                1e6 * (rig.force.sample_skew_s - rig.accelerometer.sample_skew_s)
-            ),
-            None => println!(
-                "  one frequency: harmonics will be corrected as a pure delay; give two or more to fit the high-pass + skew"
-            ),
-        }
-        if table.force_polarity_reversed {
-            println!(
-                "  force polarity reversed on the empty enclosure (phase near pi): stored without the pi"
-            );
-        }
-        println!("  wrote {}", out.display());
+        print_table(&rig, &a.gammas, &rows, &table, &out);
     }
     Ok(())
+}
+
+/// The rig of `--rig` and `--shaker`, refusing any (frequency, amplitude)
+/// it cannot do before running anything.
+fn resolve_for_all(a: &CalibrateArgs, g: f64) -> Result<RigSpec> {
+    let mut resolved = None;
+    for &f in &a.freqs_hz {
+        for &gamma in &a.gammas {
+            resolved = Some(
+                resolve_rig(&a.rig, a.shaker, f, gamma, g)
+                    .with_context(|| format!("--rig {}", a.rig))?,
+            );
+        }
+    }
+    let Some(rig) = resolved else {
+        bail!("--freq and --gammas must name at least one value each");
+    };
+    Ok(rig)
+}
+
+/// The table as text, with the fitted model and where it was written.
+fn print_table(rig: &RigSpec, gammas: &[f64], rows: &[Row], table: &PhaseCalibration, out: &Path) {
+    println!(
+        "rig {} ({} shaker), empty enclosure of {} kg, Gamma {:?}:",
+        rig.name, rig.shaker.kind, rig.enclosure.mass_kg, gammas
+    );
+    println!("   freq [Hz]   phase error [deg]   spread [deg]   rig model [deg]");
+    for r in rows {
+        println!(
+            "  {:9}   {:17.4}   {:12.5}   {:15.4}",
+            r.freq_hz,
+            r.phase_error_rad.to_degrees(),
+            r.spread_rad.to_degrees(),
+            r.rig_model_phase_error_rad.to_degrees()
+        );
+    }
+    match &table.model {
+        Some(m) => println!(
+            "  high-pass + skew fit: net high-pass corner {:.4} Hz, skew {:.3} us (rig model: {:.4} Hz, {:.3} us)",
+            m.force_high_pass_hz - m.accel_high_pass_hz,
+            1e6 * m.skew_s,
+            rig.force.high_pass_hz - rig.accelerometer.high_pass_hz,
+            1e6 * (rig.force.sample_skew_s - rig.accelerometer.sample_skew_s)
+        ),
+        None => println!(
+            "  one frequency: harmonics will be corrected as a pure delay; give two or more to fit the high-pass + skew"
+        ),
+    }
+    if table.force_polarity_reversed {
+        println!(
+            "  force polarity reversed on the empty enclosure (phase near pi): stored without the pi"
+        );
+    }
+    println!("  wrote {}", out.display());
 }

@@ -14,7 +14,6 @@
 
 use std::error::Error;
 
-use vlab::experiment::drop::DropError;
 use vlab::experiment::replay::ReplayOption;
 use vlab::rig::RigError;
 use vlab::scene::SceneError;
@@ -61,12 +60,6 @@ fn hint_of(e: &(dyn Error + 'static)) -> Option<&'static str> {
                 Some("the arguments it was started with, or another --out")
             }
             SweepError::UnfinishedShard { .. } => Some("--resume"),
-            _ => None,
-        }
-    } else if let Some(e) = e.downcast_ref::<DropError>() {
-        match e {
-            DropError::Rig(e) => rig_hint(e),
-            DropError::Signals(e) => signals_hint(e),
             _ => None,
         }
     } else {

@@ -145,7 +145,16 @@ fn source(s: Source) -> &'static str {
     }
 }
 
+/// The summary as text, and the folder written.
 fn print_summary(s: &ReplaySummary, dir: &Path) {
+    print_record(s);
+    print_truth(s);
+    print_measured(s);
+    println!("  wrote {}", dir.display());
+}
+
+/// The record read: its rows, columns, drive and window.
+fn print_record(s: &ReplaySummary) {
     let c = &s.columns;
     println!(
         "record {} ({}): {} rows every {:.4e} s from {:.6} s to {:.6} s",
@@ -177,6 +186,10 @@ fn print_summary(s: &ReplaySummary, dir: &Path) {
         "  window {:.6}-{:.6} s: the last {} whole periods",
         s.window_start_s, s.window_end_s, s.periods
     );
+}
+
+/// The record's own dissipation.
+fn print_truth(s: &ReplaySummary) {
     let t = &s.truth;
     println!("  the record's own dissipation (mean of -F_p v):");
     println!(
@@ -188,6 +201,11 @@ fn print_summary(s: &ReplaySummary, dir: &Path) {
             _ => String::new(),
         }
     );
+}
+
+/// What the rig measured from the record.
+fn print_measured(s: &ReplaySummary) {
+    let t = &s.truth;
     let m = &s.measured;
     println!(
         "  measured by rig {} (recorded motion), Yang's method over {} periods:",
@@ -229,5 +247,4 @@ fn print_summary(s: &ReplaySummary, dir: &Path) {
         100.0 * m.uncorrected_error_vs_record_rel,
         100.0 * m.predicted_leak_per_cycle_j / t.energy_per_cycle_j
     );
-    println!("  wrote {}", dir.display());
 }

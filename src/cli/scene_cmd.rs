@@ -35,10 +35,6 @@ pub fn run(a: SceneArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let laws = contact_laws(&scene);
-    let (pp, pw) = (laws.particle_particle, laws.particle_wall);
-    let p = &scene.particles;
-    let e = &scene.enclosure;
     match &a.scene {
         Some(path) => println!(
             "scene \"{}\" ({} over the built-in {THESIS_SCENE_FILE})",
@@ -50,6 +46,17 @@ pub fn run(a: SceneArgs) -> Result<()> {
             scene.name
         ),
     }
+    print_bed(&scene);
+    print_contacts(&scene);
+    print_time_step(&scene);
+    print_run(&scene);
+    Ok(())
+}
+
+/// The particles and the enclosure.
+fn print_bed(scene: &Scene) {
+    let p = &scene.particles;
+    let e = &scene.enclosure;
     println!(
         "  particles        {} spheres of {} mm, {:.4} kg in all",
         p.count,
@@ -64,6 +71,12 @@ pub fn run(a: SceneArgs) -> Result<()> {
         scene.fill_ratio(),
         scene.max_particles()
     );
+}
+
+/// The two contact laws.
+fn print_contacts(scene: &Scene) {
+    let laws = contact_laws(scene);
+    let (pp, pw) = (laws.particle_particle, laws.particle_wall);
     for (name, law) in [("particle-particle", pp), ("particle-wall", pw)] {
         println!(
             "  {name:18} {}: e = {}, mu = {}, E* = {:.3e} Pa, G* = {:.3e} Pa, damping factor {:.4} ({} mode: realised e = {:.4})",
@@ -80,6 +93,10 @@ pub fn run(a: SceneArgs) -> Result<()> {
             realised_restitution(law.damping_factor)
         );
     }
+}
+
+/// The time step at the default drive and its rule, and the yield velocities.
+fn print_time_step(scene: &Scene) {
     let dt_rule = match &scene.simulation.dt_s {
         TimeStepSpec::Seconds(_) => "fixed".to_string(),
         TimeStepSpec::Rule(TimeStepRule::Rayleigh) => format!(
@@ -103,6 +120,10 @@ pub fn run(a: SceneArgs) -> Result<()> {
             y.particle_particle_mps, y.particle_wall_mps
         );
     }
+}
+
+/// How a run goes: settling, then the drive's length.
+fn print_run(scene: &Scene) {
     let d = &scene.drive;
     let drive = match &d.cycles {
         CyclesSpec::Count(n) => format!(
@@ -121,5 +142,4 @@ pub fn run(a: SceneArgs) -> Result<()> {
         "  run              pour and settle with the settling law (vlab::experiment::settle), then drive {drive}; seed {}",
         scene.simulation.seed
     );
-    Ok(())
 }

@@ -15,7 +15,8 @@ use vlab::atomic_write::OutputDir;
 use vlab::rig::ShakerKind;
 use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::study::sweep::{
-    RowStatus, Shard, SweepEvent, SweepFile, SweepPlan, merge_shards, run_sweep, summarise,
+    RowStatus, Shard, SweepEvent, SweepFile, SweepPlan, SweepRow, merge_shards, run_sweep,
+    summarise,
 };
 use vlab::study::sweep_plot::plot_sweep;
 
@@ -126,6 +127,46 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
         Some(SweepAction::Relabel(r)) => return relabel(r),
         None => {}
     }
+    let plan = sweep_plan(&a)?;
+    let shard = a.shard.unwrap_or(Shard::ALL);
+    let out_dir = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("signals").join(format!("sweep-{}", plan.scene.name)));
+    if !a.resume && out_dir.join("sweep.csv").exists() {
+        bail!(
+            "{} exists: pass --resume to continue that sweep, or choose another --out",
+            out_dir.join("sweep.csv").display()
+        );
+    }
+    let made = OutputDir::prepare(&out_dir)
+        .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
+    let progress = Mutex::new(ProgressLine::new("sweep", quiet));
+    let events = EventLines {
+        shard,
+        // Name the fill and the orientation in progress lines only when the
+        // sweep has several (else four beds' conditions read alike).
+        with_fill: plan.fill_ratios.len() > 1,
+        with_orientation: plan.orientations.len() > 1,
+    };
+    let on_event = |e: SweepEvent| {
+        let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
+        events.show(e, &mut p);
+    };
+    let result =
+        run_sweep(&plan, shard, &out_dir, a.resume, &on_event).context("running the sweep");
+    let file = made.keep_if_ok(result)?;
+    let plots = if shard == Shard::ALL {
+        plot_sweep(&file, &out_dir).context("drawing the sweep's plots")?
+    } else {
+        Vec::new()
+    };
+    report(&file, &out_dir, &plots, a.json)
+}
+
+/// The sweep the flags ask for, validated; a refused value is named by its
+/// flag.
+fn sweep_plan(a: &SweepArgs) -> Result<SweepPlan> {
     let flags = args::FlagKeys::drive(
         a.cycles.is_some(),
         a.steady_cycles.is_some(),
@@ -159,102 +200,84 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
     plan.validate()
         .map_err(|e| flags.name_flags(e.into()))
         .with_context(|| format!("--rig {}", a.rig))?;
-    let shard = a.shard.unwrap_or(Shard::ALL);
-    let out_dir = a
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("signals").join(format!("sweep-{}", plan.scene.name)));
-    if !a.resume && out_dir.join("sweep.csv").exists() {
-        bail!(
-            "{} exists: pass --resume to continue that sweep, or choose another --out",
-            out_dir.join("sweep.csv").display()
-        );
-    }
-    let made = OutputDir::prepare(&out_dir)
-        .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
-    // Name the fill and the orientation in progress lines only when the
-    // sweep has several (else four beds' conditions read alike).
-    let with_fill = plan.fill_ratios.len() > 1;
-    let with_orientation = plan.orientations.len() > 1;
-    let progress = Mutex::new(ProgressLine::new("sweep", quiet));
-    let note = |text: String| {
-        let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
-        p.note(&text);
-    };
-    let warn = |text: String| {
-        let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
-        p.warn(&text);
-    };
-    let on_event = |e: SweepEvent| match e {
-        SweepEvent::Started {
-            total,
-            already_done,
-            beds,
-        } => note(format!(
-            "sweep{}: {total} conditions, {already_done} already in sweep.csv, {beds} bed{} to settle",
-            if shard == Shard::ALL {
-                String::new()
-            } else {
-                format!(" shard {shard}")
-            },
-            if beds == 1 { "" } else { "s" }
-        )),
-        SweepEvent::BedSettled {
-            seed,
-            wall_time_s,
-            from_cache,
-            warnings,
-        } => {
-            for w in warnings {
-                warn(format!("sweep: warning: {w}"));
+    Ok(plan)
+}
+
+/// How the sweep's events read on the progress line.
+struct EventLines {
+    shard: Shard,
+    with_fill: bool,
+    with_orientation: bool,
+}
+
+impl EventLines {
+    /// Shows `e` on `progress`.
+    fn show(&self, e: SweepEvent, progress: &mut ProgressLine) {
+        match e {
+            SweepEvent::Started {
+                total,
+                already_done,
+                beds,
+            } => progress.note(&format!(
+                "sweep{}: {total} conditions, {already_done} already in sweep.csv, {beds} bed{} to settle",
+                if self.shard == Shard::ALL {
+                    String::new()
+                } else {
+                    format!(" shard {}", self.shard)
+                },
+                if beds == 1 { "" } else { "s" }
+            )),
+            SweepEvent::BedSettled {
+                seed,
+                wall_time_s,
+                from_cache,
+                warnings,
+            } => {
+                for w in warnings {
+                    progress.warn(&format!("sweep: warning: {w}"));
+                }
+                progress.note(&if from_cache {
+                    format!("sweep: bed of seed {seed} read from the cache ({wall_time_s:.1} s)")
+                } else {
+                    format!("sweep: bed of seed {seed} settled ({wall_time_s:.0} s)")
+                })
             }
-            note(if from_cache {
-                format!("sweep: bed of seed {seed} read from the cache ({wall_time_s:.1} s)")
-            } else {
-                format!("sweep: bed of seed {seed} settled ({wall_time_s:.0} s)")
-            })
-        }
-        SweepEvent::ConditionDone {
-            row,
-            done,
-            total,
-            eta_s,
-        } => {
-            let c = &row.condition;
-            let what = match row.status {
-                RowStatus::Ok => format!(
-                    "efficiency {:.3} +- {:.3}, measured {:.3}, {} ({} cycles{}, {:.0} s)",
-                    row.efficiency,
-                    row.efficiency_se,
-                    row.efficiency_measured,
-                    row.phase,
-                    row.cycles,
-                    if row.steady == "capped" {
-                        ", NOT steady at the cap"
-                    } else {
-                        ""
-                    },
-                    row.wall_time_s
-                ),
-                RowStatus::Unreachable => "beyond the rig".into(),
-                RowStatus::Failed => format!("FAILED: {}", row.note),
-            };
-            note(format!(
-                "sweep: {done}/{total}  {}: {what}; ETA {}",
-                c.describe(with_fill, with_orientation),
+            SweepEvent::ConditionDone {
+                row,
+                done,
+                total,
+                eta_s,
+            } => progress.note(&format!(
+                "sweep: {done}/{total}  {}: {}; ETA {}",
+                row.condition
+                    .describe(self.with_fill, self.with_orientation),
+                outcome(row),
                 eta(eta_s)
-            ))
+            )),
         }
-    };
-    let result =
-        run_sweep(&plan, shard, &out_dir, a.resume, &on_event).context("running the sweep");
-    let file = made.keep_if_ok(result)?;
-    let plots = if shard == Shard::ALL {
-        plot_sweep(&file, &out_dir).context("drawing the sweep's plots")?
-    } else {
-        Vec::new()
-    };
-    report(&file, &out_dir, &plots, a.json)
+    }
+}
+
+/// A finished condition's result, for its progress line.
+fn outcome(row: &SweepRow) -> String {
+    match row.status {
+        RowStatus::Ok => format!(
+            "efficiency {:.3} +- {:.3}, measured {:.3}, {} ({} cycles{}, {:.0} s)",
+            row.efficiency,
+            row.efficiency_se,
+            row.efficiency_measured,
+            row.phase,
+            row.cycles,
+            if row.steady == "capped" {
+                ", NOT steady at the cap"
+            } else {
+                ""
+            },
+            row.wall_time_s
+        ),
+        RowStatus::Unreachable => "beyond the rig".into(),
+        RowStatus::Failed => format!("FAILED: {}", row.note),
+    }
 }
 
 fn eta(s: f64) -> String {

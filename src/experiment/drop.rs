@@ -79,8 +79,9 @@ use serde::Serialize;
 
 use crate::dem::hertz_theory;
 use crate::dem::material::{Material, effective_youngs_pa, sphere_mass_kg};
-use crate::dem::{ContactLaw, DemError, Numerics, Particles, RestitutionMode, Walls, World};
-use crate::rig::{DropRig, DropRigReport, DropRigSpec, Plate, RigError};
+use crate::dem::{ContactLaw, Numerics, Particles, RestitutionMode, Walls, World};
+use crate::rig::{DropRig, DropRigReport, DropRigSpec, Plate};
+use crate::scene::SceneError;
 use crate::scene::validity::sphere_wall_yield_velocity_mps;
 use crate::signals::{
     DropTestResult, ImpactParams, SignalsError, Trace, TraceMetadata, estimate_cor,
@@ -217,29 +218,10 @@ pub struct DropSetup {
     pub numerics: DropNumerics,
 }
 
-/// Errors of the drop scene.
-#[derive(Debug, thiserror::Error)]
-pub enum DropError {
-    /// A set-up value out of range, named as the field of [`DropSetup`] (or
-    /// the rig key) that holds it. The sample rate or height refused because
-    /// the record could not hold the impacts is one too: its valid range says why.
-    #[error("{0}")]
-    Invalid(#[from] InvalidParameter),
-    /// The engine stopped.
-    #[error(transparent)]
-    Dem(#[from] DemError),
-    /// The rig refused or failed.
-    #[error(transparent)]
-    Rig(#[from] RigError),
-    /// The record could not be analysed.
-    #[error(transparent)]
-    Signals(#[from] SignalsError),
-}
-
 impl DropSetup {
     /// A preset particle of the default diameter dropped from `height_m` on
     /// the built-in rig, seed 1.
-    pub fn preset(particle: DropParticle, height_m: f64) -> Result<DropSetup, DropError> {
+    pub fn preset(particle: DropParticle, height_m: f64) -> Result<DropSetup, SceneError> {
         Ok(DropSetup {
             particle_name: particle.name().to_string(),
             material: particle.material(),
@@ -307,7 +289,7 @@ impl DropSetup {
 
     /// The transducer's first pulse at the fastest impact and the lowest
     /// sample rate that puts one sample in it.
-    pub fn min_sample_rate_hz(&self) -> Result<SamplingLimit, DropError> {
+    pub fn min_sample_rate_hz(&self) -> Result<SamplingLimit, SceneError> {
         let plate = Plate::from_spec(&self.rig)?;
         let pulse =
             plate.first_pulse_duration_s(self.contact_duration_s(self.first_impact_speed_mps()));
@@ -323,13 +305,13 @@ impl DropSetup {
     /// its zero crossings, timed a ring period late or missed altogether; the
     /// estimate shows a missed impact as a triple with `e > 1`. The sample
     /// rate is named by its rig key, `daq.sample_rate_hz`.
-    pub fn sampling_warning(&self) -> Result<Option<String>, DropError> {
+    pub fn sampling_warning(&self) -> Result<Option<String>, SceneError> {
         self.sampling_warning_naming("daq.sample_rate_hz")
     }
 
     /// [`DropSetup::sampling_warning`] with the sample rate named `name` (a
     /// caller's own name for the value: the flag that set it).
-    pub fn sampling_warning_naming(&self, name: &str) -> Result<Option<String>, DropError> {
+    pub fn sampling_warning_naming(&self, name: &str) -> Result<Option<String>, SceneError> {
         let fs = self.rig.daq.sample_rate_hz;
         let pulse = self.min_sample_rate_hz()?.first_pulse_s;
         let ring_hz = Plate::from_spec(&self.rig)?.ring_freq_hz();
@@ -377,9 +359,11 @@ impl DropSetup {
         out
     }
 
-    /// Checks every value; a refusal names the field (or rig key), its unit
-    /// and valid range.
-    pub fn validate(&self) -> Result<(), DropError> {
+    /// Checks every value; a refusal ([`SceneError::Invalid`]) names the field
+    /// (or rig key), its unit and valid range. The sample rate or height
+    /// refused because the record could not hold the impacts is one too: its
+    /// valid range says why.
+    pub fn validate(&self) -> Result<(), SceneError> {
         self.material.validate().map_err(|e| e.within("material"))?;
         in_range(
             "diameter_m",
@@ -595,18 +579,34 @@ struct OpenContact {
 }
 
 /// Runs one drop: release, bounces, rest, to the end of the rig's record.
-pub fn run_drop(setup: &DropSetup) -> Result<DropOutcome, DropError> {
+pub fn run_drop(setup: &DropSetup) -> Result<DropOutcome, SceneError> {
     setup.validate()?;
     let start = Instant::now();
-    let g = setup.gravity_mps2;
-    let r = setup.radius_m();
     let tick = setup.tick_s();
-    let nums = setup.numerics;
     let mut rig = DropRig::new(&setup.rig, tick, setup.seed)?;
     let length = setup.rig.record.length_s;
     let n_ticks = (length / tick).round() as u64;
     rig.reserve(length);
+    let mut world = drop_world(setup, tick)?;
+    let log = bounce_to_the_end(setup, &mut rig, &mut world, tick, n_ticks)?;
+    let (trace, rig_report) = rig.finish(drop_metadata(setup))?;
+    Ok(DropOutcome {
+        trace,
+        rig_report,
+        impacts: log.impacts,
+        tick_s: tick,
+        dem_steps: world.steps,
+        fine_steps: log.fine_steps,
+        rest_time_s: log.rest_time_s,
+        first_contact_duration_s: setup.contact_duration_s(setup.first_impact_speed_mps()),
+        wall_time_s: start.elapsed().as_secs_f64(),
+    })
+}
 
+/// The drop scene's world at time step `tick_s`: the sphere at rest at its
+/// release height above the plate, under gravity.
+fn drop_world(setup: &DropSetup, tick_s: f64) -> Result<World, SceneError> {
+    let r = setup.radius_m();
     let law = ContactLaw::new(
         &setup.material,
         &setup.plate_material(),
@@ -622,35 +622,65 @@ pub fn run_drop(setup: &DropSetup) -> Result<DropOutcome, DropError> {
         r,
         setup.material.density_kgm3,
     );
-    let mut world = World::new(
+    Ok(World::new(
         particles,
         Walls::plate(),
         law,
         law,
-        DVec3::new(0.0, 0.0, -g),
-        Numerics::with_dt(tick),
-    )?;
+        DVec3::new(0.0, 0.0, -setup.gravity_mps2),
+        Numerics::with_dt(tick_s),
+    )?)
+}
+
+/// The metadata of a drop's force record.
+fn drop_metadata(setup: &DropSetup) -> TraceMetadata {
+    TraceMetadata {
+        source: format!(
+            "vlab {} drop: {} ({} m, e = {}) from {} m",
+            env!("CARGO_PKG_VERSION"),
+            setup.particle_name,
+            setup.diameter_m,
+            setup.restitution,
+            setup.height_m
+        ),
+        ..Default::default()
+    }
+}
+
+/// Steps the rig to `n_ticks` of `tick_s` and the DEM with it (module docs:
+/// one long step in free flight, the tick near and in contact), the plate
+/// carrying the sphere's weight once it rests.
+fn bounce_to_the_end(
+    setup: &DropSetup,
+    rig: &mut DropRig,
+    world: &mut World,
+    tick_s: f64,
+    n_ticks: u64,
+) -> Result<BounceLog, SceneError> {
+    let tick = tick_s;
+    let g = setup.gravity_mps2;
+    let r = setup.radius_m();
+    let nums = setup.numerics;
     let weight_n = world.particles.mass[0] * g;
     let max_flight_ticks = ((nums.max_flight_step_s / tick).floor() as u64).max(1);
-    let first_speed = setup.first_impact_speed_mps();
-    let rest_speed = nums.rest_speed_fraction * first_speed;
-
+    let rest_speed = nums.rest_speed_fraction * setup.first_impact_speed_mps();
     let mut force_on_plate = 0.0;
-    let mut impacts: Vec<DemImpact> = Vec::new();
-    let mut open: Option<OpenContact> = None;
-    let mut rest_time_s = None;
-    let mut fine_steps = 0u64;
-    // State after the previous DEM step: time, overlap, sphere velocity, plate velocity.
-    let mut prev = (0.0, -setup.height_m, 0.0, 0.0);
+    let mut log = BounceLog {
+        impacts: Vec::new(),
+        open: None,
+        rest_time_s: None,
+        fine_steps: 0,
+        prev: (0.0, -setup.height_m, 0.0, 0.0),
+    };
     while rig.ticks() < n_ticks {
-        if rest_time_s.is_some() {
+        if log.rest_time_s.is_some() {
             rig.tick(-weight_n);
             continue;
         }
         let z = world.particles.position[0].z;
         let v = world.particles.velocity[0].z;
         let gap = z - r - rig.plate().displacement_m();
-        let n = if open.is_none() && gap > nums.approach_margin_m {
+        let n = if log.open.is_none() && gap > nums.approach_margin_m {
             // Time for the free-flight parabola to come down to the margin.
             let d = gap - nums.approach_margin_m;
             let t_reach = (v + (v * v + 2.0 * g * d).sqrt()) / g;
@@ -667,22 +697,58 @@ pub fn run_drop(setup: &DropSetup) -> Result<DropOutcome, DropError> {
         world.numerics.dt_s = n as f64 * tick;
         world.step(x)?;
         if n == 1 {
-            fine_steps += 1;
+            log.fine_steps += 1;
         }
         force_on_plate = -world.wall_force().z;
-
-        let t = rig.time_s();
         let z = world.particles.position[0].z;
-        let v = world.particles.velocity[0].z;
-        let vp = rig.plate().velocity_mps();
-        let overlap = r - (z - x);
-        let (t0, overlap0, v0, vp0) = prev;
-        match open.as_mut() {
+        let after = (
+            rig.time_s(),
+            r - (z - x),
+            world.particles.velocity[0].z,
+            rig.plate().velocity_mps(),
+        );
+        log.record(after, force_on_plate, g, rest_speed);
+    }
+    Ok(log)
+}
+
+/// The contacts of a drop so far.
+#[derive(Debug, Clone)]
+struct BounceLog {
+    /// Every contact closed, in order.
+    impacts: Vec<DemImpact>,
+    /// The contact in progress.
+    open: Option<OpenContact>,
+    /// When the sphere was taken to rest, s.
+    rest_time_s: Option<f64>,
+    /// DEM steps taken at the tick.
+    fine_steps: u64,
+    /// State after the previous DEM step: time, overlap, sphere velocity, plate velocity.
+    prev: (f64, f64, f64, f64),
+}
+
+impl BounceLog {
+    /// Takes the state after a DEM step, `(t, overlap, v, vp)` as
+    /// [`BounceLog::prev`], with the sphere's force on the plate: opens,
+    /// follows or closes a contact (onset and end interpolated at the
+    /// overlap's zero crossing, speeds from the free-flight parabola), and
+    /// takes the sphere to rest after a rebound slower than `rest_speed` or a
+    /// millisecond pressed onto the plate.
+    fn record(
+        &mut self,
+        after: (f64, f64, f64, f64),
+        force_on_plate: f64,
+        g: f64,
+        rest_speed: f64,
+    ) {
+        let (t, overlap, v, vp) = after;
+        let (t0, overlap0, v0, vp0) = self.prev;
+        match self.open.as_mut() {
             None if overlap > 0.0 => {
                 let frac = (-overlap0 / (overlap - overlap0)).clamp(0.0, 1.0);
                 let t_on = t0 + frac * (t - t0);
                 let v_on = v0 - g * (t_on - t0);
-                open = Some(OpenContact {
+                self.open = Some(OpenContact {
                     onset_time_s: t_on,
                     arrival_mps: -v_on,
                     relative_arrival_mps: vp0 - v_on,
@@ -693,14 +759,14 @@ pub fn run_drop(setup: &DropSetup) -> Result<DropOutcome, DropError> {
                 c.peak_force_n = c.peak_force_n.max(force_on_plate.abs());
                 if t - c.onset_time_s > 1e-3 {
                     // Pressed onto the plate for a millisecond: at rest.
-                    rest_time_s = Some(t);
+                    self.rest_time_s = Some(t);
                 }
             }
             Some(c) => {
                 let frac = (overlap0 / (overlap0 - overlap)).clamp(0.0, 1.0);
                 let t_off = t0 + frac * (t - t0);
                 let v_off = v + g * (t - t_off);
-                impacts.push(DemImpact {
+                self.impacts.push(DemImpact {
                     onset_time_s: c.onset_time_s,
                     end_time_s: t_off,
                     arrival_speed_mps: c.arrival_mps,
@@ -709,38 +775,15 @@ pub fn run_drop(setup: &DropSetup) -> Result<DropOutcome, DropError> {
                     contact_cor: (v_off - vp) / c.relative_arrival_mps,
                     peak_contact_force_n: c.peak_force_n,
                 });
-                open = None;
+                self.open = None;
                 if v_off < rest_speed {
-                    rest_time_s = Some(t_off);
+                    self.rest_time_s = Some(t_off);
                 }
             }
             None => {}
         }
-        prev = (t, overlap, v, vp);
+        self.prev = after;
     }
-    let metadata = TraceMetadata {
-        source: format!(
-            "vlab {} drop: {} ({} m, e = {}) from {} m",
-            env!("CARGO_PKG_VERSION"),
-            setup.particle_name,
-            setup.diameter_m,
-            setup.restitution,
-            setup.height_m
-        ),
-        ..Default::default()
-    };
-    let (trace, rig_report) = rig.finish(metadata)?;
-    Ok(DropOutcome {
-        trace,
-        rig_report,
-        impacts,
-        tick_s: tick,
-        dem_steps: world.steps,
-        fine_steps,
-        rest_time_s,
-        first_contact_duration_s: setup.contact_duration_s(first_speed),
-        wall_time_s: start.elapsed().as_secs_f64(),
-    })
 }
 
 /// Text for a height in a file name: 0.05 -> "50", 0.0125 -> "12.5" (mm).
@@ -824,6 +867,44 @@ pub struct DropSummary {
     pub files: Vec<String>,
 }
 
+/// What `drop.json` says about one height's drop `out` from set-up `s` and
+/// the estimate `est` made on its record.
+fn run_summary(s: &DropSetup, out: &DropOutcome, est: &DropEstimate) -> DropRunSummary {
+    let cor = &est.result.cor;
+    let n = cor.cor_per_triple.len();
+    let speeds = cor.impact_speeds_mps[..n].to_vec();
+    let stem = format!("force-h{}mm", millimetres(s.height_m));
+    DropRunSummary {
+        height_m: s.height_m,
+        first_impact_speed_mps: s.first_impact_speed_mps(),
+        contact_duration_s: out.first_contact_duration_s,
+        impacts_detected: est.result.detection.impacts.len(),
+        onset_times_s: est.result.detection.onset_times_s(),
+        cor_per_triple: cor.cor_per_triple.clone(),
+        impact_speeds_mps: speeds,
+        cor_mean: cor.cor_mean,
+        cor_std: cor.cor_std,
+        realised_model_cor_per_triple: est.realised_per_triple.clone(),
+        realised_model_cor: est.realised_mean(),
+        growing_gap_triples: cor.growing_gaps(),
+        threshold_n: est.result.detection.threshold_n,
+        holdoff_s: est.result.detection.holdoff_s,
+        peak_transducer_force_n: out.rig_report.peak_transducer_force_n,
+        clipped_samples: out.rig_report.clipped,
+        dem_impacts: out.impacts.clone(),
+        rest_time_s: out.rest_time_s,
+        tick_s: out.tick_s,
+        dem_steps: out.dem_steps,
+        fine_steps: out.fine_steps,
+        wall_time_s: out.wall_time_s,
+        files: vec![
+            format!("{stem}.csv"),
+            format!("{stem}.wav"),
+            format!("{stem}.wav.json"),
+        ],
+    }
+}
+
 /// The summary of drops `setups` (the same sphere and rig from one or
 /// several heights; at least one) and their `runs`, with the `warnings` the
 /// caller has for them; `material` names the sphere's material.
@@ -832,7 +913,7 @@ pub fn summarise_drops(
     runs: &[(DropOutcome, DropEstimate)],
     material: &'static str,
     warnings: Vec<String>,
-) -> Result<DropSummary, DropError> {
+) -> Result<DropSummary, SceneError> {
     let first = setups
         .first()
         .ok_or_else(|| InvalidParameter::new("setups", "[]", "", "a list of at least one drop"))?;
@@ -845,43 +926,13 @@ pub fn summarise_drops(
     for (s, (out, est)) in setups.iter().zip(runs) {
         let cor = &est.result.cor;
         let n = cor.cor_per_triple.len();
-        let speeds = cor.impact_speeds_mps[..n].to_vec();
         all_cor.extend_from_slice(&cor.cor_per_triple);
-        all_speed.extend_from_slice(&speeds);
+        all_speed.extend_from_slice(&cor.impact_speeds_mps[..n]);
         all_height.extend(std::iter::repeat_n(s.height_m, n));
         all_realised.extend_from_slice(&est.realised_per_triple);
         contact
             .extend((0..n).filter_map(|k| est.matched[k + 1].map(|i| out.impacts[i].contact_cor)));
-        let stem = format!("force-h{}mm", millimetres(s.height_m));
-        run_summaries.push(DropRunSummary {
-            height_m: s.height_m,
-            first_impact_speed_mps: s.first_impact_speed_mps(),
-            contact_duration_s: out.first_contact_duration_s,
-            impacts_detected: est.result.detection.impacts.len(),
-            onset_times_s: est.result.detection.onset_times_s(),
-            cor_per_triple: cor.cor_per_triple.clone(),
-            impact_speeds_mps: speeds,
-            cor_mean: cor.cor_mean,
-            cor_std: cor.cor_std,
-            realised_model_cor_per_triple: est.realised_per_triple.clone(),
-            realised_model_cor: est.realised_mean(),
-            growing_gap_triples: cor.growing_gaps(),
-            threshold_n: est.result.detection.threshold_n,
-            holdoff_s: est.result.detection.holdoff_s,
-            peak_transducer_force_n: out.rig_report.peak_transducer_force_n,
-            clipped_samples: out.rig_report.clipped,
-            dem_impacts: out.impacts.clone(),
-            rest_time_s: out.rest_time_s,
-            tick_s: out.tick_s,
-            dem_steps: out.dem_steps,
-            fine_steps: out.fine_steps,
-            wall_time_s: out.wall_time_s,
-            files: vec![
-                format!("{stem}.csv"),
-                format!("{stem}.wav"),
-                format!("{stem}.wav.json"),
-            ],
-        });
+        run_summaries.push(run_summary(s, out, est));
     }
     let cor = mean_std(&all_cor);
     let realised: Vec<f64> = all_realised.iter().flatten().copied().collect();

@@ -148,13 +148,61 @@ pub fn run_impact(setup: &ImpactSetup) -> Result<ImpactOutcome, SceneError> {
     let v_n = setup.normal_speed_mps();
     let hertz_duration_s = hertz_theory::contact_duration_s(m_star, e_star, r_star, v_n);
     let dt = setup.dt_s.unwrap_or(hertz_duration_s / STEPS_PER_CONTACT);
+    // Start a few steps before the touch, so the contact opens mid-run.
+    let gap = 5.0 * v_n * dt;
+    let mut world = impact_world(setup, dt, gap)?;
+    let damping_factor = world.pp_law.damping_factor;
+    let start = world.snapshot();
+    let v_before = relative_velocity(setup, &world);
+    let max_steps = 10 * (gap / (v_n * dt)) as u64 + 20 * STEPS_PER_CONTACT as u64 + 100_000;
+    let Some(contact) = run_contact(setup, &mut world, max_steps)? else {
+        return Err(SceneError::Invalid(InvalidParameter::new(
+            "restitution",
+            setup.restitution,
+            "",
+            "large enough for the bodies to separate: this contact is overdamped and never lets go",
+        )));
+    };
+    let end = world.snapshot();
+    let balance = LedgerBalance::between(&start, &end);
+    let v_after = relative_velocity(setup, &world);
+    let rebound_normal = -(v_after.z * v_before.z.signum());
+    let rebound_tangential = v_after.truncate().length();
+    let trace = contact.trace;
+    let in_contact: Vec<&ImpactSample> = trace.iter().filter(|s| s.overlap_m > 0.0).collect();
+    Ok(ImpactOutcome {
+        contact_duration_s: contact.end_s - contact.onset_s,
+        max_overlap_m: in_contact.iter().map(|s| s.overlap_m).fold(0.0, f64::max),
+        max_normal_force_n: in_contact
+            .iter()
+            .map(|s| s.normal_force_n)
+            .fold(0.0, f64::max),
+        normal_restitution: rebound_normal / v_before.z.abs(),
+        rebound_speed_mps: v_after.length(),
+        rebound_angle_deg: rebound_tangential.atan2(rebound_normal).to_degrees(),
+        rebound_spin_rad_s: world.particles.angular_velocity[0].y,
+        dissipated_j: end.flows.dissipated.total() - start.flows.dissipated.total(),
+        kinetic_energy_lost_j: start.stored.kinetic_j() - end.stored.kinetic_j(),
+        integrator_j: balance.integrator_j,
+        ledger_residual_j: balance.residual_j,
+        hertz_duration_s,
+        hertz_max_overlap_m: hertz_theory::max_overlap_m(m_star, e_star, r_star, v_n),
+        hertz_max_force_n: hertz_theory::max_force_n(m_star, e_star, r_star, v_n),
+        damping_factor,
+        dt_s: dt,
+        steps: world.steps,
+        trace,
+    })
+}
+
+/// The world of the collision at time step `dt_s` (module docs' frame),
+/// `gap_m` before the touch.
+fn impact_world(setup: &ImpactSetup, dt_s: f64, gap_m: f64) -> Result<World, SceneError> {
     let r = setup.radius_m;
+    let gap = gap_m;
     let (sin, cos) = setup.angle_deg.to_radians().sin_cos();
     let direction = DVec3::new(sin, 0.0, -cos);
     let spin = DVec3::new(0.0, setup.spin_rad_s, 0.0);
-    // Start a few steps before the touch, so the contact opens mid-run.
-    let gap = 5.0 * v_n * dt;
-
     let mut particles = Particles::default();
     let (walls, wall_material) = match setup.target {
         Target::Wall(w) => {
@@ -191,34 +239,55 @@ pub fn run_impact(setup: &ImpactSetup) -> Result<ImpactOutcome, SceneError> {
         )
     };
     let (pp_law, pw_law) = (law(&setup.material), law(&wall_material));
-    let damping_factor = pp_law.damping_factor;
-    let mut world = World::new(
+    Ok(World::new(
         particles,
         walls,
         pp_law,
         pw_law,
         DVec3::ZERO,
-        Numerics::with_dt(dt),
-    )?;
-    let start = world.snapshot();
-    let relative_velocity = |w: &World| match setup.target {
+        Numerics::with_dt(dt_s),
+    )?)
+}
+
+/// Velocity of sphere A relative to what it hits.
+fn relative_velocity(setup: &ImpactSetup, w: &World) -> DVec3 {
+    match setup.target {
         Target::Wall(_) => w.particles.velocity[0],
         Target::Sphere => w.particles.velocity[0] - w.particles.velocity[1],
-    };
-    let overlap = |w: &World| match setup.target {
+    }
+}
+
+/// Overlap of the contact, m (negative: a gap).
+fn overlap(setup: &ImpactSetup, w: &World) -> f64 {
+    let r = setup.radius_m;
+    match setup.target {
         Target::Wall(_) => r - w.particles.position[0].z,
         Target::Sphere => 2.0 * r - (w.particles.position[0] - w.particles.position[1]).length(),
-    };
-    let v_before = relative_velocity(&world);
+    }
+}
 
+/// A contact followed from its onset to its end.
+struct Contact {
+    /// Every step's sample, from the first.
+    trace: Vec<ImpactSample>,
+    onset_s: f64,
+    end_s: f64,
+}
+
+/// Steps `world` until the contact has opened and closed again (onset and
+/// end by linear interpolation of the overlap's zero crossing), at most
+/// `max_steps` in all; `None` when it never closed.
+fn run_contact(
+    setup: &ImpactSetup,
+    world: &mut World,
+    max_steps: u64,
+) -> Result<Option<Contact>, SceneError> {
     let mut trace = Vec::new();
-    let mut prev = (world.time_s, overlap(&world));
+    let mut prev = (world.time_s, overlap(setup, world));
     let mut started_at = None;
-    let mut ended_at = None;
-    let max_steps = 10 * (gap / (v_n * dt)) as u64 + 20 * STEPS_PER_CONTACT as u64 + 100_000;
     while world.steps < max_steps {
         world.step(0.0)?;
-        let d = overlap(&world);
+        let d = overlap(setup, world);
         let f = world.particles.force[0];
         trace.push(ImpactSample {
             time_s: world.time_s,
@@ -226,52 +295,20 @@ pub fn run_impact(setup: &ImpactSetup) -> Result<ImpactOutcome, SceneError> {
             normal_force_n: f.z.abs(),
             tangential_force_n: f.truncate().length(),
         });
-        // Onset and end by linear interpolation of the overlap's zero crossing.
-        if started_at.is_none() && d > 0.0 {
-            started_at = Some(crossing(prev, (world.time_s, d)));
-        } else if started_at.is_some() && d <= 0.0 {
-            ended_at = Some(crossing(prev, (world.time_s, d)));
-            break;
+        match started_at {
+            None if d > 0.0 => started_at = Some(crossing(prev, (world.time_s, d))),
+            Some(onset_s) if d <= 0.0 => {
+                return Ok(Some(Contact {
+                    trace,
+                    onset_s,
+                    end_s: crossing(prev, (world.time_s, d)),
+                }));
+            }
+            _ => {}
         }
         prev = (world.time_s, d);
     }
-    let (Some(t0), Some(t1)) = (started_at, ended_at) else {
-        return Err(SceneError::Invalid(InvalidParameter::new(
-            "restitution",
-            setup.restitution,
-            "",
-            "large enough for the bodies to separate: this contact is overdamped and never lets go",
-        )));
-    };
-    let end = world.snapshot();
-    let balance = LedgerBalance::between(&start, &end);
-    let v_after = relative_velocity(&world);
-    let rebound_normal = -(v_after.z * v_before.z.signum());
-    let rebound_tangential = v_after.truncate().length();
-    let in_contact: Vec<&ImpactSample> = trace.iter().filter(|s| s.overlap_m > 0.0).collect();
-    Ok(ImpactOutcome {
-        contact_duration_s: t1 - t0,
-        max_overlap_m: in_contact.iter().map(|s| s.overlap_m).fold(0.0, f64::max),
-        max_normal_force_n: in_contact
-            .iter()
-            .map(|s| s.normal_force_n)
-            .fold(0.0, f64::max),
-        normal_restitution: rebound_normal / v_before.z.abs(),
-        rebound_speed_mps: v_after.length(),
-        rebound_angle_deg: rebound_tangential.atan2(rebound_normal).to_degrees(),
-        rebound_spin_rad_s: world.particles.angular_velocity[0].y,
-        dissipated_j: end.flows.dissipated.total() - start.flows.dissipated.total(),
-        kinetic_energy_lost_j: start.stored.kinetic_j() - end.stored.kinetic_j(),
-        integrator_j: balance.integrator_j,
-        ledger_residual_j: balance.residual_j,
-        hertz_duration_s,
-        hertz_max_overlap_m: hertz_theory::max_overlap_m(m_star, e_star, r_star, v_n),
-        hertz_max_force_n: hertz_theory::max_force_n(m_star, e_star, r_star, v_n),
-        damping_factor,
-        dt_s: dt,
-        steps: world.steps,
-        trace,
-    })
+    Ok(None)
 }
 
 /// Time at which the linear interpolation between two samples crosses zero.

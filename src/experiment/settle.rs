@@ -178,6 +178,43 @@ pub fn settle_bed(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<SettledBed, SceneError> {
     let started = Instant::now();
+    // 1. Pour under the soft law, resolving the fastest fall the column allows.
+    let mut world = pour(scene, started, progress)?;
+    let Packing {
+        fraction: packing_fraction,
+        bed_height_m,
+    } = packing(&world, scene);
+
+    // 2. Close the lid, as a piston where spheres stand above it.
+    close_lid(&mut world, scene, started, progress)?;
+
+    // 3. Turn to the test orientation and settle again.
+    turn(&mut world, scene, started, progress)?;
+
+    // 4. Stiffen to the particles' own stiffness in geometric stages, so that
+    //    the overlaps shrink a little at a time instead of springing apart.
+    stiffen(&mut world, scene, started, progress)?;
+    Ok(SettledBed {
+        settle_time_s: world.time_s,
+        settle_steps: world.steps,
+        world,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        packing_fraction,
+        bed_height_m,
+        from_cache: false,
+        warnings: Vec::new(),
+    })
+}
+
+/// Step 1 of [`settle_bed`]: the spheres inserted in the pour column and
+/// poured under the soft settling law, frictionless for
+/// [`POUR_SLIDING_FALLS`] fall times and then with the settling friction
+/// until at rest.
+fn pour(
+    scene: &Scene,
+    started: Instant,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<World, SceneError> {
     let radius = scene.radius_m();
     let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
     let g = scene.simulation.gravity_mps2;
@@ -188,8 +225,6 @@ pub fn settle_bed(
     for p in positions {
         particles.push(p, DVec3::ZERO, DVec3::ZERO, radius, density);
     }
-
-    // 1. Pour under the soft law, resolving the fastest fall the column allows.
     let (pp, pw) = settling_laws(scene, SETTLE_STIFFNESS_FACTOR);
     let fall_mps = (2.0 * g * column).sqrt().max(0.1);
     let dt_soft = resolving_step_s(
@@ -228,20 +263,23 @@ pub fn settle_bed(
     )?;
     world.set_contact_laws(pp_rough, pw_rough)?;
     run_until_rest(&mut world, 0.0, MAX_POUR_S, "pouring", started, progress)?;
-    let Packing {
-        fraction: packing_fraction,
-        bed_height_m,
-    } = packing(&world, scene);
+    Ok(world)
+}
 
-    // 2. Close the lid, as a piston where spheres stand above it.
-    close_lid(&mut world, scene, started, progress)?;
-
-    // 3. Turn to the test orientation and settle again.
+/// Step 3 of [`settle_bed`]: gravity turned to the test orientation, and the
+/// bed settled again if that turned it.
+fn turn(
+    world: &mut World,
+    scene: &Scene,
+    started: Instant,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(), SceneError> {
+    let g = scene.simulation.gravity_mps2;
     world.gravity = gravity_vector(scene.enclosure.orientation, g);
     world.rebaseline();
     if scene.enclosure.orientation != Orientation::Vertical {
         run_until_rest(
-            &mut world,
+            world,
             0.0,
             scene.simulation.settle_s.max(MAX_POUR_S),
             "turning",
@@ -249,9 +287,18 @@ pub fn settle_bed(
             progress,
         )?;
     }
+    Ok(())
+}
 
-    // 4. Stiffen to the particles' own stiffness in geometric stages, so that
-    //    the overlaps shrink a little at a time instead of springing apart.
+/// Step 4 of [`settle_bed`]: the settling law stiffened to the particles'
+/// own stiffness in [`RELAX_STAGES`] geometric stages, the bed at rest after
+/// each.
+fn stiffen(
+    world: &mut World,
+    scene: &Scene,
+    started: Instant,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(), SceneError> {
     let (pp_full, pw_full) = settling_laws(scene, 1.0);
     let stages = RELAX_STAGES;
     for k in 1..=stages {
@@ -264,7 +311,7 @@ pub fn settle_bed(
         world.set_contact_laws(pp, pw)?;
         world.set_dt_s(dt);
         run_until_rest(
-            &mut world,
+            world,
             0.0,
             scene.simulation.settle_s.max(MAX_RELAX_S),
             "settling",
@@ -272,16 +319,7 @@ pub fn settle_bed(
             progress,
         )?;
     }
-    Ok(SettledBed {
-        settle_time_s: world.time_s,
-        settle_steps: world.steps,
-        world,
-        wall_time_s: started.elapsed().as_secs_f64(),
-        packing_fraction,
-        bed_height_m,
-        from_cache: false,
-        warnings: Vec::new(),
-    })
+    Ok(())
 }
 
 /// The world of a settled bed rebuilt from its particles' state (a bed read

@@ -76,7 +76,7 @@ use serde::Serialize;
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::contact::Tangential;
 use crate::dem::material::{effective_shear_pa, effective_youngs_pa};
-use crate::dem::{ContactLaw, RestitutionMode};
+use crate::dem::{ContactLaw, Particles, RestitutionMode};
 use crate::experiment::damper::contact_laws;
 use crate::experiment::settle::SettledBed;
 use crate::experiment::shake::{TRUTH_SAMPLE_RATE_HZ, check_drive};
@@ -432,55 +432,172 @@ pub fn lammps_deck(
         2,
         Some(export.cycles),
     )?;
-    let world = &bed.world;
-    let particles = &world.particles;
-    let dt = scene.drive_dt_s(export.freq_hz, export.gamma);
-    let g = scene.simulation.gravity_mps2;
-    let period = 1.0 / export.freq_hz;
-    let omega = 2.0 * PI * export.freq_hz;
-    let amplitude = export.gamma * g / (omega * omega);
-    let every = ((1.0 / TRUTH_SAMPLE_RATE_HZ / dt).round() as u64).max(1);
-    // Whole record rows, the last ending at or past the last cycle's end: the
-    // step need not divide the period (it is vlab's, from the scene's rule),
-    // and a record short of the boundary would lose the last period.
-    let rows = (f64::from(export.cycles) * period / (every as f64 * dt) - 1e-9).ceil() as u64;
-    let steps = rows * every;
-    let radius = scene.radius_m();
-    let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
-    let length = scene.enclosure.inner_length_m;
-    let mode = scene.contact.restitution_mode;
-    let laws = contact_laws(scene);
-    let (pp_law, pw_law) = (laws.particle_particle, laws.particle_wall);
-    let pm = scene.particle_material();
-    let wm = scene.wall_material();
-    // Spheres: their own E and nu (LAMMPS mixes E* of eq. 5.6 correctly).
-    // Walls: nu = 0 and E = 2 E*_pw, Mindlin 8 G*_pw (see the module docs).
-    let pp = translate(&pp_law, mode, pm.youngs_pa, pm.poisson, None)?;
-    let pw = translate(
-        &pw_law,
-        mode,
-        2.0 * pw_law.e_star_pa,
-        0.0,
-        Some(8.0 * pw_law.g_star_pa),
-    )?;
-    debug_assert!(
-        (pw.effective_youngs_pa - effective_youngs_pa(&pm, &wm)).abs()
-            <= 1e-9 * pw.effective_youngs_pa
-    );
-    debug_assert!(
-        (pw.effective_shear_pa - effective_shear_pa(&pm, &wm)).abs()
-            <= 1e-9 * pw.effective_shear_pa
-    );
-    let side_factor = (1.0 - radius / (2.0 * cyl_r)).sqrt();
-    let keys = scene_key_uses(scene, export, dt)?;
-    let mass = particles.total_mass_kg();
-    let (gx, gy, gz) = match scene.enclosure.orientation {
-        Orientation::Vertical => (0, 0, -1),
-        Orientation::Horizontal => (0, -1, 0),
-    };
-    let version = env!("CARGO_PKG_VERSION");
+    let particles = &bed.world.particles;
+    let plan = DeckPlan::new(scene, bed, export)?;
+    let data = packing_data(&plan, particles);
+    let input = [
+        header_lines(&plan),
+        contact_comment_lines(&plan),
+        setup_lines(),
+        pair_lines(&plan),
+        drive_lines(&plan),
+        enclosure_lines(&plan),
+        motion_lines(&plan),
+        force_lines(),
+        record_lines(&plan),
+        run_lines(&plan),
+    ]
+    .concat();
+    Ok(LammpsDeck {
+        input,
+        data,
+        summary: plan.into_summary(particles.len()),
+    })
+}
 
-    // The packing.
+/// The numbers every section of the deck is written from.
+struct DeckPlan<'a> {
+    scene: &'a Scene,
+    export: &'a LammpsExport,
+    version: &'static str,
+    /// The time step, s: vlab's drive step.
+    dt: f64,
+    /// Gravity, m/s^2.
+    g: f64,
+    /// Drive amplitude, m.
+    amplitude: f64,
+    /// Steps per record row.
+    every: u64,
+    /// Steps run.
+    steps: u64,
+    /// Particle radius, m.
+    radius: f64,
+    /// Enclosure radius, m.
+    cyl_r: f64,
+    /// Enclosure inner length, m.
+    length: f64,
+    /// Particle Young's modulus (Pa), Poisson's ratio and density (kg/m^3).
+    particle_youngs_pa: f64,
+    particle_poisson: f64,
+    density: f64,
+    pp: ContactTranslation,
+    pw: ContactTranslation,
+    side_factor: f64,
+    keys: Vec<SceneKeyUse>,
+    /// Particle mass in all, kg.
+    mass: f64,
+    /// Direction of gravity.
+    gravity_dir: (i32, i32, i32),
+}
+
+impl<'a> DeckPlan<'a> {
+    fn new(
+        scene: &'a Scene,
+        bed: &SettledBed,
+        export: &'a LammpsExport,
+    ) -> Result<DeckPlan<'a>, SceneError> {
+        let particles = &bed.world.particles;
+        let dt = scene.drive_dt_s(export.freq_hz, export.gamma);
+        let g = scene.simulation.gravity_mps2;
+        let period = 1.0 / export.freq_hz;
+        let omega = 2.0 * PI * export.freq_hz;
+        let amplitude = export.gamma * g / (omega * omega);
+        let every = ((1.0 / TRUTH_SAMPLE_RATE_HZ / dt).round() as u64).max(1);
+        // Whole record rows, the last ending at or past the last cycle's end: the
+        // step need not divide the period (it is vlab's, from the scene's rule),
+        // and a record short of the boundary would lose the last period.
+        let rows = (f64::from(export.cycles) * period / (every as f64 * dt) - 1e-9).ceil() as u64;
+        let radius = scene.radius_m();
+        let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
+        let mode = scene.contact.restitution_mode;
+        let laws = contact_laws(scene);
+        let (pp_law, pw_law) = (laws.particle_particle, laws.particle_wall);
+        let pm = scene.particle_material();
+        let wm = scene.wall_material();
+        // Spheres: their own E and nu (LAMMPS mixes E* of eq. 5.6 correctly).
+        // Walls: nu = 0 and E = 2 E*_pw, Mindlin 8 G*_pw (see the module docs).
+        let pp = translate(&pp_law, mode, pm.youngs_pa, pm.poisson, None)?;
+        let pw = translate(
+            &pw_law,
+            mode,
+            2.0 * pw_law.e_star_pa,
+            0.0,
+            Some(8.0 * pw_law.g_star_pa),
+        )?;
+        debug_assert!(
+            (pw.effective_youngs_pa - effective_youngs_pa(&pm, &wm)).abs()
+                <= 1e-9 * pw.effective_youngs_pa
+        );
+        debug_assert!(
+            (pw.effective_shear_pa - effective_shear_pa(&pm, &wm)).abs()
+                <= 1e-9 * pw.effective_shear_pa
+        );
+        let gravity_dir = match scene.enclosure.orientation {
+            Orientation::Vertical => (0, 0, -1),
+            Orientation::Horizontal => (0, -1, 0),
+        };
+        Ok(DeckPlan {
+            scene,
+            export,
+            version: env!("CARGO_PKG_VERSION"),
+            dt,
+            g,
+            amplitude,
+            every,
+            steps: rows * every,
+            radius,
+            cyl_r,
+            length: scene.enclosure.inner_length_m,
+            particle_youngs_pa: pm.youngs_pa,
+            particle_poisson: pm.poisson,
+            density: pm.density_kgm3,
+            pp,
+            pw,
+            side_factor: (1.0 - radius / (2.0 * cyl_r)).sqrt(),
+            keys: scene_key_uses(scene, export, dt)?,
+            mass: particles.total_mass_kg(),
+            gravity_dir,
+        })
+    }
+
+    /// vlab's account of the deck of `n_particles` spheres.
+    fn into_summary(self, n_particles: usize) -> DeckSummary {
+        let (scene, export) = (self.scene, self.export);
+        DeckSummary {
+            vlab_version: self.version,
+            scene: scene.name.clone(),
+            freq_hz: export.freq_hz,
+            gamma: export.gamma,
+            amplitude_m: self.amplitude,
+            cycles: export.cycles,
+            steady_cycles: export.steady_cycles,
+            dt_s: self.dt,
+            steps: self.steps,
+            record_every_steps: self.every,
+            n_particles,
+            particle_mass_kg: self.mass,
+            orientation: scene.enclosure.orientation.as_str(),
+            gravity_mps2: self.g,
+            particle_particle: self.pp,
+            particle_wall: self.pw,
+            side_wall_factor: self.side_factor,
+            scene_keys: self.keys,
+            files: vec![INPUT_FILE.into(), DATA_FILE.into(), SUMMARY_FILE.into()],
+        }
+    }
+}
+
+/// Appends `text` and a newline to `s`.
+fn line(s: &mut String, text: &str) {
+    s.push_str(text);
+    s.push('\n');
+}
+
+/// `packing.data`: the box, every sphere's diameter, density and position,
+/// and every sphere's velocity and spin.
+fn packing_data(plan: &DeckPlan, particles: &Particles) -> String {
+    let (scene, version, radius, cyl_r) = (plan.scene, plan.version, plan.radius, plan.cyl_r);
+    let (amplitude, length) = (plan.amplitude, plan.length);
     let margin = 2.0 * radius;
     let mut data = String::new();
     let _ = writeln!(
@@ -513,7 +630,7 @@ pub fn lammps_deck(
     let _ = writeln!(data);
     let _ = writeln!(data, "Atoms # sphere");
     let _ = writeln!(data);
-    let density = pm.density_kgm3;
+    let density = plan.density;
     for i in 0..particles.len() {
         let p = particles.position[i];
         let r = particles.radius[i];
@@ -546,13 +663,13 @@ pub fn lammps_deck(
             w.z
         );
     }
+    data
+}
 
-    // The input.
+/// The input's header: how to run it and every scene key with its use.
+fn header_lines(plan: &DeckPlan) -> String {
+    let (scene, export, version) = (plan.scene, plan.export, plan.version);
     let mut s = String::new();
-    let line = |s: &mut String, text: &str| {
-        s.push_str(text);
-        s.push('\n');
-    };
     let _ = writeln!(
         s,
         "# LAMMPS input written by vlab {version} (vlab export lammps): the {} damper driven at {} Hz, \
@@ -577,10 +694,17 @@ pub fn lammps_deck(
         &mut s,
         "# Every key of the scene and what this deck does with it:",
     );
-    for k in &keys {
+    for k in &plan.keys {
         let _ = writeln!(s, "#   {} = {}: {}", k.key, k.value, k.use_in_deck);
     }
     line(&mut s, "#");
+    s
+}
+
+/// The header's account of the contact law's translation (module docs).
+fn contact_comment_lines(plan: &DeckPlan) -> String {
+    let (pp, pw) = (&plan.pp, &plan.pw);
+    let mut s = String::new();
     line(
         &mut s,
         "# Contact law (vlab: Hertz eq. 5.7, Mindlin eq. 5.24 with Coulomb cap eq. 5.16,",
@@ -589,7 +713,7 @@ pub fn lammps_deck(
         &mut s,
         "# restitution damping eq. 5.32/5.33, never pulling):",
     );
-    for (what, t) in [("particle-particle", &pp), ("particle-wall", &pw)] {
+    for (what, t) in [("particle-particle", pp), ("particle-wall", pw)] {
         let _ = writeln!(
             s,
             "#   {what}: e = {} ({} mode: beta = {:.6}), tsuji alpha = sqrt(5) beta = {:.6}, given to LAMMPS as e = {}; \
@@ -635,6 +759,7 @@ pub fn lammps_deck(
         "#   Mindlin coefficient 8 G*_pw = {:.6e} Pa given explicitly (its NULL is wrong for walls).",
         8.0 * pw.effective_shear_pa
     );
+    let side_factor = plan.side_factor;
     let _ = writeln!(
         s,
         "#   Side wall: E and k_t scaled by sqrt(1 - R/(2 R_c)) = {side_factor:.6}: LAMMPS takes the inside of a"
@@ -652,6 +777,12 @@ pub fn lammps_deck(
         "#   the spring carries mu F_n) and the settled contacts' tangential history (starts at 0).",
     );
     line(&mut s, "");
+    s
+}
+
+/// Units, atoms and the packing.
+fn setup_lines() -> String {
+    let mut s = String::new();
     line(&mut s, "units           si");
     line(&mut s, "atom_style      sphere");
     line(&mut s, "dimension       3");
@@ -659,17 +790,36 @@ pub fn lammps_deck(
     line(&mut s, "comm_modify     vel yes");
     let _ = writeln!(s, "read_data       {DATA_FILE}");
     line(&mut s, "");
+    s
+}
+
+/// The sphere-sphere contacts, the neighbour list and the time step.
+fn pair_lines(plan: &DeckPlan) -> String {
+    let mut s = String::new();
     line(&mut s, "# Contacts between spheres.");
     line(&mut s, "pair_style      granular");
     let _ = writeln!(
         s,
         "pair_coeff      * * {}",
-        granular_words(&pp, pm.youngs_pa, pm.poisson, None)
+        granular_words(
+            &plan.pp,
+            plan.particle_youngs_pa,
+            plan.particle_poisson,
+            None
+        )
     );
-    let _ = writeln!(s, "neighbor        {:.6e} bin", 0.2 * radius);
+    let _ = writeln!(s, "neighbor        {:.6e} bin", 0.2 * plan.radius);
     line(&mut s, "neigh_modify    delay 0 every 1 check yes");
+    let dt = plan.dt;
     let _ = writeln!(s, "timestep        {dt:e}");
     line(&mut s, "");
+    s
+}
+
+/// The drive's variables (thesis eq. 6.2).
+fn drive_lines(plan: &DeckPlan) -> String {
+    let (export, amplitude) = (plan.export, plan.amplitude);
+    let mut s = String::new();
     line(
         &mut s,
         "# The drive, from t = 0 at the settled packing (thesis eq. 6.2): u = Gamma g / w^2 sin(w t).",
@@ -691,6 +841,14 @@ pub fn lammps_deck(
         "variable        enclosure_acceleration equal -v_amplitude_m*v_omega*v_omega*sin(v_omega*time)",
     );
     line(&mut s, "");
+    s
+}
+
+/// The enclosure's three moving regions and their wall fixes.
+fn enclosure_lines(plan: &DeckPlan) -> String {
+    let (radius, cyl_r, length) = (plan.radius, plan.cyl_r, plan.length);
+    let (pw, side_factor) = (&plan.pw, plan.side_factor);
+    let mut s = String::new();
     line(
         &mut s,
         "# The enclosure: side, floor and lid, moving together along z.",
@@ -714,16 +872,24 @@ pub fn lammps_deck(
     let _ = writeln!(
         s,
         "fix             side_wall all wall/gran/region granular {} region side contacts",
-        granular_words(&pw, wall_e * side_factor, 0.0, Some(wall_kt * side_factor))
+        granular_words(pw, wall_e * side_factor, 0.0, Some(wall_kt * side_factor))
     );
     for name in ["floor", "lid"] {
         let _ = writeln!(
             s,
             "fix             {name}_wall all wall/gran/region granular {} region {name} contacts",
-            granular_words(&pw, wall_e, 0.0, Some(wall_kt))
+            granular_words(pw, wall_e, 0.0, Some(wall_kt))
         );
     }
     line(&mut s, "");
+    s
+}
+
+/// Time integration and gravity.
+fn motion_lines(plan: &DeckPlan) -> String {
+    let g = plan.g;
+    let (gx, gy, gz) = plan.gravity_dir;
+    let mut s = String::new();
     line(&mut s, "fix             integrate all nve/sphere");
     if g > 0.0 {
         let _ = writeln!(
@@ -732,6 +898,12 @@ pub fn lammps_deck(
         );
     }
     line(&mut s, "");
+    s
+}
+
+/// The particles' force on the enclosure from the walls' per-atom forces.
+fn force_lines() -> String {
+    let mut s = String::new();
     line(
         &mut s,
         "# The particles' force on the enclosure along z: minus the walls' forces on the atoms.",
@@ -753,6 +925,15 @@ pub fn lammps_deck(
         "variable        particle_force_axial equal -(c_side_fz+c_floor_fz+c_lid_fz)",
     );
     line(&mut s, "");
+    s
+}
+
+/// The `fix ave/time` that writes `record.txt`, with its `# key: value`
+/// header for `vlab replay`.
+fn record_lines(plan: &DeckPlan) -> String {
+    let (scene, export, version) = (plan.scene, plan.export, plan.version);
+    let (every, mass, g) = (plan.every, plan.mass, plan.g);
+    let mut s = String::new();
     let _ = writeln!(
         s,
         "# The record vlab replay reads: each row the mean over {every} steps (one 40 kHz sample),"
@@ -779,6 +960,13 @@ pub fn lammps_deck(
         "# particle_force_axial: the particles' force on the enclosure along +z (N); each row a window mean\"\"\"",
     );
     line(&mut s, "");
+    s
+}
+
+/// Thermo output and the run.
+fn run_lines(plan: &DeckPlan) -> String {
+    let steps = plan.steps;
+    let mut s = String::new();
     line(
         &mut s,
         "thermo_style    custom step time atoms ke v_enclosure_displacement v_particle_force_axial",
@@ -786,33 +974,7 @@ pub fn lammps_deck(
     line(&mut s, "thermo_modify   lost error norm no");
     let _ = writeln!(s, "thermo          {}", (steps / 20).max(1));
     let _ = writeln!(s, "run             {steps}");
-
-    let summary = DeckSummary {
-        vlab_version: version,
-        scene: scene.name.clone(),
-        freq_hz: export.freq_hz,
-        gamma: export.gamma,
-        amplitude_m: amplitude,
-        cycles: export.cycles,
-        steady_cycles: export.steady_cycles,
-        dt_s: dt,
-        steps,
-        record_every_steps: every,
-        n_particles: particles.len(),
-        particle_mass_kg: mass,
-        orientation: scene.enclosure.orientation.as_str(),
-        gravity_mps2: g,
-        particle_particle: pp,
-        particle_wall: pw,
-        side_wall_factor: side_factor,
-        scene_keys: keys,
-        files: vec![INPUT_FILE.into(), DATA_FILE.into(), SUMMARY_FILE.into()],
-    };
-    Ok(LammpsDeck {
-        input: s,
-        data,
-        summary,
-    })
+    s
 }
 
 impl LammpsDeck {

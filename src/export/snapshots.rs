@@ -79,65 +79,16 @@ impl PhaseSnapshots {
         length_m: f64,
         peak_speed_mps: f64,
     ) -> Result<(), SignalsError> {
-        let mm = 1e3;
         let amp = self
             .snapshots
             .iter()
             .map(|s| s.enclosure_displacement_m.abs())
             .fold(0.0, f64::max);
-        // (across, along-the-view-up, depth) of a point, in mm.
-        let view = |p: DVec3| match orientation {
-            Orientation::Vertical => (p.x, p.z, p.y),
-            Orientation::Horizontal => (p.z, p.y, p.x),
-        };
-        let (x_range, y_range) = match orientation {
-            Orientation::Vertical => (
-                (-radius_m * mm * 1.05, radius_m * mm * 1.05),
-                (
-                    (-amp - 0.05 * length_m) * mm,
-                    (length_m + amp + 0.05 * length_m) * mm,
-                ),
-            ),
-            Orientation::Horizontal => (
-                (
-                    (-amp - 0.05 * length_m) * mm,
-                    (length_m + amp + 0.05 * length_m) * mm,
-                ),
-                (-radius_m * mm * 1.05, radius_m * mm * 1.05),
-            ),
-        };
+        let (x_range, y_range) = view_ranges(orientation, radius_m, length_m, amp);
         let panels = self
             .snapshots
             .iter()
-            .map(|s| {
-                let u = s.enclosure_displacement_m;
-                let outline = match orientation {
-                    Orientation::Vertical => [
-                        (-radius_m * mm, u * mm),
-                        (radius_m * mm, (u + length_m) * mm),
-                    ],
-                    Orientation::Horizontal => [
-                        (u * mm, -radius_m * mm),
-                        ((u + length_m) * mm, radius_m * mm),
-                    ],
-                };
-                let mut order: Vec<usize> = (0..s.position.len()).collect();
-                order.sort_by(|&a, &b| view(s.position[b]).2.total_cmp(&view(s.position[a]).2));
-                CirclePanel {
-                    title: format!(
-                        "{:.0} deg, v_enc {:+.2} m/s",
-                        s.phase_deg, s.enclosure_velocity_mps
-                    ),
-                    outline,
-                    circles: order
-                        .into_iter()
-                        .map(|i| {
-                            let (x, y, _) = view(s.position[i]);
-                            (x * mm, y * mm, s.radius_m[i] * mm, s.speed_mps[i])
-                        })
-                        .collect(),
-                }
-            })
+            .map(|s| phase_panel(s, orientation, radius_m, length_m))
             .collect();
         plot_panel_strip(
             path,
@@ -157,6 +108,81 @@ impl PhaseSnapshots {
                 ),
             },
         )
+    }
+}
+
+/// Millimetres per metre: the plots' unit.
+#[cfg(feature = "plot")]
+const MM: f64 = 1e3;
+
+/// (across, along-the-view-up, depth) of a point in the side view of a
+/// damper of `orientation`.
+#[cfg(feature = "plot")]
+fn view(orientation: Orientation, p: DVec3) -> (f64, f64, f64) {
+    match orientation {
+        Orientation::Vertical => (p.x, p.z, p.y),
+        Orientation::Horizontal => (p.z, p.y, p.x),
+    }
+}
+
+/// The (x, y) ranges of every panel, mm: the enclosure of `radius_m` ×
+/// `length_m` at both ends of its stroke `amp_m`, with a margin.
+#[cfg(feature = "plot")]
+fn view_ranges(
+    orientation: Orientation,
+    radius_m: f64,
+    length_m: f64,
+    amp_m: f64,
+) -> ((f64, f64), (f64, f64)) {
+    let (mm, amp) = (MM, amp_m);
+    let across = (-radius_m * mm * 1.05, radius_m * mm * 1.05);
+    let along = (
+        (-amp - 0.05 * length_m) * mm,
+        (length_m + amp + 0.05 * length_m) * mm,
+    );
+    match orientation {
+        Orientation::Vertical => (across, along),
+        Orientation::Horizontal => (along, across),
+    }
+}
+
+/// One phase's panel: its enclosure outline and its particles, nearer ones
+/// drawn over farther ones, coloured by speed.
+#[cfg(feature = "plot")]
+fn phase_panel(
+    s: &Snapshot,
+    orientation: Orientation,
+    radius_m: f64,
+    length_m: f64,
+) -> CirclePanel {
+    let mm = MM;
+    let u = s.enclosure_displacement_m;
+    let outline = match orientation {
+        Orientation::Vertical => [
+            (-radius_m * mm, u * mm),
+            (radius_m * mm, (u + length_m) * mm),
+        ],
+        Orientation::Horizontal => [
+            (u * mm, -radius_m * mm),
+            ((u + length_m) * mm, radius_m * mm),
+        ],
+    };
+    let depth = |i: usize| view(orientation, s.position[i]).2;
+    let mut order: Vec<usize> = (0..s.position.len()).collect();
+    order.sort_by(|&a, &b| depth(b).total_cmp(&depth(a)));
+    CirclePanel {
+        title: format!(
+            "{:.0} deg, v_enc {:+.2} m/s",
+            s.phase_deg, s.enclosure_velocity_mps
+        ),
+        outline,
+        circles: order
+            .into_iter()
+            .map(|i| {
+                let (x, y, _) = view(orientation, s.position[i]);
+                (x * mm, y * mm, s.radius_m[i] * mm, s.speed_mps[i])
+            })
+            .collect(),
     }
 }
 

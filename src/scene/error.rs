@@ -11,7 +11,11 @@ use crate::scene::packing::MAX_FILL;
 use crate::signals::SignalsError;
 use crate::validation::InvalidParameter;
 
-/// Errors of scene files and scene runs.
+/// Errors of scene files and scene runs. The drop test
+/// (`experiment::drop`) has no error type of its own: its refusals and
+/// failures (a set-up value out of range, the engine, the rig, the record's
+/// analysis) are this type's `Invalid`, `Dem`, `Rig` and `Signals`, so a
+/// caller handles the drop and the damper alike.
 #[derive(Debug, Error)]
 pub enum SceneError {
     #[error("cannot read scene file {path}")]

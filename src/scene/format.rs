@@ -345,6 +345,8 @@ impl Scene {
     }
 
     /// Checks every value; a refusal names the key, its unit and valid range.
+    /// The checks go table by table, in the file's order, so the first bad
+    /// value is the one named.
     pub fn validate(&self) -> Result<(), SceneError> {
         if self.version != 1 {
             return Err(InvalidParameter::new(
@@ -355,6 +357,15 @@ impl Scene {
             )
             .into());
         }
+        self.validate_bed()?;
+        self.validate_contacts()?;
+        self.validate_simulation()?;
+        self.validate_drive()
+    }
+
+    /// `particles` and `enclosure`: the sizes and materials, and whether the
+    /// enclosure can hold the particles.
+    fn validate_bed(&self) -> Result<(), SceneError> {
         let p = &self.particles;
         positive("particles.diameter_m", p.diameter_m, "m")?;
         let particle = p.material.resolve("particles.material")?;
@@ -385,6 +396,11 @@ impl Scene {
                 max_count: self.max_particles(),
             });
         }
+        Ok(())
+    }
+
+    /// `contact`: restitution and friction of both pairs.
+    fn validate_contacts(&self) -> Result<(), SceneError> {
         let c = &self.contact;
         for (key, pair) in [
             ("contact.particle_particle", c.particle_particle),
@@ -393,6 +409,11 @@ impl Scene {
             validation::restitution(&format!("{key}.restitution"), pair.restitution)?;
             validation::friction(&format!("{key}.friction"), pair.friction)?;
         }
+        Ok(())
+    }
+
+    /// `simulation`: the time step and its rules, settling time and gravity.
+    fn validate_simulation(&self) -> Result<(), SceneError> {
         let s = &self.simulation;
         in_range(
             "simulation.rayleigh_safety_factor",
@@ -413,6 +434,11 @@ impl Scene {
         )?;
         non_negative("simulation.settle_s", s.settle_s, "s")?;
         non_negative("simulation.gravity_mps2", s.gravity_mps2, "m/s^2")?;
+        Ok(())
+    }
+
+    /// `drive`: the run length, a number of cycles or the until-steady rule.
+    fn validate_drive(&self) -> Result<(), SceneError> {
         let d = &self.drive;
         match &d.cycles {
             CyclesSpec::Count(cycles) => {
