@@ -20,7 +20,9 @@
 //! - a given `freq_hz` more than [`FREQ_TOLERANCE`] (relative) away from the
 //!   metadata's `drive_freq_hz`, or from the fundamental of the
 //!   acceleration's spectrum ([`spectrum_fundamental_hz`]: the peak of its
-//!   Hann-windowed spectrum, refined between bins), is refused unless
+//!   Hann-windowed spectrum, refined between bins; on a record of few
+//!   periods, whose peak the negative-frequency image pulls aside, the
+//!   tolerance widens to [`SPECTRUM_TOLERANCE_BINS`] of a bin), is refused unless
 //!   `force_freq`: a 40 Hz record read at 41 Hz loses 7 % of its power. A
 //!   metadata frequency the spectrum contradicts is used, with a warning;
 //! - a calibration of another rig than the record's (both named) is refused
@@ -47,6 +49,11 @@ use crate::warning::Warning;
 /// the record states (metadata) or shows (spectrum) that is taken as the same
 /// frequency. A 40 Hz record read 0.5 % off loses about 1.5 % of its power.
 pub const FREQ_TOLERANCE: f64 = 0.005;
+/// Fraction of the spectrum's bin (`sample_rate_hz / samples`) the given
+/// frequency may differ from its fundamental, when that exceeds
+/// [`FREQ_TOLERANCE`]: a record of two periods finds its fundamental within
+/// about 1/70 of a bin, seven periods (the reference record) far closer.
+pub const SPECTRUM_TOLERANCE_BINS: f64 = 0.05;
 /// Fraction of a drive period left out at the record's end from which a
 /// warning says so (below it the result still reports it).
 pub const DROPPED_PERIODS_WARNING: f64 = 0.1;
@@ -159,6 +166,8 @@ pub struct FreqCheck {
     pub metadata_freq_hz: Option<f64>,
     /// The acceleration spectrum's fundamental, if one could be found (Hz).
     pub spectrum_freq_hz: Option<f64>,
+    /// How far from the fundamental a frequency still agrees with it (Hz).
+    pub spectrum_tolerance_hz: f64,
 }
 
 impl FreqCheck {
@@ -170,11 +179,12 @@ impl FreqCheck {
         }
         if let Some(s) = self.spectrum_freq_hz {
             said.push(format!(
-                "its acceleration spectrum's fundamental is {s:.2} Hz"
+                "its acceleration spectrum's fundamental is {s:.2} Hz (agreement within {:.2} Hz)",
+                self.spectrum_tolerance_hz
             ));
         }
         format!(
-            "freq_hz = {} Hz contradicts the record: {} (more than {} % apart; a wrong drive frequency biases the power)",
+            "freq_hz = {} Hz contradicts the record: {} (the metadata must agree within {} %; a wrong drive frequency biases the power)",
             self.freq_hz,
             said.join(" and "),
             100.0 * FREQ_TOLERANCE
@@ -250,17 +260,18 @@ fn drive_freq(
     warnings: &mut Vec<AnalysisWarning>,
 ) -> Result<DriveFreq, AnalysisError> {
     let metadata = trace.metadata.drive_freq_hz;
-    let spectrum = spectrum_fundamental_hz(
-        &trace.channel(&options.accel_channel)?.samples,
-        trace.sample_rate_hz,
-    );
+    let accel = &trace.channel(&options.accel_channel)?.samples;
+    let spectrum = spectrum_fundamental_hz(accel, trace.sample_rate_hz);
+    let bin_hz = trace.sample_rate_hz / accel.len().max(1) as f64;
+    let tolerance_hz = |f: f64| (FREQ_TOLERANCE * f).max(SPECTRUM_TOLERANCE_BINS * bin_hz);
+    let off_spectrum = |f: f64| spectrum.is_some_and(|s| (f - s).abs() > tolerance_hz(s));
     let Some(given) = options.freq_hz else {
         let m = metadata.ok_or(SignalsError::NotInMetadata {
             what: "drive frequency",
             metadata_key: "drive_freq_hz",
             parameter: "freq_hz",
         })?;
-        if let Some(s) = spectrum.filter(|&s| !same_freq(m, s)) {
+        if let Some(s) = spectrum.filter(|_| off_spectrum(m)) {
             warnings.push(AnalysisWarning::advising(
                 format!(
                     "the metadata's drive_freq_hz {m} Hz is used, but the acceleration spectrum's fundamental is {s:.2} Hz: if the drive ran there, give freq_hz = {s:.2} with force_freq"
@@ -272,6 +283,7 @@ fn drive_freq(
             freq_hz: m,
             metadata_freq_hz: metadata,
             spectrum_freq_hz: spectrum,
+            spectrum_tolerance_hz: spectrum.map_or(0.0, tolerance_hz),
         };
         return Ok(DriveFreq {
             freq_hz: m,
@@ -283,11 +295,9 @@ fn drive_freq(
         freq_hz: given,
         metadata_freq_hz: metadata,
         spectrum_freq_hz: spectrum,
+        spectrum_tolerance_hz: spectrum.map_or(0.0, tolerance_hz),
     };
-    let contradicted = [metadata, spectrum]
-        .iter()
-        .flatten()
-        .any(|&f| !same_freq(given, f));
+    let contradicted = metadata.is_some_and(|m| !same_freq(given, m)) || off_spectrum(given);
     if contradicted {
         if !options.force_freq {
             return Err(AnalysisError::FreqContradicts(check));
@@ -687,8 +697,11 @@ mod tests {
                     40_000.0,
                 )
                 .expect("a peak");
+                // Within half of what the check tolerates.
+                let bin_hz = freq / periods;
+                let tolerance = (FREQ_TOLERANCE * freq).max(SPECTRUM_TOLERANCE_BINS * bin_hz);
                 assert!(
-                    (got / freq - 1.0).abs() < 0.1 * FREQ_TOLERANCE,
+                    (got - freq).abs() < 0.5 * tolerance,
                     "{periods} periods of {freq} Hz: {got} Hz"
                 );
             }
