@@ -485,7 +485,8 @@ fn input_warnings(
 /// The fundamental of `x` sampled at `sample_rate_hz` (Hz): the largest bin
 /// of its mean-removed, Hann-windowed spectrum, refined to the maximum of the
 /// windowed transform's magnitude within a bin either side (golden-section
-/// search). `None` for a record shorter than 16 samples or without a peak.
+/// search). `None` for a record shorter than 16 samples, without a peak, or
+/// holding less than two periods of it.
 pub fn spectrum_fundamental_hz(x: &[f64], sample_rate_hz: f64) -> Option<f64> {
     let n = x.len();
     if n < 16 || !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
@@ -505,7 +506,9 @@ pub fn spectrum_fundamental_hz(x: &[f64], sample_rate_hz: f64) -> Option<f64> {
         .skip(1)
         .map(|(k, c)| (k, c.norm()))
         .fold((0, 0.0), |best, kc| if kc.1 > best.1 { kc } else { best });
-    if peak == 0 || top <= 0.0 {
+    // Below bin 2 the record holds less than two periods of its peak, the
+    // window's main lobe reaches DC, and the analysis refuses it anyway.
+    if peak < 2 || top <= 0.0 {
         return None;
     }
     // |sum w x e^(-j 2 pi f i / fs)|, by a rotating phasor.
@@ -708,6 +711,10 @@ mod tests {
         }
         assert_eq!(spectrum_fundamental_hz(&[0.0; 100], 1000.0), None);
         assert_eq!(spectrum_fundamental_hz(&[1.0; 10], 1000.0), None);
+        let one_period: Vec<f64> = (0..100)
+            .map(|i| (std::f64::consts::TAU * i as f64 / 100.0).sin())
+            .collect();
+        assert_eq!(spectrum_fundamental_hz(&one_period, 1000.0), None);
     }
 
     #[test]
