@@ -271,13 +271,39 @@ fn predict_reproduces_table_6_3() {
             assert!((g - w).abs() / w < 0.01, "{key}: {g} vs {w}");
         }
     }
-    let bad = vlab(&dir.0, &["predict", "--freq", "40", "--fill-ratio", "0.6"]);
+    let bad = vlab(&dir.0, &["predict", "--freq", "40", "--fill-ratio", "0.64"]);
     assert!(!bad.status.success());
     assert!(
-        stderr(&bad).starts_with("error: --fill-ratio = 0.6: must be"),
+        stderr(&bad).starts_with("error: --fill-ratio = 0.64: must be"),
         "{}",
         stderr(&bad)
     );
+}
+
+/// A bed fuller than loose packing (vlab settles to about 0.57) still has a
+/// close-packing clearance: predicted, with the loose-packing estimate said
+/// not to apply.
+#[test]
+fn predict_takes_fills_up_to_close_packing() {
+    let dir = Scratch::new("predict-full");
+    let out = vlab(&dir.0, &["predict", "--freq", "40", "--fill-ratio", "0.57"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("loose-packing estimate stops applying") && text.contains("0.55"),
+        "{text}"
+    );
+    // h = (1 - 0.57 / 0.64) 0.04 m = 4.375 mm; Gamma = (80 pi)^2 h / (9.81 pi) = 8.967.
+    assert!(text.contains("4.38 mm with close packing"), "{text}");
+    let out = vlab(
+        &dir.0,
+        &["predict", "--freq", "40", "--fill-ratio", "0.57", "--json"],
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let cp = v["close_packing_gamma"][0].as_f64().expect("CP");
+    assert!((cp - 8.967).abs() < 0.001, "{cp}");
+    assert!(v["loose_packing_gamma"].is_null(), "{v}");
+    assert!(v["loose_packing_note"].is_string(), "{v}");
 }
 
 #[test]

@@ -4,19 +4,22 @@
 //! (eq. 7.7) when the particle mass and amplitude are known, the phase
 //! correction used (at the drive and, through the calibration's high-pass +
 //! skew model, at its harmonics) and the force polarity (a record whose force
-//! is the gauge reaction is detected, said so and corrected). The work is
+//! is the gauge reaction is detected, said so and corrected). A drive
+//! frequency the record contradicts (`--freq` against its metadata or
+//! spectrum) and a calibration of another rig are refused, naming the flag
+//! that overrides (`--force-freq`, `--force-calibration`). The work is
 //! [`vlab::signals::analysis`]'s; this is its command line, and the home of
 //! [`LabFileArgs`], the options for reading a lab record that `vlab cor`
 //! shares.
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use vlab::signals::csv::{CsvReadOptions, parse_delimiter};
 use vlab::signals::{
-    Analysis, AnalysisInput, AnalysisOptions, PhaseCalibration, Trace, TraceFormat, analyse_trace,
-    read_trace_with,
+    Analysis, AnalysisError, AnalysisInput, AnalysisOptions, PhaseCalibration, Trace, TraceFormat,
+    analyse_trace, read_trace_with,
 };
 
 use super::args;
@@ -63,12 +66,21 @@ pub struct AnalyzeArgs {
     /// The record: a CSV (',', ';' or tab separated), a WAV file (with its .json sidecar) or a TDMS file.
     #[arg(value_name = "TRACE")]
     trace: PathBuf,
-    /// Phase-error table (from `vlab calibrate` or a shake run's calibration.json).
+    /// Phase-error table (from `vlab calibrate` or a shake run's calibration.json);
+    /// refused when it names another rig than the record.
     #[arg(long, value_name = "FILE")]
     calibration: Option<PathBuf>,
-    /// Drive frequency (Hz) [default: from the trace's metadata].
+    /// Apply --calibration even when it names another rig than the record.
+    #[arg(long, requires = "calibration")]
+    force_calibration: bool,
+    /// Drive frequency (Hz) [default: from the trace's metadata]; refused
+    /// when the metadata or the acceleration's spectrum says another.
     #[arg(long = "freq", value_name = "HZ", value_parser = args::freq_hz)]
     freq_hz: Option<f64>,
+    /// Use --freq even where the record's metadata or spectrum says another
+    /// frequency.
+    #[arg(long, requires = "freq_hz")]
+    force_freq: bool,
     /// Amplitude Γ, for the efficiency [default: from the metadata].
     #[arg(long, value_parser = args::gamma)]
     gamma: Option<f64>,
@@ -102,6 +114,7 @@ pub fn analyse(a: &AnalyzeArgs) -> Result<Analysis> {
         force_channel: a.force_channel.clone(),
         accel_channel: a.accel_channel.clone(),
         freq_hz: a.freq_hz,
+        force_freq: a.force_freq,
         gamma: a.gamma,
         particle_mass_kg: a.particle_mass_kg,
         calibration,
@@ -109,8 +122,33 @@ pub fn analyse(a: &AnalyzeArgs) -> Result<Analysis> {
             .calibration
             .as_ref()
             .map_or("none".into(), |p| p.display().to_string()),
+        force_calibration: a.force_calibration,
     };
-    analyse_trace(&trace, &options).with_context(|| format!("analysing {}", a.trace.display()))
+    analyse_trace(&trace, &options)
+        .map_err(refusal)
+        .with_context(|| format!("analysing {}", a.trace.display()))
+}
+
+/// An analysis error for the command line: a refusal names the flag that
+/// overrides it; the record's own error is unwrapped so its flag hint is found.
+fn refusal(e: AnalysisError) -> anyhow::Error {
+    let overridden_by = e.overridden_by();
+    match (e, overridden_by) {
+        (AnalysisError::Signals(e), _) => anyhow::Error::new(e),
+        (e, Some(input)) => anyhow!(
+            "{}; {} uses it anyway",
+            flag_words(&e.figures()),
+            input_flags(input)
+        ),
+        (e, None) => anyhow::Error::new(e),
+    }
+}
+
+/// The library's parameter names in a refusal or warning, as this command's flags.
+fn flag_words(text: &str) -> String {
+    text.replace("freq_hz = ", "--freq ")
+        .replace("force_freq", "--force-freq")
+        .replace("force_calibration", "--force-calibration")
 }
 
 /// The flags that give what an analysis warning lacks.
@@ -119,15 +157,36 @@ fn input_flags(input: AnalysisInput) -> &'static str {
         AnalysisInput::GammaAndMass => "--gamma, --particle-mass-kg",
         AnalysisInput::Calibration => "--calibration FILE",
         AnalysisInput::CalibrationFrequencies => "vlab calibrate --freq 40,160,640",
+        AnalysisInput::CalibrationAtDrive => {
+            "vlab calibrate --freq HZ,... with the drive frequency among them"
+        }
+        AnalysisInput::Freq => "--freq HZ --force-freq",
+        AnalysisInput::ForceFreq => "--force-freq",
+        AnalysisInput::ForceCalibration => "--force-calibration",
     }
+}
+
+/// Where the drive frequency came from and what the record says, in words.
+fn freq_provenance(r: &Analysis) -> String {
+    let mut parts = vec![match r.drive_freq_source {
+        "given" => "from --freq".to_string(),
+        other => format!("from the {other}"),
+    }];
+    if let (Some(m), "given") = (r.metadata_freq_hz, r.drive_freq_source) {
+        parts.push(format!("metadata {m} Hz"));
+    }
+    if let Some(s) = r.spectrum_freq_hz {
+        parts.push(format!("spectrum {s:.2} Hz"));
+    }
+    parts.join("; ")
 }
 
 pub fn run(a: AnalyzeArgs) -> Result<()> {
     let r = analyse(&a)?;
     for w in &r.warnings {
         match w.advice {
-            Some(input) => eprintln!("warning: {w} ({})", input_flags(input)),
-            None => eprintln!("warning: {w}"),
+            Some(input) => eprintln!("warning: {} ({})", flag_words(&w.text), input_flags(input)),
+            None => eprintln!("warning: {}", flag_words(&w.text)),
         }
     }
     if a.json {
@@ -135,11 +194,17 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "{}: drive {} Hz, {} whole periods ({} samples)",
+        "{}: drive {} Hz ({}), {} whole periods ({} samples) of the record's {:.2}{}",
         a.trace.display(),
         r.drive_freq_hz,
+        freq_provenance(&r),
         r.n_periods,
-        r.n_samples
+        r.n_samples,
+        r.record_periods,
+        match r.dropped_samples {
+            0 => String::new(),
+            d => format!(", the last {d} samples left out"),
+        }
     );
     println!("  dissipated power      {:.4e} W", r.power_w);
     println!(

@@ -5,7 +5,7 @@
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
-use vlab::experiment::bed_cache::{BedCache, BedSource};
+use vlab::experiment::bed_cache::{BedCache, BedSource, PHYSICS_FINGERPRINT};
 
 #[derive(Debug, Clone, Args)]
 pub struct CacheArgs {
@@ -69,6 +69,15 @@ pub fn run(a: CacheArgs) -> Result<()> {
                     .map(|n| n.to_string_lossy().into_owned())
                     .unwrap_or_default();
                 match &b.header {
+                    Ok(h) if b.stale => println!(
+                        "  {name}  {:<12} stale: settled by other physics code (fingerprint {}, this vlab {PHYSICS_FINGERPRINT}); never read, removed by `vlab cache clear`",
+                        h.scene,
+                        if h.fingerprint.is_empty() {
+                            "none"
+                        } else {
+                            &h.fingerprint
+                        },
+                    ),
                     Ok(h) => println!(
                         "  {name}  {:<12} {:>6} particles  packing {:.3}  bed {:.1} mm  settled in {:.1} s wall  {:.1} MiB",
                         h.scene,

@@ -1,6 +1,7 @@
 //! `vlab predict`: the bouncing-bed onset amplitude predicted by thesis eq.
 //! 6.11–6.13 ([`vlab::study::predict`]), with close- and loose-packing
-//! clearances.
+//! clearances (close packing alone for a fill from loose packing, 0.55, up to
+//! close packing, 0.64).
 
 use anyhow::Result;
 use clap::Args;
@@ -44,19 +45,31 @@ pub fn run(a: PredictArgs) -> Result<()> {
     println!(
         "bouncing-bed onset (thesis eq. 6.11-6.13): Gamma = w^2 h / (g pi), h = (1 - fill / fill_max) L"
     );
+    let lp_clearance = p
+        .loose_packing_clearance_m
+        .map_or("none".to_string(), |h| format!("{:.2} mm", 1e3 * h));
     println!(
-        "  fill {}, L {} m: clearance {:.2} mm with close packing ({CLOSE_PACKING}), {:.2} mm with loose packing ({LOOSE_PACKING})",
+        "  fill {}, L {} m: clearance {:.2} mm with close packing ({CLOSE_PACKING}), {lp_clearance} with loose packing ({LOOSE_PACKING})",
         a.fill_ratio,
         a.length_m,
         1e3 * p.close_packing_clearance_m,
-        1e3 * p.loose_packing_clearance_m
     );
     println!("  freq [Hz]   close packing   loose packing");
     for (k, f) in p.freq_hz.iter().enumerate() {
+        let lp = p
+            .loose_packing_gamma
+            .as_ref()
+            .map_or("-".to_string(), |g| format!("{:.1}", g[k]));
         println!(
-            "  {:>9}   {:>13.1}   {:>13.1}",
-            f, p.close_packing_gamma[k], p.loose_packing_gamma[k]
+            "  {:>9}   {:>13.1}   {:>13}",
+            f, p.close_packing_gamma[k], lp
         );
+    }
+    match &p.loose_packing_note {
+        Some(note) => println!("  {note}"),
+        None => println!(
+            "  the loose-packing estimate applies to fills below {LOOSE_PACKING}, the close-packing one up to {CLOSE_PACKING}"
+        ),
     }
     println!(
         "  the thesis found the most efficient amplitude at this onset; close packing is the better estimate (Table 6.3)"

@@ -2,11 +2,36 @@
 //!
 //! Settling is three quarters of a default shake's wall time, and its result
 //! depends only on what shapes the bed: the particles, the enclosure, the
-//! settling law ([`SETTLING_VERSION`](crate::experiment::settle::SETTLING_VERSION)),
-//! gravity, the orientation and the seed — not on the contacts under test or
-//! the drive (the settling law is fixed, see [`crate::experiment::settle`]). A bed
-//! is stored under a key made of exactly those, plus the bed-file format and
-//! vlab's version (a new engine may settle differently).
+//! settling law, gravity, the orientation and the seed — not on the contacts
+//! under test or the drive (the settling law is fixed, see
+//! [`crate::experiment::settle`]) — and on the code that settles it. A bed is
+//! stored under a key made of exactly those, plus the bed-file format and
+//! vlab's version.
+//!
+//! # Why a bed cannot go stale
+//!
+//! The code's part of the key is [`PHYSICS_FINGERPRINT`], computed by the
+//! package's `build.rs` when vlab is compiled: an FNV-1a 64 hash of
+//!
+//! - the bytes and paths of every file below `src/dem/` and `src/scene/` and
+//!   of `src/experiment/{damper,fill,settle,bed_cache}.rs` (the contact laws,
+//!   integrator, neighbour search, walls, the scene's figures, the filling and
+//!   the settling schedule, and this file's own encoding);
+//! - the `Cargo.lock` versions of `glam`, `rand_core` and `rand_xoshiro`,
+//!   whose arithmetic and random numbers reach the bed;
+//! - the rustc version, target triple, target features and optimisation
+//!   level (`powi` and `powf` need not round alike across them).
+//!
+//! A change there that moves a single trajectory therefore misses every cached
+//! bed: nothing has to remember to bump a number, and CI, whose tests isolate
+//! the cache, is not needed to notice. The price: any edit of a hashed file,
+//! a comment-only one included, and a debug build after a release build,
+//! settle their beds anew once. [`SETTLING_VERSION`] stays in the key as the
+//! settling law's own name. Not covered: the platform's maths library that
+//! `powf` and `ln` call at run time (one machine keeps one).
+//!
+//! Beds of another fingerprint are never read; `vlab cache list` marks them
+//! stale and `vlab cache clear` removes them.
 //!
 //! # The bed file
 //!
@@ -44,6 +69,9 @@ use crate::experiment::damper::Progress;
 use crate::experiment::settle::{SETTLING_VERSION, SettledBed, rebuild_settled_world, settle_bed};
 use crate::scene::{Scene, SceneError};
 
+/// Hash of the code and compiler that settle a bed (see the module docs):
+/// part of every bed's key.
+pub const PHYSICS_FINGERPRINT: &str = env!("VLAB_PHYSICS_FINGERPRINT");
 /// Version of the bed-file layout.
 pub const BED_FORMAT_VERSION: u32 = 1;
 /// Environment variable that moves the cache folder (tests, shared clusters).
@@ -77,6 +105,7 @@ pub enum BedCacheError {
 struct BedKey<'a> {
     bed_format: u32,
     settling_version: u32,
+    physics_fingerprint: &'a str,
     vlab_version: &'static str,
     particles: &'a crate::scene::ParticlesSpec,
     particle_material: crate::dem::material::Material,
@@ -90,11 +119,18 @@ struct BedKey<'a> {
     settle_s: f64,
 }
 
-/// The cache key of the bed `scene` settles to (JSON text).
+/// The cache key of the bed `scene` settles to (JSON text), with this
+/// build's [`PHYSICS_FINGERPRINT`].
 pub fn bed_key(scene: &Scene) -> String {
+    bed_key_with(scene, PHYSICS_FINGERPRINT)
+}
+
+/// [`bed_key`] as code of fingerprint `fingerprint` would make it.
+fn bed_key_with(scene: &Scene, fingerprint: &str) -> String {
     let key = BedKey {
         bed_format: BED_FORMAT_VERSION,
         settling_version: SETTLING_VERSION,
+        physics_fingerprint: fingerprint,
         vlab_version: env!("CARGO_PKG_VERSION"),
         particles: &scene.particles,
         particle_material: scene.particle_material(),
@@ -125,6 +161,10 @@ fn fnv1a64(bytes: &[u8]) -> u64 {
 pub struct BedHeader {
     /// The full key text ([`bed_key`]).
     pub key: String,
+    /// The [`PHYSICS_FINGERPRINT`] of the vlab that settled it (empty in beds
+    /// made before fingerprints).
+    #[serde(default)]
+    pub fingerprint: String,
     /// Name of the scene that first settled it (for `vlab cache list`).
     pub scene: String,
     pub n_particles: usize,
@@ -140,9 +180,15 @@ pub struct BedHeader {
 
 /// Encodes `bed` of `scene` as a bed file.
 pub fn encode_bed(scene: &Scene, bed: &SettledBed) -> Vec<u8> {
+    encode_bed_with(scene, bed, PHYSICS_FINGERPRINT)
+}
+
+/// [`encode_bed`] as code of fingerprint `fingerprint` would write it.
+fn encode_bed_with(scene: &Scene, bed: &SettledBed, fingerprint: &str) -> Vec<u8> {
     let p = &bed.world.particles;
     let header = BedHeader {
-        key: bed_key(scene),
+        key: bed_key_with(scene, fingerprint),
+        fingerprint: fingerprint.to_string(),
         scene: scene.name.clone(),
         n_particles: p.len(),
         settle_time_s: bed.settle_time_s,
@@ -265,18 +311,36 @@ pub struct CachedBedInfo {
     pub bytes: u64,
     /// The header, or why the file cannot be read.
     pub header: Result<BedHeader, BadBed>,
+    /// Settled by other code than this vlab's (another
+    /// [`PHYSICS_FINGERPRINT`]): never read, only listed and cleared.
+    pub stale: bool,
 }
 
 /// A folder of settled beds.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct BedCache {
     dir: PathBuf,
+    /// The fingerprint beds are stored and looked up under: this build's
+    /// [`PHYSICS_FINGERPRINT`], another one only in tests.
+    fingerprint: String,
 }
 
 impl BedCache {
     /// A cache in `dir` (made when the first bed is stored).
     pub fn new(dir: impl Into<PathBuf>) -> Self {
-        BedCache { dir: dir.into() }
+        BedCache {
+            dir: dir.into(),
+            fingerprint: PHYSICS_FINGERPRINT.to_string(),
+        }
+    }
+
+    /// A cache in `dir` as code of fingerprint `fingerprint` would see it.
+    #[cfg(test)]
+    fn with_fingerprint(dir: impl Into<PathBuf>, fingerprint: &str) -> Self {
+        BedCache {
+            dir: dir.into(),
+            fingerprint: fingerprint.to_string(),
+        }
     }
 
     /// The user's cache: `$VLAB_CACHE_DIR`, else the platform's cache folder
@@ -298,7 +362,7 @@ impl BedCache {
 
     /// Where the bed of `scene` is kept.
     pub fn path_for(&self, scene: &Scene) -> PathBuf {
-        let hash = fnv1a64(bed_key(scene).as_bytes());
+        let hash = fnv1a64(bed_key_with(scene, &self.fingerprint).as_bytes());
         self.dir.join(format!("bed-{hash:016x}.{EXTENSION}"))
     }
 
@@ -312,7 +376,7 @@ impl BedCache {
             Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(format!("cannot read cached bed {}: {e}", path.display())),
         };
-        let key = bed_key(scene);
+        let key = bed_key_with(scene, &self.fingerprint);
         let decoded = decode_bed(&bytes, Some(&key)).map_err(|why| {
             format!(
                 "cached bed {} was not used: {why}; settled anew",
@@ -355,7 +419,7 @@ impl BedCache {
     pub fn store(&self, scene: &Scene, bed: &SettledBed) -> io::Result<PathBuf> {
         fs::create_dir_all(&self.dir)?;
         let path = self.path_for(scene);
-        write_bytes_atomic(&path, &encode_bed(scene, bed))?;
+        write_bytes_atomic(&path, &encode_bed_with(scene, bed, &self.fingerprint))?;
         Ok(path)
     }
 
@@ -367,9 +431,13 @@ impl BedCache {
                 path: path.clone(),
                 source,
             })?;
+            let header = decode_bed(&bytes, None).map(|d| d.header);
             out.push(CachedBedInfo {
                 bytes: bytes.len() as u64,
-                header: decode_bed(&bytes, None).map(|d| d.header),
+                stale: header
+                    .as_ref()
+                    .is_ok_and(|h| h.fingerprint != self.fingerprint),
+                header,
                 path,
             });
         }
@@ -499,6 +567,44 @@ mod tests {
         for other in [seed, count, length, turned, g] {
             assert_ne!(bed_key(&other), k);
         }
+    }
+
+    #[test]
+    fn a_bed_of_other_physics_is_a_miss_and_listed_stale() {
+        let scene = small_scene();
+        assert_eq!(PHYSICS_FINGERPRINT.len(), 16, "{PHYSICS_FINGERPRINT}");
+        assert_ne!(
+            bed_key_with(&scene, "0000000000000000"),
+            bed_key(&scene),
+            "the fingerprint is part of the key"
+        );
+        let dir = std::env::temp_dir().join(format!("vlab-bed-stale-test-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let old = BedCache::with_fingerprint(&dir, "0123456789abcdef");
+        let bed = settle_bed(&scene, &mut |_| {}).expect("settles");
+        old.store(&scene, &bed).expect("stores");
+        assert!(
+            old.load(&scene).expect("reads").is_some(),
+            "a hit for its own code"
+        );
+        let now = BedCache::new(&dir);
+        assert!(
+            now.load(&scene).expect("no error").is_none(),
+            "a bed of another fingerprint is a miss"
+        );
+        // Even copied to the name this build looks up, it is refused.
+        fs::copy(old.path_for(&scene), now.path_for(&scene)).expect("copy");
+        let refused = now.load(&scene).expect_err("another key");
+        assert!(refused.contains("not used"), "{refused}");
+        fs::remove_file(now.path_for(&scene)).expect("remove");
+        let listed = now.list().expect("lists");
+        assert_eq!(listed.len(), 1);
+        assert!(listed[0].stale, "listed as stale");
+        assert!(
+            !old.list().expect("lists")[0].stale,
+            "not stale to its own code"
+        );
+        let _ = fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -46,7 +46,9 @@ pub mod wav;
 #[cfg(test)]
 mod testutil;
 
-pub use analysis::{Analysis, AnalysisInput, AnalysisOptions, AnalysisWarning, analyse_trace};
+pub use analysis::{
+    Analysis, AnalysisError, AnalysisInput, AnalysisOptions, AnalysisWarning, analyse_trace,
+};
 pub use bench::{YangBenchReport, bench_yang_power};
 pub use calibration::{
     CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error, split_polarity,

@@ -12,7 +12,10 @@
 //! with ν the volume fill ratio, L the enclosure's inner length along the drive
 //! and ν_max the densest fill the bed reaches: random close packing (0.64, the
 //! thesis' "CP" row) or random loose packing (0.55, "LP", equivalent to eq.
-//! 6.12's clearance of a poured bed). The thesis found the most efficient
+//! 6.12's clearance of a poured bed). A fill from 0.55 up to 0.64 is a real
+//! bed (vlab's settling drives beds to 0.57): it has a close-packing
+//! clearance, but no loose-packing one, so only the CP estimate is given
+//! there and the prediction says why. The thesis found the most efficient
 //! amplitude at the onset (Γ_optimum = Γ_bouncing bed) and the CP estimate within
 //! 5–12 % of its DEM (Table 6.3, whose "Optimum Amplitude (mm)" columns are Γ
 //! values: an erratum). Pure functions, SI units.
@@ -46,16 +49,29 @@ pub struct BouncingBedPrediction {
     pub freq_hz: Vec<f64>,
     /// Clearance with close packing, eq. 6.13 with ν_max = 0.64 (m).
     pub close_packing_clearance_m: f64,
-    /// Clearance with loose packing, ν_max = 0.55 (m).
-    pub loose_packing_clearance_m: f64,
+    /// Clearance with loose packing, ν_max = 0.55 (m); `None` for a fill at
+    /// or above loose packing, where the estimate does not apply.
+    pub loose_packing_clearance_m: Option<f64>,
     /// Γ_opt at each frequency, close packing (the thesis' better estimate).
     pub close_packing_gamma: Vec<f64>,
-    /// Γ_opt at each frequency, loose packing.
-    pub loose_packing_gamma: Vec<f64>,
+    /// Γ_opt at each frequency, loose packing; `None` where it does not apply.
+    pub loose_packing_gamma: Option<Vec<f64>>,
+    /// Why the loose-packing estimate is missing, in words (`None` when given).
+    pub loose_packing_note: Option<String>,
 }
 
-/// Γ_opt with close- and loose-packing clearances at each of `freq_hz`,
-/// refusing a fill ratio that is not below loose packing (no clearance), a
+/// Why the loose-packing estimate has no value at `fill_ratio`, if it has none.
+pub fn loose_packing_note(fill_ratio: f64) -> Option<String> {
+    (fill_ratio >= LOOSE_PACKING).then(|| {
+        format!(
+            "fill {fill_ratio} is at or above random loose packing ({LOOSE_PACKING}): the loose-packing estimate stops applying there (eq. 6.13 leaves no clearance); the close-packing estimate holds up to {CLOSE_PACKING}"
+        )
+    })
+}
+
+/// Γ_opt with close- and loose-packing clearances at each of `freq_hz`
+/// (close packing alone for a fill from loose packing up to close packing),
+/// refusing a fill ratio that is not below close packing (no clearance), a
 /// non-positive length or gravity, or a non-positive frequency.
 pub fn predict_bouncing_bed(
     freq_hz: &[f64],
@@ -70,18 +86,21 @@ pub fn predict_bouncing_bed(
         fill_ratio,
         "",
         Bound::Open(0.0),
-        Bound::Open(LOOSE_PACKING),
+        Bound::Open(CLOSE_PACKING),
     )
     .map_err(|e| {
         e.because(&format!(
-            "{LOOSE_PACKING} is random loose packing: a fuller bed leaves no clearance in eq. 6.13"
+            "{CLOSE_PACKING} is random close packing: a fuller bed leaves no clearance in eq. 6.13"
         ))
     })?;
     for &f in freq_hz {
         positive("freq_hz", f, "Hz")?;
     }
     let cp = effective_clearance_m(fill_ratio, CLOSE_PACKING, length_m);
-    let lp = effective_clearance_m(fill_ratio, LOOSE_PACKING, length_m);
+    let note = loose_packing_note(fill_ratio);
+    let lp = note
+        .is_none()
+        .then(|| effective_clearance_m(fill_ratio, LOOSE_PACKING, length_m));
     Ok(BouncingBedPrediction {
         fill_ratio,
         length_m,
@@ -93,10 +112,13 @@ pub fn predict_bouncing_bed(
             .iter()
             .map(|&f| onset_gamma(f, cp, gravity_mps2))
             .collect(),
-        loose_packing_gamma: freq_hz
-            .iter()
-            .map(|&f| onset_gamma(f, lp, gravity_mps2))
-            .collect(),
+        loose_packing_gamma: lp.map(|lp| {
+            freq_hz
+                .iter()
+                .map(|&f| onset_gamma(f, lp, gravity_mps2))
+                .collect()
+        }),
+        loose_packing_note: note,
     })
 }
 
@@ -121,7 +143,11 @@ mod tests {
             for k in 0..3 {
                 for (got, want, row) in [
                     (p.close_packing_gamma[k], cp[k], "CP"),
-                    (p.loose_packing_gamma[k], lp[k], "LP"),
+                    (
+                        p.loose_packing_gamma.as_ref().expect("below LP")[k],
+                        lp[k],
+                        "LP",
+                    ),
                 ] {
                     let rel = (got - want).abs() / want;
                     assert!(
@@ -145,9 +171,28 @@ mod tests {
     }
 
     #[test]
+    fn a_fill_between_loose_and_close_packing_gets_the_close_estimate_alone() {
+        // vlab settles the thesis bed to about 0.57; 0.63 is nearly close packed.
+        for fill in [LOOSE_PACKING, 0.57, 0.63] {
+            let p = predict_bouncing_bed(&[40.0], fill, 0.04, 9.81).expect("below CP");
+            let h = effective_clearance_m(fill, CLOSE_PACKING, 0.04);
+            assert!(h > 0.0 && p.close_packing_clearance_m == h, "fill {fill}");
+            assert_eq!(p.close_packing_gamma, vec![onset_gamma(40.0, h, 9.81)]);
+            assert_eq!(p.loose_packing_gamma, None, "fill {fill}");
+            assert_eq!(p.loose_packing_clearance_m, None);
+            let note = p.loose_packing_note.expect("says why");
+            assert!(note.contains("0.55") && note.contains("0.64"), "{note}");
+        }
+        let below = predict_bouncing_bed(&[40.0], 0.54, 0.04, 9.81).expect("valid");
+        assert!(below.loose_packing_gamma.is_some() && below.loose_packing_note.is_none());
+    }
+
+    #[test]
     fn refuses_a_bed_with_no_clearance_and_bad_values() {
-        let e = predict_bouncing_bed(&[40.0], 0.6, 0.04, 9.81).expect_err("too full");
-        assert_eq!(e.key, "fill_ratio");
+        for fill in [CLOSE_PACKING, 0.7] {
+            let e = predict_bouncing_bed(&[40.0], fill, 0.04, 9.81).expect_err("too full");
+            assert_eq!(e.key, "fill_ratio");
+        }
         assert!(predict_bouncing_bed(&[40.0], 0.466, 0.0, 9.81).is_err());
         assert!(predict_bouncing_bed(&[-40.0], 0.466, 0.04, 9.81).is_err());
         assert!(predict_bouncing_bed(&[f64::NAN], 0.466, 0.04, 9.81).is_err());

@@ -104,12 +104,14 @@ fn efficiency_curves(
                 color: k,
                 dash: LineDash::Long,
             });
-            markers.push(MarkerLine {
-                name: format!("LP onset {f} Hz: {:.1}", p.loose_packing_gamma[k]),
-                x: p.loose_packing_gamma[k],
-                color: k,
-                dash: LineDash::Short,
-            });
+            if let Some(lp) = &p.loose_packing_gamma {
+                markers.push(MarkerLine {
+                    name: format!("LP onset {f} Hz: {:.1}", lp[k]),
+                    x: lp[k],
+                    color: k,
+                    dash: LineDash::Short,
+                });
+            }
         }
     }
     // Onsets far beyond the swept amplitudes would squeeze the curves.
@@ -190,15 +192,16 @@ fn efficiency_map(
         for (name, gammas, dash) in [
             (
                 "bouncing-bed onset, close packing (eq. 6.11-6.13)",
-                &p.close_packing_gamma,
+                Some(&p.close_packing_gamma),
                 LineDash::Long,
             ),
             (
                 "bouncing-bed onset, loose packing",
-                &p.loose_packing_gamma,
+                p.loose_packing_gamma.as_ref(),
                 LineDash::Short,
             ),
         ] {
+            let Some(gammas) = gammas else { continue };
             let segments = segments(gammas);
             if !segments.is_empty() {
                 overlays.push(HeatOverlay {

@@ -1,0 +1,190 @@
+//! `vlab analyze` gives no silent wrong number (issue 20 item 8), tried on
+//! the tutorial's own reference record (`signals/reference/thesis-40Hz-G20`,
+//! 40 Hz, rig `thesis-shaker`, exactly 7 periods):
+//!
+//! - a `--freq` its metadata and spectrum contradict is refused with both
+//!   figures and `--force-freq`, which then uses it with a warning;
+//! - another rig's calibration is refused with both rig names and
+//!   `--force-calibration`; a calibration measured only at 160 Hz is warned
+//!   about as outside the calibrated range at 40 Hz;
+//! - a record cut to 3.7 periods says that 3 were used and what was left out.
+
+#![cfg(all(feature = "cli", feature = "plot"))]
+
+mod common;
+
+use common::{Scratch, refuses_in, stderr, vlab};
+
+fn reference(file: &str) -> String {
+    format!(
+        "{}/signals/reference/thesis-40Hz-G20/{file}",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+/// Runs `args` in `dir`, which must succeed; returns (JSON on stdout, stderr).
+fn analyze(dir: &Scratch, args: &[&str]) -> (serde_json::Value, String) {
+    let mut all = vec!["analyze"];
+    all.extend_from_slice(args);
+    all.push("--json");
+    let out = vlab(&dir.0, &all);
+    assert!(out.status.success(), "{all:?}: {}", stderr(&out));
+    (
+        serde_json::from_slice(&out.stdout).expect("JSON"),
+        stderr(&out),
+    )
+}
+
+#[test]
+fn the_reference_record_reads_without_a_warning() {
+    let dir = Scratch::new("checks-clean");
+    let (trace, cal) = (reference("trace.csv"), reference("calibration.json"));
+    let (a, err) = analyze(&dir, &[&trace, "--calibration", &cal]);
+    assert_eq!(err, "", "no warning on the tutorial's own record");
+    assert_eq!(a["drive_freq_source"], "metadata");
+    let s = a["spectrum_freq_hz"].as_f64().expect("spectrum");
+    assert!((s - 40.0).abs() < 0.02, "{s}");
+    assert_eq!(a["dropped_samples"], 0);
+    // The semicolon export has no metadata: its --freq 40 agrees with its spectrum.
+    let semi = reference("trace-semicolon.csv");
+    let (b, err) = analyze(&dir, &[&semi, "--freq", "40", "--calibration", &cal]);
+    assert_eq!(
+        err.matches("warning").count(),
+        1,
+        "only the efficiency: {err}"
+    );
+    assert_eq!(b["drive_freq_source"], "given");
+    assert_eq!(b["power_w"], a["power_w"]);
+}
+
+#[test]
+fn a_freq_the_record_contradicts_is_refused_unless_forced() {
+    let dir = Scratch::new("checks-freq");
+    let trace = reference("trace.csv");
+    refuses_in(
+        &dir,
+        &["analyze", &trace, "--freq", "41"],
+        &[
+            "--freq 41 Hz",
+            "drive_freq_hz is 40 Hz",
+            "40.00 Hz",
+            "--force-freq",
+        ],
+    );
+    // Half a percent off is still the same frequency; one percent is not.
+    analyze(&dir, &[&trace, "--freq", "40.1"]);
+    refuses_in(
+        &dir,
+        &["analyze", &trace, "--freq", "40.4"],
+        &["--force-freq"],
+    );
+    let (forced, err) = analyze(&dir, &[&trace, "--freq", "41", "--force-freq"]);
+    assert_eq!(forced["drive_freq_hz"], 41.0);
+    assert_eq!(forced["drive_freq_source"], "given");
+    assert!(
+        err.contains("warning: --freq 41 Hz contradicts the record")
+            && err.contains("used as forced"),
+        "{err}"
+    );
+    // The forced reading is the 7 % wrong number the refusal prevents.
+    let (right, _) = analyze(&dir, &[&trace, "--freq", "40"]);
+    let ratio =
+        forced["power_w"].as_f64().expect("power") / right["power_w"].as_f64().expect("power");
+    assert!((ratio - 1.0).abs() > 0.05, "{ratio}");
+    // --force-freq without --freq is refused by the command line.
+    assert!(
+        !vlab(&dir.0, &["analyze", &trace, "--force-freq"])
+            .status
+            .success()
+    );
+}
+
+#[test]
+fn another_rigs_calibration_is_refused_unless_forced() {
+    let dir = Scratch::new("checks-rig");
+    let out = vlab(
+        &dir.0,
+        &[
+            "calibrate",
+            "--rig",
+            "ideal",
+            "--freq",
+            "40",
+            "--out",
+            "ideal.json",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let trace = reference("trace.csv");
+    refuses_in(
+        &dir,
+        &["analyze", &trace, "--calibration", "ideal.json"],
+        &["'ideal'", "'thesis-shaker'", "--force-calibration"],
+    );
+    let (_, err) = analyze(
+        &dir,
+        &[&trace, "--calibration", "ideal.json", "--force-calibration"],
+    );
+    assert!(
+        err.contains("'ideal'")
+            && err.contains("'thesis-shaker'")
+            && err.contains("applied as forced"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_calibration_away_from_the_drive_is_warned_about() {
+    let dir = Scratch::new("checks-range");
+    // The reference calibration measured at 40, 160 and 640 Hz, kept at 160 Hz alone.
+    let text = std::fs::read_to_string(reference("calibration.json")).expect("read");
+    let mut cal: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let at_160 = cal["points"][1].clone();
+    assert_eq!(at_160["freq_hz"], 160.0);
+    cal["points"] = serde_json::json!([at_160]);
+    cal.as_object_mut().expect("object").remove("model");
+    dir.write("cal-160.json", &cal.to_string());
+    let trace = reference("trace.csv");
+    let (_, err) = analyze(&dir, &[&trace, "--calibration", "cal-160.json"]);
+    assert!(
+        err.contains("drive frequency 40 Hz lies outside the calibrated range (160 Hz alone)")
+            && err.contains("extrapolated as a pure delay through 160 Hz")
+            && err.contains("vlab calibrate --freq"),
+        "{err}"
+    );
+    // The full table covers 40 Hz: no such warning.
+    let (_, err) = analyze(
+        &dir,
+        &[&trace, "--calibration", &reference("calibration.json")],
+    );
+    assert!(!err.contains("outside the calibrated range"), "{err}");
+}
+
+#[test]
+fn a_record_cut_short_says_what_was_left_out() {
+    let dir = Scratch::new("checks-cut");
+    let text = std::fs::read_to_string(reference("trace.csv")).expect("read");
+    // The comment lines and the header, then 3.7 periods of 1000 samples.
+    let head = text.lines().take_while(|l| l.starts_with('#')).count() + 1;
+    let cut: String = text
+        .lines()
+        .take(head + 3700)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    dir.write("cut.csv", &cut);
+    let (a, err) = analyze(&dir, &["cut.csv"]);
+    assert_eq!(a["n_periods"], 3);
+    assert_eq!(a["dropped_samples"], 700);
+    assert!(
+        err.contains("the record holds 3.70 drive periods: 3 whole periods were used and the last 0.70 periods (700 samples"),
+        "{err}"
+    );
+    let out = vlab(&dir.0, &["analyze", "cut.csv"]);
+    let human = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        human.contains(
+            "3 whole periods (3000 samples) of the record's 3.70, the last 700 samples left out"
+        ),
+        "{human}"
+    );
+}
