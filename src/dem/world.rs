@@ -14,9 +14,9 @@
 //!    displacement ([`forces`], in parallel pair blocks and their gather on
 //!    many threads), each contact checked and booked ([`checks`],
 //!    [`books`]);
-//! 5. the second half kick ([`integrate`]), and the step's books are closed
-//!    ([`books::close_step`], eq. 6.4);
-//! 6. every few thousand steps, the energy books are checked
+//! 5. the second half kick ([`integrate`]);
+//! 6. the step's books are closed ([`books::close_step`], eq. 6.4);
+//! 7. every few thousand steps, the energy books are checked
 //!    ([`checks::energy_closes`]).
 //!
 //! Forces are summed in a fixed order (walls in order, then pairs sorted by
@@ -436,18 +436,24 @@ impl World {
         let dt = self.numerics.dt_s;
         let parallel = self.parallel();
         let verlet = self.integrator();
+        // 1. Integration: half kick and drift; a position that is not finite stops.
         let sums = &mut self.scratch.kick_sums;
         let drift = verlet.kick_drift(&mut self.particles, &self.neighbours, sums, parallel);
         if let Some(i) = drift.nonfinite {
             return Err(self.diagnosis().nonfinite(i, dt));
         }
+        // 2. The walls' stroke.
         let stroke = drive::move_walls(&mut self.walls, wall_displacement_m, dt, self.wall_force);
+        // 3. Neighbour update.
         neighbour_update::update(&mut self.neighbours, &self.particles, drift.moved_far);
+        // 4. Contact forces, each contact checked and booked.
         let booked_before = self.ledger;
         self.step_stored_change_j = 0.0;
         self.compute_forces(dt)?;
+        // 5. Integration: second half kick.
         let sums = &mut self.scratch.kick_sums;
         let kick = verlet.kick(&mut self.particles, sums, drift.work, parallel);
+        // 6. The step's books close.
         books::close_step(
             &mut self.ledger,
             &booked_before,
@@ -457,6 +463,7 @@ impl World {
         );
         self.time_s += dt;
         self.steps += 1;
+        // 7. Every few thousand steps, the energy books must still close.
         if self.steps % self.numerics.energy_check_steps == 0 {
             self.check_energy()?;
         }
