@@ -452,17 +452,7 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
 
     if delta_m <= 0.0 {
         if state.delta_prev > 0.0 {
-            // The contact opened during this step. The integrator applied the last
-            // forces over half of the step; their work closes the books.
-            out.dissipated_normal_j = 0.5 * state.fd_prev * (delta_m - state.delta_prev);
-            out.integrator_j =
-                state.u_normal_j + 0.5 * state.fel_prev * (delta_m - state.delta_prev);
-            if FRICTION {
-                let ds = (v_rel - v_n * n) * dt_s;
-                let stored = 0.5 * state.kt_prev * state.xi.length_squared();
-                out.dissipated_tangential_j = -0.5 * state.ft_prev.dot(ds) + stored;
-                out.stiffness_work_j = -stored;
-            }
+            close_opened::<FRICTION>(geometry, v_n, dt_s, state, &mut out);
         }
         *state = ContactState::apart(delta_m);
         out.stored_change_j = -stored_before;
@@ -497,29 +487,12 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
     }
 
     // Tangential: Mindlin spring with vector history, damping, Coulomb slip.
-    let mut ft = DVec3::ZERO;
-    let mut k_t = 0.0;
-    if FRICTION
-        && let Tangential::MindlinCoulomb {
-            shear_coeff,
-            damping_ratio,
-            friction,
-        } = law.tangential
-    {
-        let v_t = v_rel - v_n * n;
-        let ds = v_t * dt_s;
-        k_t = shear_coeff * sqrt_rd;
-        let c_t = c_n * damping_ratio;
-        let xi_rot = rotate_into_plane(state.xi, n);
-        let xi_sq = xi_rot.length_squared();
-        let (f, xi_new) = mindlin_coulomb(k_t, c_t, friction * f_n, xi_rot, ds, v_t);
-        ft = f;
-        let taken = -0.5 * (state.ft_prev + ft).dot(ds);
-        let stored_before = 0.5 * state.kt_prev * xi_sq;
-        out.dissipated_tangential_j = taken - (0.5 * k_t * xi_new.length_squared() - stored_before);
-        out.stiffness_work_j = 0.5 * (k_t - state.kt_prev) * xi_sq;
-        state.xi = xi_new;
-    }
+    let (ft, k_t) = if FRICTION {
+        let normal = (sqrt_rd, c_n, f_n);
+        tangential_step(&law.tangential, geometry, normal, dt_s, state, &mut out)
+    } else {
+        (DVec3::ZERO, 0.0)
+    };
 
     state.ft_prev = ft;
     state.fd_prev = f_d;
@@ -531,6 +504,71 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
     let (stored_n, stored_t) = state.stored_energy_j();
     out.stored_change_j = stored_n + stored_t - stored_before;
     out
+}
+
+/// The books of a contact that opened during a step of `dt_s` (its overlap
+/// now `geometry.delta_m` ≤ 0, before it `state.delta_prev` > 0): the
+/// integrator applied the last forces over half of the step, and their work
+/// closes the books. Apart from [`evaluate_contact_with`] to keep it short;
+/// always inlined into it.
+#[inline(always)]
+fn close_opened<const FRICTION: bool>(
+    geometry: &ContactGeometry,
+    v_n: f64,
+    dt_s: f64,
+    state: &ContactState,
+    out: &mut ContactOutput,
+) {
+    let (delta_m, n, v_rel) = (geometry.delta_m, geometry.normal, geometry.v_rel);
+    out.dissipated_normal_j = 0.5 * state.fd_prev * (delta_m - state.delta_prev);
+    out.integrator_j = state.u_normal_j + 0.5 * state.fel_prev * (delta_m - state.delta_prev);
+    if FRICTION {
+        let ds = (v_rel - v_n * n) * dt_s;
+        let stored = 0.5 * state.kt_prev * state.xi.length_squared();
+        out.dissipated_tangential_j = -0.5 * state.ft_prev.dot(ds) + stored;
+        out.stiffness_work_j = -stored;
+    }
+}
+
+/// The tangential part of a touching contact over a step of `dt_s`: the
+/// Mindlin spring with its vector history rotated into the tangent plane,
+/// damping and Coulomb slip (eq. 5.15, 5.16, 5.24, 5.33), given `√(R* δ)`,
+/// the normal damping `c_n` and the normal force `f_n`. Advances the history
+/// in `state`, books the tangential dissipation and stiffness work in `out`,
+/// and returns the tangential force on body `i` and the stiffness k_t.
+/// Always inlined into [`evaluate_contact_with`].
+#[inline(always)]
+fn tangential_step(
+    model: &Tangential,
+    geometry: &ContactGeometry,
+    (sqrt_rd, c_n, f_n): (f64, f64, f64),
+    dt_s: f64,
+    state: &mut ContactState,
+    out: &mut ContactOutput,
+) -> (DVec3, f64) {
+    let Tangential::MindlinCoulomb {
+        shear_coeff,
+        damping_ratio,
+        friction,
+    } = *model
+    else {
+        return (DVec3::ZERO, 0.0);
+    };
+    let (n, v_rel) = (geometry.normal, geometry.v_rel);
+    let v_n = v_rel.dot(n);
+    let v_t = v_rel - v_n * n;
+    let ds = v_t * dt_s;
+    let k_t = shear_coeff * sqrt_rd;
+    let c_t = c_n * damping_ratio;
+    let xi_rot = rotate_into_plane(state.xi, n);
+    let xi_sq = xi_rot.length_squared();
+    let (ft, xi_new) = mindlin_coulomb(k_t, c_t, friction * f_n, xi_rot, ds, v_t);
+    let taken = -0.5 * (state.ft_prev + ft).dot(ds);
+    let stored_before = 0.5 * state.kt_prev * xi_sq;
+    out.dissipated_tangential_j = taken - (0.5 * k_t * xi_new.length_squared() - stored_before);
+    out.stiffness_work_j = 0.5 * (k_t - state.kt_prev) * xi_sq;
+    state.xi = xi_new;
+    (ft, k_t)
 }
 
 #[cfg(test)]

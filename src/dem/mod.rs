@@ -2,8 +2,10 @@
 //!
 //! Pure state and physics, driven by the wall kinematics it is given: no rigs, no
 //! sensors, no files. [`World`] holds the state and advances it with
-//! [`World::step`]; [`contact`] holds the force laws as small pure functions;
-//! [`ledger`] keeps the energy books.
+//! [`World::step`], a pipeline of named stages (`step/`: integration, wall
+//! drive, neighbour update, contact forces in blocks, books, checks);
+//! [`contact`] holds the force laws as small pure functions; [`ledger`] keeps
+//! the energy books.
 
 pub mod contact;
 pub mod error;
@@ -13,6 +15,7 @@ pub mod material;
 pub mod neighbours;
 pub mod particles;
 pub mod restitution;
+mod step;
 pub mod testbed;
 pub mod timestep;
 pub mod walls;

@@ -184,38 +184,24 @@ impl NeighbourList {
             self.build_adjacency(n);
             return;
         }
-        let r_max = radii.iter().copied().fold(0.0, f64::max);
-        let (lo, hi) = bounding_box(positions);
-        // Cells at least one cutoff wide; coarser if the box is sparse and huge.
-        let mut cell = 2.0 * r_max + self.skin_m;
-        let extent = hi - lo;
-        let max_cells = (4 * n + 64) as f64;
-        loop {
-            let dims = (extent / cell).floor() + DVec3::ONE;
-            if dims.x * dims.y * dims.z <= max_cells {
-                break;
-            }
-            cell *= 1.25;
-        }
-        let dims = ((extent / cell).floor() + DVec3::ONE).as_uvec3();
-        let (nx, ny, nz) = (dims.x as usize, dims.y as usize, dims.z as usize);
-        let n_cells = nx * ny * nz;
-        let cell_coords = |p: DVec3| -> (usize, usize, usize) {
-            let c = ((p - lo) / cell).floor();
-            (
-                (c.x as usize).min(nx - 1),
-                (c.y as usize).min(ny - 1),
-                (c.z as usize).min(nz - 1),
-            )
-        };
+        let grid = Grid::around(positions, radii, self.skin_m);
+        self.sort_into_cells(&grid, positions);
+        self.list_pairs(&grid, positions, radii);
+        std::mem::swap(&mut self.pairs, &mut self.new_pairs);
+        std::mem::swap(&mut self.states, &mut self.new_states);
+        std::mem::swap(&mut self.gaps, &mut self.new_gaps);
+        self.build_adjacency(n);
+    }
 
-        // Counting sort of particles into cells.
+    /// Counting sort of the particles into the cells of `grid`: the
+    /// particles of cell `c` are `cell_items[cell_start[c]..cell_start[c + 1]]`.
+    fn sort_into_cells(&mut self, grid: &Grid, positions: &[DVec3]) {
+        let n_cells = grid.len();
         self.cell_start.clear();
         self.cell_start.resize(n_cells + 1, 0);
         self.cell_of.clear();
         for p in positions {
-            let (x, y, z) = cell_coords(*p);
-            let c = (z * ny + y) * nx + x;
+            let c = grid.index(grid.coords(*p));
             self.cell_of.push(c as u32);
             self.cell_start[c + 1] += 1;
         }
@@ -223,39 +209,23 @@ impl NeighbourList {
             self.cell_start[c + 1] += self.cell_start[c];
         }
         self.cell_items.clear();
-        self.cell_items.resize(n, 0);
+        self.cell_items.resize(positions.len(), 0);
         self.fill.clear();
         self.fill.extend_from_slice(&self.cell_start[..n_cells]);
         for (i, &c) in self.cell_of.iter().enumerate() {
             self.cell_items[self.fill[c as usize] as usize] = i as u32;
             self.fill[c as usize] += 1;
         }
+    }
 
-        // Pairs i < j within the cutoff, sorted by (i, j).
+    /// The pairs `i < j` within the cutoff, sorted by `(i, j)`, into the new
+    /// list: each particle's row from the 27 cells around it, each pair with
+    /// the state it had on the old list, or apart if it is new.
+    fn list_pairs(&mut self, grid: &Grid, positions: &[DVec3], radii: &[f64]) {
         let mut old = 0usize;
-        for i in 0..n {
+        for i in 0..positions.len() {
             let pi = positions[i];
-            let (cx, cy, cz) = cell_coords(pi);
-            self.row.clear();
-            for z in cz.saturating_sub(1)..=(cz + 1).min(nz - 1) {
-                for y in cy.saturating_sub(1)..=(cy + 1).min(ny - 1) {
-                    for x in cx.saturating_sub(1)..=(cx + 1).min(nx - 1) {
-                        let c = (z * ny + y) * nx + x;
-                        let (s, e) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
-                        for &j in &self.cell_items[s..e] {
-                            let ju = j as usize;
-                            if ju <= i {
-                                continue;
-                            }
-                            let cut = radii[i] + radii[ju] + self.skin_m;
-                            if (positions[ju] - pi).length_squared() < cut * cut {
-                                self.row.push(j);
-                            }
-                        }
-                    }
-                }
-            }
-            self.row.sort_unstable();
+            self.fill_row(grid, positions, radii, i);
             for &j in &self.row {
                 let key = (i as u32, j);
                 // Merge walk: both lists are sorted by (i, j).
@@ -274,10 +244,94 @@ impl NeighbourList {
                 self.new_gaps.push(overlap);
             }
         }
-        std::mem::swap(&mut self.pairs, &mut self.new_pairs);
-        std::mem::swap(&mut self.states, &mut self.new_states);
-        std::mem::swap(&mut self.gaps, &mut self.new_gaps);
-        self.build_adjacency(n);
+    }
+
+    /// The particles `j > i` within the cutoff of particle `i`, sorted, into
+    /// `row`.
+    fn fill_row(&mut self, grid: &Grid, positions: &[DVec3], radii: &[f64], i: usize) {
+        let pi = positions[i];
+        let (cx, cy, cz) = grid.coords(pi);
+        let (nx, ny, nz) = (grid.nx, grid.ny, grid.nz);
+        self.row.clear();
+        for z in cz.saturating_sub(1)..=(cz + 1).min(nz - 1) {
+            for y in cy.saturating_sub(1)..=(cy + 1).min(ny - 1) {
+                for x in cx.saturating_sub(1)..=(cx + 1).min(nx - 1) {
+                    let c = grid.index((x, y, z));
+                    let (s, e) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
+                    for &j in &self.cell_items[s..e] {
+                        let ju = j as usize;
+                        if ju <= i {
+                            continue;
+                        }
+                        let cut = radii[i] + radii[ju] + self.skin_m;
+                        if (positions[ju] - pi).length_squared() < cut * cut {
+                            self.row.push(j);
+                        }
+                    }
+                }
+            }
+        }
+        self.row.sort_unstable();
+    }
+}
+
+/// The cell grid of a rebuild: cubic cells `cell` wide from the corner `lo`,
+/// `nx` by `ny` by `nz` of them.
+struct Grid {
+    lo: DVec3,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    nz: usize,
+}
+
+impl Grid {
+    /// Cells at least one cutoff (`2 R_max + skin`) wide around the
+    /// particles; coarser if the box is sparse and huge.
+    fn around(positions: &[DVec3], radii: &[f64], skin_m: f64) -> Self {
+        let n = positions.len();
+        let r_max = radii.iter().copied().fold(0.0, f64::max);
+        let (lo, hi) = bounding_box(positions);
+        let mut cell = 2.0 * r_max + skin_m;
+        let extent = hi - lo;
+        let max_cells = (4 * n + 64) as f64;
+        loop {
+            let dims = (extent / cell).floor() + DVec3::ONE;
+            if dims.x * dims.y * dims.z <= max_cells {
+                break;
+            }
+            cell *= 1.25;
+        }
+        let dims = ((extent / cell).floor() + DVec3::ONE).as_uvec3();
+        Grid {
+            lo,
+            cell,
+            nx: dims.x as usize,
+            ny: dims.y as usize,
+            nz: dims.z as usize,
+        }
+    }
+
+    /// Number of cells.
+    fn len(&self) -> usize {
+        self.nx * self.ny * self.nz
+    }
+
+    /// The cell a point falls in.
+    #[inline]
+    fn coords(&self, p: DVec3) -> (usize, usize, usize) {
+        let c = ((p - self.lo) / self.cell).floor();
+        (
+            (c.x as usize).min(self.nx - 1),
+            (c.y as usize).min(self.ny - 1),
+            (c.z as usize).min(self.nz - 1),
+        )
+    }
+
+    /// Index of cell `(x, y, z)`.
+    #[inline]
+    fn index(&self, (x, y, z): (usize, usize, usize)) -> usize {
+        (z * self.ny + y) * self.nx + x
     }
 }
 

@@ -1,0 +1,257 @@
+//! Time integration: velocity Verlet (kick–drift–kick) for spheres with six
+//! degrees of freedom.
+//!
+//! Newton's and Euler's equations for each sphere (eq. 3.23–3.24 of
+//! Terzioglu's thesis; for a sphere the gyroscopic terms vanish, so
+//! `m a = F` and `I ω̇ = τ` with the resultant loads of eq. 3.25–3.26) are
+//! integrated by velocity Verlet, which is symplectic, unlike the explicit
+//! Euler of eq. 3.29–3.30 (whose angle update, eq. 3.30, should use ω, not
+//! its derivative). The orientation itself is not tracked: nothing in the
+//! contact laws reads it.
+//!
+//! The seam: [`VelocityVerlet::kick_drift`] runs before the forces (half
+//! kick `v += F/m Δt/2`, `ω += τ/I Δt/2`, drift `x += v Δt`) and
+//! [`VelocityVerlet::kick`] after them (the second half kick). Another
+//! integrator replaces this struct by one that offers the same two calls;
+//! both are plain loops over fixed blocks of particles ([`PARTICLE_BLOCK`]),
+//! on one core or on all threads, with the same bits either way.
+//!
+//! Each pass also sums the power of the contact forces (gravity taken out)
+//! on the half-step velocities, which [`super::books::close_step`] needs: the
+//! trapezoid of the forces at both ends of the step on the drift.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::block_size::PARTICLE_BLOCK;
+use crate::dem::neighbours::NeighbourList;
+use crate::dem::particles::Particles;
+
+/// Velocity Verlet for a time step `dt_s` under `gravity`.
+#[derive(Debug, Clone, Copy)]
+pub struct VelocityVerlet {
+    /// Time step (s).
+    pub dt_s: f64,
+    /// Gravitational acceleration (m/s²).
+    pub gravity: DVec3,
+    /// Integrate the spin too (some law has friction; without friction
+    /// nothing could change it).
+    pub rotation: bool,
+}
+
+impl VelocityVerlet {
+    /// The first half of the step: half kick and drift of every particle.
+    /// Returns the power `(F - m g)·v + τ·ω` summed over the particles, the
+    /// first particle whose position is not finite, and whether some
+    /// particle drifted more than half the skin from where `list` was built
+    /// (a list built for other particles must be rebuilt anyway).
+    pub fn kick_drift(
+        &self,
+        particles: &mut Particles,
+        list: &NeighbourList,
+        sums: &mut Vec<KickSums>,
+        parallel: bool,
+    ) -> KickSums {
+        let reference = list.reference();
+        let reference = (reference.len() == particles.len()).then_some(reference);
+        let kick = self.pass(Pass::KickDrift, list.rebuild_travel_sq_m2());
+        half_kick(&kick, particles, reference, sums, 0.0, parallel)
+    }
+
+    /// The second half kick of every particle, with the forces at the new
+    /// positions. Returns `carry` plus the power `(F - m g)·v + τ·ω` summed
+    /// over the particles, before the kick.
+    pub fn kick(
+        &self,
+        particles: &mut Particles,
+        sums: &mut Vec<KickSums>,
+        carry: f64,
+        parallel: bool,
+    ) -> KickSums {
+        let kick = self.pass(Pass::Kick, f64::INFINITY);
+        half_kick(&kick, particles, None, sums, carry, parallel)
+    }
+
+    fn pass(&self, pass: Pass, travel_sq_m2: f64) -> Kick {
+        Kick {
+            pass,
+            dt: self.dt_s,
+            gravity: self.gravity,
+            rotation: self.rotation,
+            travel_sq_m2,
+        }
+    }
+}
+
+/// Which half of velocity Verlet a particle pass is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    /// Half kick, then drift; the power is read after the drift.
+    KickDrift,
+    /// The power is read, then the second half kick.
+    Kick,
+}
+
+/// One particle pass of velocity Verlet.
+#[derive(Debug, Clone, Copy)]
+struct Kick {
+    pass: Pass,
+    dt: f64,
+    gravity: DVec3,
+    /// Integrate the spin too (some law has friction).
+    rotation: bool,
+    /// Squared travel from where the pair list was built beyond which it
+    /// must be rebuilt (m²).
+    travel_sq_m2: f64,
+}
+
+/// What a half kick found, over a block or over all particles.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct KickSums {
+    /// `carry` plus the contact power `(F - m g)·v + τ·ω`, summed in order.
+    pub work: f64,
+    /// The first particle whose position is not finite (drift only).
+    pub nonfinite: Option<usize>,
+    /// Some particle travelled more than half the skin since the pair list
+    /// was built (drift only).
+    pub moved_far: bool,
+}
+
+/// The loads and inertia of a block of particles.
+struct Loads<'a> {
+    force: &'a [DVec3],
+    torque: &'a [DVec3],
+    mass: &'a [f64],
+    inv_mass: &'a [f64],
+    inv_inertia: &'a [f64],
+}
+
+impl Kick {
+    /// The pass over one block of positions `x`, velocities `v` and spins `w`
+    /// (`built_at`: where the pair list was built for them): returns `carry`
+    /// plus the contact power `(F - m g)·v + τ·ω` summed over the block in
+    /// order, and on the first pass the first particle of the block whose
+    /// position is not finite and whether one drifted far enough to need a
+    /// new pair list.
+    #[inline]
+    fn block(
+        &self,
+        l: &Loads,
+        x: &mut [DVec3],
+        v: &mut [DVec3],
+        w: &mut [DVec3],
+        built_at: Option<&[DVec3]>,
+        carry: f64,
+    ) -> KickSums {
+        let half = 0.5 * self.dt;
+        let g = self.gravity;
+        let mut work = carry;
+        for k in 0..x.len() {
+            let contact = l.force[k] - g * l.mass[k];
+            match self.pass {
+                Pass::KickDrift => {
+                    v[k] += l.force[k] * (l.inv_mass[k] * half);
+                    x[k] += v[k] * self.dt;
+                    if self.rotation {
+                        w[k] += l.torque[k] * (l.inv_inertia[k] * half);
+                        work += contact.dot(v[k]) + l.torque[k].dot(w[k]);
+                    } else {
+                        work += contact.dot(v[k]);
+                    }
+                }
+                Pass::Kick => {
+                    if self.rotation {
+                        work += contact.dot(v[k]) + l.torque[k].dot(w[k]);
+                        w[k] += l.torque[k] * (l.inv_inertia[k] * half);
+                    } else {
+                        work += contact.dot(v[k]);
+                    }
+                    v[k] += l.force[k] * (l.inv_mass[k] * half);
+                }
+            }
+        }
+        let (nonfinite, moved_far) = match (self.pass, built_at) {
+            (Pass::Kick, _) => (None, false),
+            (Pass::KickDrift, built_at) => (
+                x.iter().position(|p| !p.is_finite()),
+                built_at.is_some_and(|r| {
+                    x.iter()
+                        .zip(r)
+                        .any(|(p, q)| (*p - *q).length_squared() > self.travel_sq_m2)
+                }),
+            ),
+        };
+        KickSums {
+            work,
+            nonfinite,
+            moved_far,
+        }
+    }
+}
+
+/// One half kick of every particle (and the drift, on the first pass),
+/// in fixed blocks, whose sums go to `sums`. Returns the sum of the contact
+/// power terms `(F - m g)·v + τ·ω` over the particles, added to `carry` in
+/// particle order (block by block, so the same for any thread count; for
+/// one block the order of a plain loop), the first particle whose position
+/// is not finite, and whether some particle drifted far enough from
+/// `reference`, where the pair list was built, for the list to be rebuilt.
+fn half_kick(
+    kick: &Kick,
+    p: &mut Particles,
+    reference: Option<&[DVec3]>,
+    sums: &mut Vec<KickSums>,
+    carry: f64,
+    parallel: bool,
+) -> KickSums {
+    let (force, torque, mass) = (&p.force, &p.torque, &p.mass);
+    let (inv_mass, inv_inertia) = (&p.inv_mass, &p.inv_inertia);
+    type Block<'b> = (usize, ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [DVec3]));
+    let block = |(c, ((x, v), w)): Block<'_>| {
+        let s = c * PARTICLE_BLOCK;
+        let e = s + x.len();
+        let loads = Loads {
+            force: &force[s..e],
+            torque: &torque[s..e],
+            mass: &mass[s..e],
+            inv_mass: &inv_mass[s..e],
+            inv_inertia: &inv_inertia[s..e],
+        };
+        let built_at = reference.map(|r| &r[s..e]);
+        let sums = kick.block(&loads, x, v, w, built_at, if c == 0 { carry } else { 0.0 });
+        KickSums {
+            nonfinite: sums.nonfinite.map(|k| s + k),
+            ..sums
+        }
+    };
+    if parallel {
+        p.position
+            .par_chunks_mut(PARTICLE_BLOCK)
+            .zip(p.velocity.par_chunks_mut(PARTICLE_BLOCK))
+            .zip(p.angular_velocity.par_chunks_mut(PARTICLE_BLOCK))
+            .enumerate()
+            .map(block)
+            .collect_into_vec(sums);
+    } else {
+        sums.clear();
+        sums.extend(
+            p.position
+                .chunks_mut(PARTICLE_BLOCK)
+                .zip(p.velocity.chunks_mut(PARTICLE_BLOCK))
+                .zip(p.angular_velocity.chunks_mut(PARTICLE_BLOCK))
+                .enumerate()
+                .map(block),
+        );
+    }
+    let mut total = KickSums {
+        work: if sums.is_empty() { carry } else { 0.0 },
+        nonfinite: None,
+        moved_far: false,
+    };
+    for b in sums.iter() {
+        total.work += b.work;
+        total.nonfinite = total.nonfinite.or(b.nonfinite);
+        total.moved_far |= b.moved_far;
+    }
+    total
+}

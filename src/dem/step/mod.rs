@@ -1,0 +1,36 @@
+//! The stages of one DEM step, each in its own file, in the order
+//! [`World::step`](super::World::step) calls them (the resultant loads of
+//! eq. 3.25–3.28 in Terzioglu's thesis, Section 3.5, integrated in time as
+//! Section 3.6 does):
+//!
+//! 1. [`integrate`]: first half of velocity Verlet, kick and drift (the
+//!    symplectic replacement of the explicit Euler of eq. 3.29–3.30);
+//! 2. [`drive`]: the walls move to the prescribed displacement for the end
+//!    of the step;
+//! 3. [`neighbour_update`]: the Verlet pair list is rebuilt when some
+//!    particle moved more than half the skin (Section 3.4);
+//! 4. [`forces`]: gravity and the contact forces at the new positions
+//!    (eq. 3.25–3.28), one contact at a time by the kernels of [`contacts`]
+//!    (eq. 3.1–3.8, 3.12–3.14), on one core or in the fixed pair blocks of
+//!    [`blocks`] and their gather;
+//! 5. [`integrate`] again: the second half kick;
+//! 6. [`books`]: what the contacts dissipated and stored, block by block,
+//!    and the step's energy balance (eq. 6.4);
+//! 7. [`checks`]: the refusals (a collision resolved in too few steps, an
+//!    excessive overlap, an escaped particle, a position that is not finite,
+//!    energy books that no longer close).
+//!
+//! The stages are plain functions over the world's plain state structs,
+//! borrowed field by field; none of them imports the world. Loops are cut
+//! into the fixed blocks of [`block_size`], so that every sum is taken in the
+//! same order whatever the number of threads.
+
+pub mod block_size;
+pub mod blocks;
+pub mod books;
+pub mod checks;
+pub mod contacts;
+pub mod drive;
+pub mod forces;
+pub mod integrate;
+pub mod neighbour_update;
