@@ -87,6 +87,7 @@ use crate::signals::{
 };
 use crate::stats::mean_std;
 use crate::validation::{self, Bound, InvalidParameter, in_range, non_negative, positive, require};
+use crate::warning::{FileKey, RunWarning};
 
 /// Gravity of the drop scene, m/s^2 (as the thesis scene).
 pub const DROP_GRAVITY_MPS2: f64 = 9.81;
@@ -323,13 +324,14 @@ impl DropSetup {
     /// its zero crossings, timed a ring period late or missed altogether; the
     /// estimate shows a missed impact as a triple with `e > 1`. The sample
     /// rate is named by its rig key, `daq.sample_rate_hz`.
-    pub fn sampling_warning(&self) -> Result<Option<String>, DropError> {
+    pub fn sampling_warning(&self) -> Result<Option<RunWarning>, DropError> {
         self.sampling_warning_naming("daq.sample_rate_hz")
     }
 
     /// [`DropSetup::sampling_warning`] with the sample rate named `name` (a
-    /// caller's own name for the value: the flag that set it).
-    pub fn sampling_warning_naming(&self, name: &str) -> Result<Option<String>, DropError> {
+    /// caller's own name for the value: the flag that set it); the warning's
+    /// advice is the rig key, `daq.sample_rate_hz`.
+    pub fn sampling_warning_naming(&self, name: &str) -> Result<Option<RunWarning>, DropError> {
         let fs = self.rig.daq.sample_rate_hz;
         let pulse = self.min_sample_rate_hz()?.first_pulse_s;
         let ring_hz = Plate::from_spec(&self.rig)?.ring_freq_hz();
@@ -337,7 +339,7 @@ impl DropSetup {
         if fs >= good {
             return Ok(None);
         }
-        Ok(Some(format!(
+        let text = format!(
             "{name} {fs} Hz barely resolves the impacts: the transducer's first pulse \
              ({:.1} us) spans {:.1} sample periods and the plate's {:.1} kHz ring is {} the \
              {:.1} kHz Nyquist frequency, so an impact can be sampled near its zero crossings, \
@@ -349,6 +351,10 @@ impl DropSetup {
             if 2.0 * ring_hz > fs { "above" } else { "below" },
             fs / 2e3,
             good.ceil()
+        );
+        Ok(Some(RunWarning::advising(
+            text,
+            FileKey("daq.sample_rate_hz"),
         )))
     }
 
@@ -819,7 +825,7 @@ pub struct DropSummary {
     pub yield_velocity_mps: Option<f64>,
     /// Lowest accepted sample rate: one sample per first pulse, Hz.
     pub min_sample_rate_hz: f64,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<RunWarning>,
     pub runs: Vec<DropRunSummary>,
     pub files: Vec<String>,
 }
@@ -831,7 +837,7 @@ pub fn summarise_drops(
     setups: &[DropSetup],
     runs: &[(DropOutcome, DropEstimate)],
     material: &'static str,
-    warnings: Vec<String>,
+    warnings: Vec<RunWarning>,
 ) -> Result<DropSummary, DropError> {
     let first = setups
         .first()

@@ -74,7 +74,7 @@ use crate::signals::{
     read_table,
 };
 use crate::validation::{InvalidParameter, positive};
-use crate::warning::Warning;
+use crate::warning::{RunWarning, Warning};
 
 /// The rig is stepped at most this far apart (s): the thesis' DEM step.
 pub const PUSH_STEP_S: f64 = 1e-6;
@@ -403,7 +403,7 @@ pub struct ReplayMeasured {
     pub calibration: String,
     pub n_periods: usize,
     pub rig: String,
-    pub clipping: Vec<String>,
+    pub clipping: Vec<RunWarning>,
 }
 
 /// Everything `summary.json` says about a replay.
@@ -755,7 +755,14 @@ pub fn replay_record(
         rig: rig.name.clone(),
         clipping: daq_report.clipping_warnings(),
     };
-    warnings.extend(measured.clipping.iter().cloned().map(ReplayWarning::from));
+    // A rig key is not a replay option: the clipping warnings come without advice.
+    warnings.extend(
+        measured
+            .clipping
+            .iter()
+            .cloned()
+            .map(|w| w.advising_as(|_| None)),
+    );
     if table.format == crate::signals::TableFormat::LammpsText
         && !table.comments.contains_key("units")
     {

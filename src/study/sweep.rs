@@ -48,6 +48,7 @@ use crate::study::phases::{
 };
 use crate::study::predict::{CLOSE_PACKING, effective_clearance_m};
 use crate::validation::InvalidParameter;
+use crate::warning::RunWarning;
 
 /// First line of every sweep file.
 pub const SWEEP_MAGIC: &str = "# vlab sweep";
@@ -613,7 +614,7 @@ pub enum SweepEvent<'a> {
         /// Read from the bed cache rather than settled.
         from_cache: bool,
         /// What the bed's source had to say (a cache entry rebuilt, say).
-        warnings: &'a [String],
+        warnings: &'a [RunWarning],
     },
     /// A condition finished and its row is in the file.
     ConditionDone {
