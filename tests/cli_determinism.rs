@@ -4,30 +4,19 @@
 
 mod common;
 
-use common::{Scratch, json, stderr, vlab};
-
-/// A small scene with the pair loop forced onto the threads.
-const SMALL_PARALLEL_SCENE: &str = r#"
-[particles]
-count = 150
-[simulation]
-settle_s = 0.02
-parallel_min_pairs = 0
-[drive]
-cycles = 3
-steady_cycles = 2
-"#;
+use common::{Scratch, TIMING_KEYS, run_summary, small_scene, stderr, vlab, without_keys};
 
 #[test]
 fn one_and_two_threads_give_identical_physics() {
     let dir = Scratch::new("determinism");
-    dir.write("small.toml", SMALL_PARALLEL_SCENE);
+    // The small scene with the pair loop forced onto the threads.
+    dir.write("small.toml", &small_scene(3, 2, "parallel_min_pairs = 0\n"));
     let mut summaries = Vec::new();
     let mut records = Vec::new();
     for threads in ["1", "2"] {
         let out_dir = format!("run{threads}");
-        let out = vlab(
-            &dir.0,
+        let (_, s) = run_summary(
+            &dir,
             &[
                 "--quiet",
                 "--threads",
@@ -39,25 +28,12 @@ fn one_and_two_threads_give_identical_physics() {
                 "40",
                 "--gamma",
                 "10",
-                "--out",
-                &out_dir,
                 // Each thread count settles its own bed.
                 "--no-cache",
             ],
+            &out_dir,
         );
-        assert!(out.status.success(), "{}", stderr(&out));
-        let mut s = json(&dir.path(&format!("{out_dir}/summary.json")));
-        let obj = s.as_object_mut().expect("object");
-        for timing in [
-            "wall_time_s",
-            "particle_steps_per_s",
-            "settle_wall_time_s",
-            "rig_wall_time_s",
-            "threads",
-        ] {
-            assert!(obj.remove(timing).is_some(), "{timing} missing");
-        }
-        summaries.push(s);
+        summaries.push(without_keys(s, &TIMING_KEYS));
         records.push(std::fs::read(dir.path(&format!("{out_dir}/kinematics.csv"))).expect("csv"));
     }
     assert_eq!(

@@ -4,18 +4,7 @@
 
 mod common;
 
-use common::{Scratch, json, refuses_in, stderr, vlab};
-
-/// A small, quick damper: enough to produce real records.
-const SMALL_SCENE: &str = r#"
-[particles]
-count = 150
-[simulation]
-settle_s = 0.02
-[drive]
-cycles = 5
-steady_cycles = 3
-"#;
+use common::{Scratch, refuses_in, run_summary, small_scene, stderr, vlab};
 
 fn analyze_json(dir: &Scratch, trace: &str) -> serde_json::Value {
     let out = vlab(
@@ -36,9 +25,9 @@ fn analyze_json(dir: &Scratch, trace: &str) -> serde_json::Value {
 #[test]
 fn csv_and_wav_analysis_equal_the_run() {
     let dir = Scratch::new("measure");
-    dir.write("small.toml", SMALL_SCENE);
-    let out = vlab(
-        &dir.0,
+    dir.write("small.toml", &small_scene(5, 3, ""));
+    let (_, s) = run_summary(
+        &dir,
         &[
             "--quiet",
             "shake",
@@ -48,12 +37,9 @@ fn csv_and_wav_analysis_equal_the_run() {
             "40",
             "--gamma",
             "10",
-            "--out",
-            "run",
         ],
+        "run",
     );
-    assert!(out.status.success(), "{}", stderr(&out));
-    let s = json(&dir.path("run/summary.json"));
     let measured = s["measured"]["energy_per_cycle_j"]
         .as_f64()
         .expect("measured");

@@ -8,7 +8,7 @@ mod common;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 
-use common::{Scratch, json, refuses_in, stderr, vlab};
+use common::{Scratch, json, refuses_in, run_summary, stderr, vlab};
 
 const FREQ: f64 = 40.0;
 const GAMMA: f64 = 20.0;
@@ -76,12 +76,7 @@ fn records_of_known_power_in_every_format() {
     // power; through the thesis rig within its calibrated phase error.
     for (rig, tol) in [("ideal", 1e-4), ("thesis-shaker", 2e-3)] {
         let out = format!("out-{rig}");
-        let o = vlab(
-            &dir.0,
-            &["replay", "record.txt", "--rig", rig, "--out", &out],
-        );
-        assert!(o.status.success(), "{}", stderr(&o));
-        let s = json(&dir.path(&format!("{out}/summary.json")));
+        let (o, s) = run_summary(&dir, &["replay", "record.txt", "--rig", rig], &out);
         let t = s["truth"]["power_w"].as_f64().expect("truth");
         assert!((t / truth - 1.0).abs() < 1e-4, "truth {t} vs {truth}");
         let m = s["measured"]["power_w"].as_f64().expect("measured");

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{Scratch, json, stderr, vlab};
+use common::{Scratch, run_summary};
 use vlab::signals::read_csv;
 
 /// The thesis scene at 40 Hz, Gamma 20: the energy ledger closes within 1e-3 of
@@ -13,14 +13,11 @@ use vlab::signals::read_csv;
 #[test]
 fn thesis_scene_ledger_closes_and_record_agrees() {
     let dir = Scratch::new("shake-thesis");
-    let out = vlab(
-        &dir.0,
-        &[
-            "--quiet", "shake", "--freq", "40", "--gamma", "20", "--out", "run",
-        ],
+    let (_, s) = run_summary(
+        &dir,
+        &["--quiet", "shake", "--freq", "40", "--gamma", "20"],
+        "run",
     );
-    assert!(out.status.success(), "{}", stderr(&out));
-    let s = json(&dir.path("run/summary.json"));
     for key in [
         "freq_hz",
         "gamma",
@@ -109,9 +106,7 @@ fn thesis_scene_ledger_closes_and_record_agrees() {
     // measured, within 0.1 % (measured on the 2-core VM at fc23db4: -0.048 %,
     // of which -0.041 % is the 40 kHz rows' loss of the DEM's work, the rest
     // the two chains' errors, -0.021 % vs the record and -0.014 % vs the DEM).
-    let out = vlab(&dir.0, &["replay", "run/kinematics.csv", "--out", "replay"]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let r = json(&dir.path("replay/summary.json"));
+    let (_, r) = run_summary(&dir, &["replay", "run/kinematics.csv"], "replay");
     let shake = s["measured"]["power_w"].as_f64().expect("shake power");
     let replay = r["measured"]["power_w"].as_f64().expect("replay power");
     assert!(
@@ -140,13 +135,9 @@ fn ledger_closes_at_dt_and_half_dt_and_the_integration_error_is_second_order() {
             "3",
             "--steady-cycles",
             "2",
-            "--out",
-            out,
         ];
         args.extend_from_slice(extra);
-        let o = vlab(&dir.0, &args);
-        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
-        json(&dir.path(&format!("{out}/summary.json")))
+        run_summary(&dir, &args, out).1
     };
     let full = run(&[], "dt");
     let dt = full["dt_s"].as_f64().expect("dt_s");

@@ -12,22 +12,7 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{Scratch, stderr, vlab};
-
-const TINY: &str = r#"
-name = "tiny"
-[particles]
-count = 30
-[enclosure]
-inner_diameter_m = 0.02
-inner_length_m = 0.03
-[simulation]
-dt_s = 4e-6
-settle_s = 0.05
-[drive]
-cycles = 4
-steady_cycles = 2
-"#;
+use common::{Scratch, TINY_SCENE, stderr, vlab};
 
 const SWEEP: [&str; 8] = [
     "--freq",
@@ -78,7 +63,7 @@ fn run(dir: &Path, extra: &[&str]) -> std::process::Output {
 #[test]
 fn sweep_marks_resumes_shards_and_merges() {
     let dir = Scratch::new("sweep");
-    dir.write("tiny.toml", TINY);
+    dir.write("tiny.toml", TINY_SCENE);
 
     // The whole sweep at once.
     let a = run(&dir.0, &["--out", "all"]);
@@ -309,7 +294,7 @@ fn predict_takes_fills_up_to_close_packing() {
 #[test]
 fn shake_dump_is_readable_vtk_and_snapshots_are_drawn() {
     let dir = Scratch::new("dump");
-    dir.write("tiny.toml", TINY);
+    dir.write("tiny.toml", TINY_SCENE);
     let out = vlab(
         &dir.0,
         &[

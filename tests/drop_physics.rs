@@ -211,7 +211,9 @@ fn at_50_khz_the_estimate_is_as_good_and_at_20_khz_impacts_are_missed() {
     setup.validate().expect("20 kHz is accepted");
     let warning = setup.sampling_warning().expect("checks").expect("warns");
     assert!(
-        warning.contains("above the 10.0 kHz Nyquist frequency"),
+        warning
+            .text
+            .contains("above the 10.0 kHz Nyquist frequency"),
         "{warning}"
     );
     let broken = runs(20_000)

@@ -11,24 +11,9 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-use common::Scratch;
+use common::{Scratch, TINY_SCENE};
 
 const SCRIPT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/slurm-sweep.sh");
-
-const TINY: &str = r#"
-name = "tiny"
-[particles]
-count = 30
-[enclosure]
-inner_diameter_m = 0.02
-inner_length_m = 0.03
-[simulation]
-dt_s = 4e-6
-settle_s = 0.05
-[drive]
-cycles = 4
-steady_cycles = 2
-"#;
 
 /// Records every call's arguments (one a line) in `callN`, the `--wrap`
 /// command in `merge.sh`, and answers with a job id as `--parsable` does.
@@ -87,7 +72,7 @@ fn the_script_parses() {
 #[test]
 fn the_script_submits_runs_shards_and_merges() {
     let dir = Scratch::new("slurm");
-    dir.write("tiny.toml", TINY);
+    dir.write("tiny.toml", TINY_SCENE);
     let stub_dir = dir.path("stub");
     std::fs::create_dir_all(&stub_dir).expect("stub dir");
     let stub = dir.write("stub/sbatch", STUB);

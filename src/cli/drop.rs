@@ -25,6 +25,7 @@ use vlab::experiment::drop::{
 use vlab::rig::{DROP_RIG, DropRigSpec, RigFile};
 use vlab::scene::validity::yield_warning;
 use vlab::signals::{ImpactParams, Series, SeriesStyle, plot_xy_svg, write_csv, write_wav};
+use vlab::warning::RunWarning;
 
 use super::args;
 
@@ -162,7 +163,7 @@ fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
 pub fn run(a: DropArgs) -> Result<()> {
     let setups = setups(&a)?;
     let first = &setups[0];
-    let mut warnings: Vec<String> = Vec::new();
+    let mut warnings: Vec<RunWarning> = Vec::new();
     // The fastest drop sets the sampling demands.
     let fastest = setups
         .iter()
@@ -192,19 +193,22 @@ pub fn run(a: DropArgs) -> Result<()> {
             .map(|d| d.arrival_speed_mps)
             .fold(0.0, f64::max);
         if let Some(w) = yield_mps.and_then(|vy| yield_warning(&s.pair_label(), fastest, vy)) {
-            warnings.push(format!("height {} m: {w}", s.height_m));
+            warnings.push(format!("height {} m: {w}", s.height_m).into());
         }
         if out.rig_report.clipped > 0 {
-            warnings.push(format!(
-                "height {} m: {} samples clipped at the ADC's full scale ({:.1} N): the record is distorted",
-                s.height_m, out.rig_report.clipped, out.rig_report.full_scale_n
-            ));
+            warnings.push(
+                format!(
+                    "height {} m: {} samples clipped at the ADC's full scale ({:.1} N): the record is distorted",
+                    s.height_m, out.rig_report.clipped, out.rig_report.full_scale_n
+                )
+                .into(),
+            );
         }
     }
     for (s, (_, est)) in setups.iter().zip(&runs) {
         let grown = est.result.cor.growing_gaps();
         if !grown.is_empty() {
-            warnings.push(format!(
+            warnings.push(RunWarning::from(format!(
                 "height {} m: triple(s) {} have a second gap longer than the first (COR > 1): an \
                  impact was missed or ringing taken for one; that estimate is not to be trusted \
                  (try a lower --threshold-n)",
@@ -214,7 +218,7 @@ pub fn run(a: DropArgs) -> Result<()> {
                     .map(|k| (k + 1).to_string())
                     .collect::<Vec<_>>()
                     .join(", ")
-            ));
+            )));
         }
     }
     let summary = summarise_drops(

@@ -15,8 +15,8 @@ use vlab::atomic_write::OutputDir;
 use vlab::rig::ShakerKind;
 use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::study::sweep::{
-    RowStatus, Shard, SweepEvent, SweepFile, SweepPlan, SweepRow, merge_shards, run_sweep,
-    summarise,
+    RowStatus, Shard, Steady, SweepEvent, SweepFile, SweepPlan, SweepRow, merge_shards, phase_name,
+    run_sweep, summarise,
 };
 use vlab::study::sweep_plot::plot_sweep;
 
@@ -266,9 +266,9 @@ fn outcome(row: &SweepRow) -> String {
             row.efficiency,
             row.efficiency_se,
             row.efficiency_measured,
-            row.phase,
+            phase_name(row.phase),
             row.cycles,
-            if row.steady == "capped" {
+            if row.steady == Some(Steady::Capped) {
                 ", NOT steady at the cap"
             } else {
                 ""
@@ -316,7 +316,7 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
         } else {
             format!("{} cycles (last {} kept)", h.cycles, h.steady_cycles)
         },
-        h.seeds,
+        h.grid.seeds,
         if h.shard == Shard::ALL {
             String::new()
         } else {
@@ -325,7 +325,7 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
     );
     println!("  fill   orientation  freq    Gamma   efficiency (DEM +- se)  measured  phase");
     for s in &summary {
-        if s.status == "ok" {
+        if s.status == RowStatus::Ok {
             println!(
                 "  {:.3}  {:<11}  {:>5}  {:>6}   {:.3} +- {:.3}          {:.3}     {}",
                 s.fill_ratio,
@@ -335,7 +335,7 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
                 s.efficiency,
                 s.efficiency_se,
                 s.efficiency_measured,
-                s.phase
+                phase_name(s.phase)
             );
         } else {
             println!(
@@ -344,7 +344,7 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
                 s.orientation.as_str(),
                 s.freq_hz,
                 s.gamma,
-                s.status
+                s.status.as_str()
             );
         }
     }

@@ -68,6 +68,7 @@ use crate::dem::Particles;
 use crate::experiment::damper::Progress;
 use crate::experiment::settle::{SETTLING_VERSION, SettledBed, rebuild_settled_world, settle_bed};
 use crate::scene::{Scene, SceneError};
+use crate::warning::RunWarning;
 
 /// Hash of the code and compiler that settle a bed (see the module docs):
 /// part of every bed's key.
@@ -504,18 +505,21 @@ impl BedSource {
         let BedSource::Cache(cache) = self else {
             return settle_bed(scene, progress);
         };
-        let mut warnings = Vec::new();
+        let mut warnings: Vec<RunWarning> = Vec::new();
         match cache.load(scene) {
             Ok(Some(bed)) => return Ok(bed),
             Ok(None) => {}
-            Err(w) => warnings.push(w),
+            Err(w) => warnings.push(w.into()),
         }
         let mut bed = settle_bed(scene, progress)?;
         if let Err(e) = cache.store(scene, &bed) {
-            warnings.push(format!(
-                "the settled bed could not be kept in the cache {}: {e}",
-                cache.dir().display()
-            ));
+            warnings.push(
+                format!(
+                    "the settled bed could not be kept in the cache {}: {e}",
+                    cache.dir().display()
+                )
+                .into(),
+            );
         }
         warnings.append(&mut bed.warnings);
         bed.warnings = warnings;
@@ -712,7 +716,7 @@ mod tests {
         let again = source.settle(&scene, &mut |_| {}).expect("settles");
         assert!(!again.from_cache);
         assert!(
-            again.warnings[0].contains("not used"),
+            again.warnings[0].text.contains("not used"),
             "{:?}",
             again.warnings
         );

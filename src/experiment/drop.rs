@@ -88,6 +88,7 @@ use crate::signals::{
 };
 use crate::stats::mean_std;
 use crate::validation::{self, Bound, InvalidParameter, in_range, non_negative, positive, require};
+use crate::warning::{FileKey, RunWarning};
 
 /// Gravity of the drop scene, m/s^2 (as the thesis scene).
 pub const DROP_GRAVITY_MPS2: f64 = 9.81;
@@ -305,13 +306,14 @@ impl DropSetup {
     /// its zero crossings, timed a ring period late or missed altogether; the
     /// estimate shows a missed impact as a triple with `e > 1`. The sample
     /// rate is named by its rig key, `daq.sample_rate_hz`.
-    pub fn sampling_warning(&self) -> Result<Option<String>, SceneError> {
+    pub fn sampling_warning(&self) -> Result<Option<RunWarning>, SceneError> {
         self.sampling_warning_naming("daq.sample_rate_hz")
     }
 
     /// [`DropSetup::sampling_warning`] with the sample rate named `name` (a
-    /// caller's own name for the value: the flag that set it).
-    pub fn sampling_warning_naming(&self, name: &str) -> Result<Option<String>, SceneError> {
+    /// caller's own name for the value: the flag that set it); the warning's
+    /// advice is the rig key, `daq.sample_rate_hz`.
+    pub fn sampling_warning_naming(&self, name: &str) -> Result<Option<RunWarning>, SceneError> {
         let fs = self.rig.daq.sample_rate_hz;
         let pulse = self.min_sample_rate_hz()?.first_pulse_s;
         let ring_hz = Plate::from_spec(&self.rig)?.ring_freq_hz();
@@ -319,7 +321,7 @@ impl DropSetup {
         if fs >= good {
             return Ok(None);
         }
-        Ok(Some(format!(
+        let text = format!(
             "{name} {fs} Hz barely resolves the impacts: the transducer's first pulse \
              ({:.1} us) spans {:.1} sample periods and the plate's {:.1} kHz ring is {} the \
              {:.1} kHz Nyquist frequency, so an impact can be sampled near its zero crossings, \
@@ -331,6 +333,10 @@ impl DropSetup {
             if 2.0 * ring_hz > fs { "above" } else { "below" },
             fs / 2e3,
             good.ceil()
+        );
+        Ok(Some(RunWarning::advising(
+            text,
+            FileKey("daq.sample_rate_hz"),
         )))
     }
 
@@ -862,7 +868,7 @@ pub struct DropSummary {
     pub yield_velocity_mps: Option<f64>,
     /// Lowest accepted sample rate: one sample per first pulse, Hz.
     pub min_sample_rate_hz: f64,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<RunWarning>,
     pub runs: Vec<DropRunSummary>,
     pub files: Vec<String>,
 }
@@ -912,7 +918,7 @@ pub fn summarise_drops(
     setups: &[DropSetup],
     runs: &[(DropOutcome, DropEstimate)],
     material: &'static str,
-    warnings: Vec<String>,
+    warnings: Vec<RunWarning>,
 ) -> Result<DropSummary, SceneError> {
     let first = setups
         .first()

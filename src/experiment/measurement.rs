@@ -42,6 +42,7 @@ use crate::signals::{
     yang_power_of_trace,
 };
 use crate::stats::{MeanStderr, mean_stderr};
+use crate::warning::RunWarning;
 
 /// Feeds the rig's DAQ and the truth recorder from every DEM step, and the
 /// caller's own observer (a dump, the motional-phase indicators).
@@ -130,7 +131,7 @@ pub struct Measured {
     pub shaker: ShakerKind,
     /// Fundamental enclosure acceleration / g over the last cycle.
     pub achieved_gamma: Option<f64>,
-    pub clipping: Vec<String>,
+    pub clipping: Vec<RunWarning>,
 }
 
 /// A measured damper run.

@@ -74,7 +74,7 @@ use crate::signals::{
     read_table,
 };
 use crate::validation::{InvalidParameter, positive};
-use crate::warning::Warning;
+use crate::warning::{RunWarning, Warning};
 
 /// The rig is stepped at most this far apart (s): the thesis' DEM step.
 pub const PUSH_STEP_S: f64 = 1e-6;
@@ -403,7 +403,7 @@ pub struct ReplayMeasured {
     pub calibration: String,
     pub n_periods: usize,
     pub rig: String,
-    pub clipping: Vec<String>,
+    pub clipping: Vec<RunWarning>,
 }
 
 /// Everything `summary.json` says about a replay.
@@ -473,6 +473,11 @@ pub fn estimate_freq_hz(t0_s: f64, step_s: f64, velocity: &[f64]) -> Option<f64>
 }
 
 /// Replays `record` through the rig of `options` (see the module docs).
+///
+/// Longer than 80 lines: one pass from the record to the summary. The
+/// resolving of its inputs and the feeding of the DAQ are helpers; what
+/// remains names the drive (freq_hz, gamma, gravity) on most lines and is
+/// left whole for the change that gives the drive a type of its own.
 pub fn replay_record(
     record: &EnclosureRecord,
     options: &ReplayOptions,
@@ -482,120 +487,17 @@ pub fn replay_record(
     let h = record.step_s;
     let rig = &options.rig;
 
-    let (freq_hz, freq_source) = match (options.freq_hz, table.declared_f64("drive_freq_hz")?) {
-        (Some(f), _) => (f, Source::Given),
-        (None, Some(f)) => (f, Source::Record),
-        (None, None) => {
-            let f = estimate_freq_hz(record.start_s, h, record.motion.velocity_samples_mps())
-                .ok_or_else(|| SceneError::RecordNeeds {
-                    path: table.path.clone(),
-                    problem: format!(
-                        "the record does not state its drive frequency and its velocity does not \
-                         oscillate enough to tell it: give it as {}",
-                        ReplayOption::FreqHz
-                    ),
-                    option: ReplayOption::FreqHz,
-                })?;
-            warnings.push(ReplayWarning::advising(
-                format!(
-                    "the record does not state its drive frequency; {f:.4} Hz was estimated from \
-                     its velocity (give {} for an exact window of whole periods)",
-                    ReplayOption::FreqHz
-                ),
-                ReplayOption::FreqHz,
-            ));
-            (f, Source::Estimated)
-        }
-    };
-    positive("freq_hz", freq_hz, "Hz")?;
+    let (freq_hz, freq_source) = drive_freq_hz(record, options, &mut warnings)?;
+    check_record_step(record, freq_hz, rig, &mut warnings)?;
     let period = 1.0 / freq_hz;
-    if h > period / 8.0 {
-        return Err(SceneError::Record {
-            path: table.path.clone(),
-            problem: format!(
-                "a step of {h:.4e} s resolves a {freq_hz} Hz drive with fewer than 8 samples a \
-                 period; record at least every {:.4e} s",
-                period / 8.0
-            ),
-        });
-    }
     let sample_rate_hz = rig.daq.sample_rate_hz;
-    if h > 1.0 / sample_rate_hz * (1.0 + 1e-9) {
-        warnings.push(ReplayWarning::from(format!(
-            "the record steps {h:.4e} s, coarser than the DAQ's {:.4e} s: each value is held over \
-             its interval, so the record's content above {:.0} Hz is that of the hold, not of \
-             the damper",
-            1.0 / sample_rate_hz,
-            0.5 / h
-        )));
-    }
 
-    // The window: the last whole periods the record covers.
-    let covered_from = record.start_s - 0.5 * h;
-    let end_k = ((record.end_s() + h) / period + 1e-9).floor();
-    let window_end = end_k * period;
-    let available = ((window_end - covered_from) / period + 1e-9).floor();
-    if available < 2.0 {
-        return Err(SceneError::Record {
-            path: table.path.clone(),
-            problem: format!(
-                "the record covers {:.3} periods of the {freq_hz} Hz drive ({} rows of {h:.4e} s); \
-                 Yang's method needs 2 whole periods",
-                (record.end_s() + 0.5 * h - covered_from) / period,
-                record.force_axial_n.len()
-            ),
-        });
-    }
-    let declared_cycles = match table.declared_f64("steady_cycles")? {
-        Some(n) if n >= 1.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX) => Some(n as u32),
-        Some(n) => {
-            return Err(SceneError::Record {
-                path: table.path.clone(),
-                problem: format!("steady_cycles = {n}: must be a whole number of periods"),
-            });
-        }
-        None => None,
-    };
-    let periods = match options.steady_cycles.or(declared_cycles) {
-        Some(n) if n < 2 => {
-            return Err(InvalidParameter::new(
-                "steady_cycles",
-                n,
-                "",
-                "at least 2 (Yang's method needs 2 whole periods)",
-            )
-            .into());
-        }
-        Some(n) if f64::from(n) > available => {
-            return Err(InvalidParameter::new(
-                "steady_cycles",
-                n,
-                "",
-                format!("at most {available}: the whole periods the record covers"),
-            )
-            .into());
-        }
-        Some(n) => n,
-        None if available < f64::from(DEFAULT_STEADY_CYCLES) => {
-            warnings.push(ReplayWarning::from(format!(
-                "the record covers {available} whole periods, fewer than the {DEFAULT_STEADY_CYCLES} \
-                 the thesis measured; all {available} are used"
-            )));
-            available as u32
-        }
-        None => DEFAULT_STEADY_CYCLES,
-    };
-    let window_start = window_end - f64::from(periods) * period;
-    let transient = (((window_start - covered_from) / period + 1e-9).floor() as u32).min(100);
+    let window = replay_window(record, options.steady_cycles, freq_hz, &mut warnings)?;
+    let (window_start, window_end) = (window.start_s, window.end_s);
+    let (periods, transient) = (window.periods, window.transient);
 
     // Drive level: as given or declared, else the recorded fundamental.
-    let g = match options.gravity_mps2 {
-        Some(g) => g,
-        None => table
-            .declared_f64("gravity_mps2")?
-            .unwrap_or(Scene::thesis().simulation.gravity_mps2),
-    };
-    positive("gravity_mps2", g, "m/s^2")?;
+    let g = gravity_of(options, table)?;
     let omega = 2.0 * PI * freq_hz;
     let achieved_gamma =
         fundamental_velocity_mps(record, freq_hz, window_start, window_end) * omega / g;
@@ -606,41 +508,8 @@ pub fn replay_record(
     };
     positive("gamma", gamma, "")?;
     check_limits(rig, freq_hz, gamma, g)?;
-    let (orientation, orientation_source) =
-        match (options.orientation, table.declared_text("orientation")) {
-            (Some(o), _) => (o, Source::Given),
-            (None, Some(text)) => match text.trim() {
-                "vertical" => (Orientation::Vertical, Source::Record),
-                "horizontal" => (Orientation::Horizontal, Source::Record),
-                other => {
-                    return Err(SceneError::Record {
-                        path: table.path.clone(),
-                        problem: format!("orientation '{other}': must be vertical or horizontal"),
-                    });
-                }
-            },
-            (None, None) => (Orientation::Vertical, Source::Default),
-        };
-    let (particle_mass_kg, particle_mass_source) = match (
-        options.particle_mass_kg,
-        table.declared_f64("particle_mass_kg")?,
-    ) {
-        (Some(m), _) => (Some(m), Some(Source::Given)),
-        (None, Some(m)) => (Some(m), Some(Source::Record)),
-        (None, None) => {
-            warnings.push(ReplayWarning::advising(
-                format!(
-                    "the record does not state the particle mass: no efficiency (give {})",
-                    ReplayOption::ParticleMassKg
-                ),
-                ReplayOption::ParticleMassKg,
-            ));
-            (None, None)
-        }
-    };
-    if let Some(m) = particle_mass_kg {
-        positive("particle_mass_kg", m, "kg")?;
-    }
+    let (orientation, orientation_source) = orientation_of(options, table)?;
+    let (particle_mass_kg, particle_mass_source) = particle_mass_of(options, table, &mut warnings)?;
 
     // Drive the rig with the record, stepped at h / n. DAQ time is record
     // time shifted by whole periods so that the window starts at t >= 0.
@@ -657,26 +526,7 @@ pub fn replay_record(
         Orientation::Horizontal => 0.0,
     };
     let mut daq = Daq::new(rig, dt, window_start + shift, options.seed)?;
-    daq.reserve(window_end - window_start + 3.0 / sample_rate_hz);
-    let first = (covered_from / dt).ceil() as i64;
-    let last = ((window_end + 3.0 / sample_rate_hz) / dt).floor() as i64;
-    // The conditioner has long settled to the record's mean levels; the
-    // record's own start (the drive-start jolt) then passes as a transient.
-    let mean_force = {
-        let (sum, n) = (first..=last)
-            .map(|m| m as f64 * dt)
-            .filter(|&t| t > window_start && t <= window_end)
-            .fold((0.0, 0usize), |(s, n), t| (s + record.force_at_n(t), n + 1));
-        sum / n.max(1) as f64
-    };
-    daq.settle_at(0.0, transducer_force_n(m_enc, 0.0, mean_force, weight));
-    let mut motion = record.motion.clone();
-    for m in first..=last {
-        let t = m as f64 * dt;
-        let a = motion.advance(t, dt, 0.0).acceleration_mps2;
-        let f_p = record.force_at_n(t);
-        daq.push(t + shift, a, transducer_force_n(m_enc, a, f_p, weight));
-    }
+    feed_daq(&mut daq, record, &window, rig, dt, shift, weight);
     let truth_power = record.input_power_w(window_start, window_end);
     let metadata = replay_metadata(
         record,
@@ -755,7 +605,14 @@ pub fn replay_record(
         rig: rig.name.clone(),
         clipping: daq_report.clipping_warnings(),
     };
-    warnings.extend(measured.clipping.iter().cloned().map(ReplayWarning::from));
+    // A rig key is not a replay option: the clipping warnings come without advice.
+    warnings.extend(
+        measured
+            .clipping
+            .iter()
+            .cloned()
+            .map(|w| w.advising_as(|_| None)),
+    );
     if table.format == crate::signals::TableFormat::LammpsText
         && !table.comments.contains_key("units")
     {
@@ -811,6 +668,268 @@ pub fn replay_record(
 
 /// Amplitude of the velocity's fundamental at `freq_hz` over `[from_s, to_s]`
 /// (whole periods), from the record's samples in it (m/s).
+/// The drive frequency (Hz) and where it came from: given, declared by the
+/// record, or estimated from its velocity (with a warning).
+fn drive_freq_hz(
+    record: &EnclosureRecord,
+    options: &ReplayOptions,
+    warnings: &mut Vec<ReplayWarning>,
+) -> Result<(f64, Source), SceneError> {
+    let table = &record.table;
+    let h = record.step_s;
+    let found = match (options.freq_hz, table.declared_f64("drive_freq_hz")?) {
+        (Some(f), _) => (f, Source::Given),
+        (None, Some(f)) => (f, Source::Record),
+        (None, None) => {
+            let f = estimate_freq_hz(record.start_s, h, record.motion.velocity_samples_mps())
+                .ok_or_else(|| SceneError::RecordNeeds {
+                    path: table.path.clone(),
+                    problem: format!(
+                        "the record does not state its drive frequency and its velocity does not \
+                         oscillate enough to tell it: give it as {}",
+                        ReplayOption::FreqHz
+                    ),
+                    option: ReplayOption::FreqHz,
+                })?;
+            warnings.push(ReplayWarning::advising(
+                format!(
+                    "the record does not state its drive frequency; {f:.4} Hz was estimated from \
+                     its velocity (give {} for an exact window of whole periods)",
+                    ReplayOption::FreqHz
+                ),
+                ReplayOption::FreqHz,
+            ));
+            (f, Source::Estimated)
+        }
+    };
+    Ok(found)
+}
+
+/// Checks that the record's step resolves a `freq_hz` drive (at least 8
+/// samples a period); warns when it is coarser than the DAQ of `rig` samples.
+fn check_record_step(
+    record: &EnclosureRecord,
+    freq_hz: f64,
+    rig: &RigSpec,
+    warnings: &mut Vec<ReplayWarning>,
+) -> Result<(), SceneError> {
+    let table = &record.table;
+    let h = record.step_s;
+    positive("freq_hz", freq_hz, "Hz")?;
+    let period = 1.0 / freq_hz;
+    if h > period / 8.0 {
+        return Err(SceneError::Record {
+            path: table.path.clone(),
+            problem: format!(
+                "a step of {h:.4e} s resolves a {freq_hz} Hz drive with fewer than 8 samples a \
+                 period; record at least every {:.4e} s",
+                period / 8.0
+            ),
+        });
+    }
+    let sample_rate_hz = rig.daq.sample_rate_hz;
+    if h > 1.0 / sample_rate_hz * (1.0 + 1e-9) {
+        warnings.push(ReplayWarning::from(format!(
+            "the record steps {h:.4e} s, coarser than the DAQ's {:.4e} s: each value is held over \
+             its interval, so the record's content above {:.0} Hz is that of the hold, not of \
+             the damper",
+            1.0 / sample_rate_hz,
+            0.5 / h
+        )));
+    }
+    Ok(())
+}
+
+/// Gravity (m/s^2): given, declared by the record, else the thesis's.
+fn gravity_of(options: &ReplayOptions, table: &Table) -> Result<f64, SceneError> {
+    let g = match options.gravity_mps2 {
+        Some(g) => g,
+        None => table
+            .declared_f64("gravity_mps2")?
+            .unwrap_or(Scene::thesis().simulation.gravity_mps2),
+    };
+    positive("gravity_mps2", g, "m/s^2")?;
+    Ok(g)
+}
+
+/// The replayed window of a record: the last whole periods it covers.
+struct ReplayWindow {
+    /// The record covers from here (its first sample less half a step), s.
+    covered_from: f64,
+    start_s: f64,
+    end_s: f64,
+    periods: u32,
+    /// Whole periods before the window (at most 100).
+    transient: u32,
+}
+
+/// The window of `record` at `freq_hz`: `steady_cycles` periods, else the
+/// record's declared count, else the thesis's (or all the record covers,
+/// with a warning, when it covers fewer).
+fn replay_window(
+    record: &EnclosureRecord,
+    steady_cycles: Option<u32>,
+    freq_hz: f64,
+    warnings: &mut Vec<ReplayWarning>,
+) -> Result<ReplayWindow, SceneError> {
+    let table = &record.table;
+    let h = record.step_s;
+    let period = 1.0 / freq_hz;
+    let covered_from = record.start_s - 0.5 * h;
+    let end_k = ((record.end_s() + h) / period + 1e-9).floor();
+    let window_end = end_k * period;
+    let available = ((window_end - covered_from) / period + 1e-9).floor();
+    if available < 2.0 {
+        return Err(SceneError::Record {
+            path: table.path.clone(),
+            problem: format!(
+                "the record covers {:.3} periods of the {freq_hz} Hz drive ({} rows of {h:.4e} s); \
+                 Yang's method needs 2 whole periods",
+                (record.end_s() + 0.5 * h - covered_from) / period,
+                record.force_axial_n.len()
+            ),
+        });
+    }
+    let declared_cycles = match table.declared_f64("steady_cycles")? {
+        Some(n) if n >= 1.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX) => Some(n as u32),
+        Some(n) => {
+            return Err(SceneError::Record {
+                path: table.path.clone(),
+                problem: format!("steady_cycles = {n}: must be a whole number of periods"),
+            });
+        }
+        None => None,
+    };
+    let periods = match steady_cycles.or(declared_cycles) {
+        Some(n) if n < 2 => {
+            return Err(InvalidParameter::new(
+                "steady_cycles",
+                n,
+                "",
+                "at least 2 (Yang's method needs 2 whole periods)",
+            )
+            .into());
+        }
+        Some(n) if f64::from(n) > available => {
+            return Err(InvalidParameter::new(
+                "steady_cycles",
+                n,
+                "",
+                format!("at most {available}: the whole periods the record covers"),
+            )
+            .into());
+        }
+        Some(n) => n,
+        None if available < f64::from(DEFAULT_STEADY_CYCLES) => {
+            warnings.push(ReplayWarning::from(format!(
+                "the record covers {available} whole periods, fewer than the {DEFAULT_STEADY_CYCLES} \
+                 the thesis measured; all {available} are used"
+            )));
+            available as u32
+        }
+        None => DEFAULT_STEADY_CYCLES,
+    };
+    let window_start = window_end - f64::from(periods) * period;
+    let transient = (((window_start - covered_from) / period + 1e-9).floor() as u32).min(100);
+    Ok(ReplayWindow {
+        covered_from,
+        start_s: window_start,
+        end_s: window_end,
+        periods,
+        transient,
+    })
+}
+
+/// The enclosure's orientation and where it came from.
+fn orientation_of(
+    options: &ReplayOptions,
+    table: &Table,
+) -> Result<(Orientation, Source), SceneError> {
+    Ok(
+        match (options.orientation, table.declared_text("orientation")) {
+            (Some(o), _) => (o, Source::Given),
+            (None, Some(text)) => match text.trim() {
+                "vertical" => (Orientation::Vertical, Source::Record),
+                "horizontal" => (Orientation::Horizontal, Source::Record),
+                other => {
+                    return Err(SceneError::Record {
+                        path: table.path.clone(),
+                        problem: format!("orientation '{other}': must be vertical or horizontal"),
+                    });
+                }
+            },
+            (None, None) => (Orientation::Vertical, Source::Default),
+        },
+    )
+}
+
+/// The particles' mass (kg) and where it came from, if known (else a
+/// warning: no efficiency).
+fn particle_mass_of(
+    options: &ReplayOptions,
+    table: &Table,
+    warnings: &mut Vec<ReplayWarning>,
+) -> Result<(Option<f64>, Option<Source>), SceneError> {
+    let (particle_mass_kg, particle_mass_source) = match (
+        options.particle_mass_kg,
+        table.declared_f64("particle_mass_kg")?,
+    ) {
+        (Some(m), _) => (Some(m), Some(Source::Given)),
+        (None, Some(m)) => (Some(m), Some(Source::Record)),
+        (None, None) => {
+            warnings.push(ReplayWarning::advising(
+                format!(
+                    "the record does not state the particle mass: no efficiency (give {})",
+                    ReplayOption::ParticleMassKg
+                ),
+                ReplayOption::ParticleMassKg,
+            ));
+            (None, None)
+        }
+    };
+    if let Some(m) = particle_mass_kg {
+        positive("particle_mass_kg", m, "kg")?;
+    }
+    Ok((particle_mass_kg, particle_mass_source))
+}
+
+/// Feeds `daq` with `record` over `window`, stepped at `dt` (s), on the
+/// enclosure of `rig` of static weight `weight` (N); DAQ time is record time
+/// plus `shift` (s, whole periods). The conditioner is settled first to the
+/// record's mean levels, so the record's own start (the drive-start jolt)
+/// passes as a transient.
+fn feed_daq(
+    daq: &mut Daq,
+    record: &EnclosureRecord,
+    window: &ReplayWindow,
+    rig: &RigSpec,
+    dt: f64,
+    shift: f64,
+    weight: f64,
+) {
+    let (window_start, window_end) = (window.start_s, window.end_s);
+    let sample_rate_hz = rig.daq.sample_rate_hz;
+    let m_enc = rig.enclosure.mass_kg;
+    daq.reserve(window_end - window_start + 3.0 / sample_rate_hz);
+    let first = (window.covered_from / dt).ceil() as i64;
+    let last = ((window_end + 3.0 / sample_rate_hz) / dt).floor() as i64;
+    let mean_force = {
+        let (sum, n) = (first..=last)
+            .map(|m| m as f64 * dt)
+            .filter(|&t| t > window_start && t <= window_end)
+            .fold((0.0, 0usize), |(s, n), t| (s + record.force_at_n(t), n + 1));
+        sum / n.max(1) as f64
+    };
+    daq.settle_at(0.0, transducer_force_n(m_enc, 0.0, mean_force, weight));
+    let mut motion = record.motion.clone();
+    for m in first..=last {
+        let t = m as f64 * dt;
+        let a = motion.advance(t, dt, 0.0).acceleration_mps2;
+        let f_p = record.force_at_n(t);
+        daq.push(t + shift, a, transducer_force_n(m_enc, a, f_p, weight));
+    }
+}
+
 fn fundamental_velocity_mps(record: &EnclosureRecord, freq_hz: f64, from_s: f64, to_s: f64) -> f64 {
     let omega = 2.0 * PI * freq_hz;
     let v = record.motion.velocity_samples_mps();

@@ -66,6 +66,7 @@ use crate::dem::{
 use crate::experiment::damper::{Progress, contact_laws, gravity_vector};
 use crate::experiment::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
 use crate::scene::{Orientation, Scene, SceneError};
+use crate::warning::RunWarning;
 
 /// Young's moduli of the settling law while pouring, as a fraction of the
 /// materials' own.
@@ -119,7 +120,7 @@ pub struct SettledBed {
     pub from_cache: bool,
     /// What went wrong on the way that the run should report (a cache entry
     /// that could not be read and was rebuilt, say).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<RunWarning>,
 }
 
 /// The settling law between two materials, at `stiffness_factor` of their

@@ -42,6 +42,7 @@ use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
 use crate::scene::{Scene, SceneError};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
 use crate::validation::{InvalidParameter, positive, require};
+use crate::warning::{FileKey, RunWarning};
 
 /// Sample rate of the truth record (Hz), the thesis DAQ's.
 pub const TRUTH_SAMPLE_RATE_HZ: f64 = 40_000.0;
@@ -232,8 +233,9 @@ impl DemTruth {
     }
 
     /// Warnings a user must see: impacts beyond yield, a record that is not
-    /// steady, collisions resolved with too few steps.
-    pub fn warnings(&self, freq_hz: f64, steps_per_contact: f64) -> Vec<String> {
+    /// steady, collisions resolved with too few steps; each with the scene
+    /// key that lifts it, where one does.
+    pub fn warnings(&self, freq_hz: f64, steps_per_contact: f64) -> Vec<RunWarning> {
         let mut w = Vec::new();
         if let Some(y) = &self.yield_velocity_mps {
             let v = &self.largest_impact_speed_mps;
@@ -246,28 +248,28 @@ impl DemTruth {
                 ("particle-wall", v.particle_wall_mps, y.particle_wall_mps),
             ] {
                 if speed > limit {
-                    w.push(format!(
+                    w.push(RunWarning::from(format!(
                         "{what} impacts reached {speed:.2} m/s, above the yield velocity {limit:.2} m/s (thesis eq. 5.26): the contacts would yield and the constant restitution of the model no longer holds (Section 5.5.4)"
-                    ));
+                    )));
                 }
             }
         }
         let s = &self.steadiness;
         if s.lossless {
-            w.push(format!(
+            w.push(RunWarning::from(format!(
                 "the bed dissipated no energy (every contact elastic and frictionless): the enclosure's work, {:.3e} J per cycle, only heats it, so it has no steady state and no efficiency; the drive stopped after {} cycles",
                 self.work_in_per_cycle_j, self.cycles
-            ));
+            )));
         } else if s.capped {
-            w.push(format!(
+            w.push(RunWarning::advising(format!(
                 "the drive stopped at its cap of {} cycles without reaching a steady state: over the last {} cycles the enclosure's work and the dissipation differ by {:+.2} % and the energy per cycle has a standard error of {:.2} % (both should be within drive.balance_rel and drive.stderr_rel); the figures are those of an unsteady bed",
                 self.cycles,
                 self.cycles - self.steady_first_cycle,
                 100.0 * s.balance_rel,
                 100.0 * s.stderr_rel
-            ));
+            ), FileKey("drive.max_cycles")));
         } else if !s.reached && self.steadiness_rel.abs() > 0.01 {
-            w.push(format!(
+            w.push(RunWarning::advising(format!(
                 "the bed is not in a steady state over the record: the enclosure put in {:+.1} % of the energy the DEM dissipated (the bed {} the difference), so any input-power measurement differs from the DEM's dissipation by that much; let the drive run until steady (drive.cycles = \"steady\") or lengthen it (at {freq_hz} Hz try {} cycles)",
                 100.0 * self.steadiness_rel,
                 if self.steadiness_rel < 0.0 {
@@ -276,17 +278,17 @@ impl DemTruth {
                     "stored"
                 },
                 (freq_hz * 0.5).ceil().max(16.0)
-            ));
+            ), FileKey("drive.cycles")));
         }
         // The rule's impact speed is an estimate; a few collisions of a chaotic
         // bed beat it by a little (the thesis bed: 24 of 25 steps). Warn when
         // a collision lost a fifth of its steps.
         if self.fewest_steps_per_contact < STEPS_PER_CONTACT_SLACK * steps_per_contact {
-            w.push(format!(
+            w.push(RunWarning::advising(format!(
                 "a collision was resolved with only {:.1} time steps (the scene asks for {steps_per_contact}, warned below {:.0}): impacts were faster than the time step was chosen for; the contact forces and the restitution are less accurate (give simulation.dt_s a smaller step)",
                 self.fewest_steps_per_contact,
                 STEPS_PER_CONTACT_SLACK * steps_per_contact
-            ));
+            ), FileKey("simulation.dt_s")));
         }
         w
     }
@@ -332,7 +334,7 @@ pub struct ShakeSummary {
     pub threads: usize,
     pub dem: DemTruth,
     pub measured: Measured,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<RunWarning>,
     pub files: Vec<String>,
 }
 
@@ -665,8 +667,9 @@ mod tests {
             "warned below 20",
             "simulation.dt_s",
         ] {
-            assert!(w[0].contains(part), "'{}' lacks '{part}'", w[0]);
+            assert!(w[0].text.contains(part), "'{}' lacks '{part}'", w[0]);
         }
+        assert_eq!(w[0].advice, Some(FileKey("simulation.dt_s")));
     }
 
     #[test]
@@ -691,7 +694,7 @@ mod tests {
             "2.10 %",
             "unsteady bed",
         ] {
-            assert!(w[0].contains(part), "'{}' lacks '{part}'", w[0]);
+            assert!(w[0].text.contains(part), "'{}' lacks '{part}'", w[0]);
         }
     }
 
@@ -718,7 +721,7 @@ mod tests {
             "no steady state and no efficiency",
             "after 8 cycles",
         ] {
-            assert!(w[0].contains(part), "'{}' lacks '{part}'", w[0]);
+            assert!(w[0].text.contains(part), "'{}' lacks '{part}'", w[0]);
         }
     }
 
@@ -729,8 +732,8 @@ mod tests {
         let w = t.warnings(40.0, 25.0);
         assert_eq!(w.len(), 1, "{w:?}");
         assert!(
-            w[0].contains("particle-wall impacts reached 2.60 m/s")
-                && w[0].contains("yield velocity 2.50 m/s"),
+            w[0].text.contains("particle-wall impacts reached 2.60 m/s")
+                && w[0].text.contains("yield velocity 2.50 m/s"),
             "{}",
             w[0]
         );

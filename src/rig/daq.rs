@@ -18,6 +18,7 @@ use super::file::RigFile;
 use super::noise::GaussianNoise;
 use super::spec::{ChannelParams, RigSpec, Sampling};
 use crate::signals::{Sensitivity, Trace, TraceMetadata};
+use crate::warning::RunWarning;
 
 /// Name of the acceleration channel in the trace.
 pub const ACCEL_CHANNEL: &str = "acceleration";
@@ -60,8 +61,9 @@ impl DaqReport {
         self.channels.iter().any(|c| c.clipped > 0)
     }
 
-    /// One sentence per clipped channel, for a loud warning.
-    pub fn clipping_warnings(&self) -> Vec<String> {
+    /// One sentence per clipped channel, for a loud warning (of two ways
+    /// out, gain or amplitude, so no one key lifts it).
+    pub fn clipping_warnings(&self) -> Vec<RunWarning> {
         self.channels
             .iter()
             .filter(|c| c.clipped > 0)
@@ -72,6 +74,7 @@ impl DaqReport {
                      drive amplitude",
                     c.name, c.clipped, self.samples, c.full_scale, c.unit
                 )
+                .into()
             })
             .collect()
     }
@@ -387,7 +390,7 @@ mod tests {
         let w = report.clipping_warnings();
         assert_eq!(w.len(), 1);
         assert!(
-            w[0].starts_with("force: ") && w[0].contains("446.4286 N"),
+            w[0].text.starts_with("force: ") && w[0].text.contains("446.4286 N"),
             "{}",
             w[0]
         );

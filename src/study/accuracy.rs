@@ -618,45 +618,14 @@ pub fn run_accuracy(
             s
         })
         .collect();
-    let beds: Vec<Result<(SettledBed, f64), SceneError>> = run_queue(&scenes, |s| {
-        let t = Instant::now();
-        let bed = settle_bed(s, &mut |_| {})?;
-        let wall = t.elapsed().as_secs_f64();
-        progress(AccuracyEvent::Stage(&format!(
-            "settled seed {} in {wall:.1} s",
-            s.simulation.seed
-        )));
-        Ok((bed, wall))
-    });
-    let beds: Vec<(SettledBed, f64)> = beds.into_iter().collect::<Result<_, _>>()?;
+    let beds = settle_seeds(&scenes, progress)?;
     let settle_wall_s: Vec<f64> = beds.iter().map(|b| b.1).collect();
 
     // Every drive, the longest first.
     let rayleigh = scene.rayleigh_limit_s();
     let default_dt = scene.drive_dt_s(plan.freq_hz, plan.gamma);
-    let mut jobs: Vec<DriveJob> = Vec::new();
-    for &x in &plan.dt_over_rayleigh {
-        jobs.push(DriveJob {
-            label: format!("dt {x} x Rayleigh"),
-            seed_index: 0,
-            dt_s: x * rayleigh,
-            dt_over_rayleigh: Some(x),
-            steady_cycles: plan.dt_steady_cycles,
-            record_truth: false,
-        });
-    }
-    for (i, &seed) in plan.seeds.iter().enumerate() {
-        jobs.push(DriveJob {
-            label: format!("seed {seed}"),
-            seed_index: i,
-            dt_s: default_dt,
-            dt_over_rayleigh: None,
-            steady_cycles: plan.seed_steady_cycles,
-            record_truth: i == 0,
-        });
-    }
-    let cost = |j: &DriveJob| f64::from(plan.transient_cycles + j.steady_cycles) / j.dt_s;
-    jobs.sort_by(|a, b| cost(b).total_cmp(&cost(a)));
+    let jobs = drive_jobs(plan, rayleigh, default_dt);
+    let cost = |j: &DriveJob| job_cost(plan, j);
     progress(AccuracyEvent::Stage(&format!(
         "{} drives, {:.2} million steps of {} particles",
         jobs.len(),
@@ -672,29 +641,7 @@ pub fn run_accuracy(
             progress,
         )
     });
-    let failed_hard: Vec<&DriveRun> = runs
-        .iter()
-        .filter(|r| r.job.dt_over_rayleigh.is_none() && r.outcome.is_err())
-        .collect();
-    if let Some(r) = failed_hard.first() {
-        let why = r.outcome.as_ref().err().cloned().unwrap_or_default();
-        return Err(SceneError::Invalid(InvalidParameter::new(
-            "seed",
-            plan.seeds[r.job.seed_index],
-            "",
-            format!("a bed that drives at the default time step: {why}"),
-        )));
-    }
-    let seed_runs: Vec<&DriveRun> = (0..plan.seeds.len())
-        .filter_map(|i| {
-            runs.iter()
-                .find(|r| r.job.dt_over_rayleigh.is_none() && r.job.seed_index == i)
-        })
-        .collect();
-    let dt_runs: Vec<&DriveRun> = runs
-        .iter()
-        .filter(|r| r.job.dt_over_rayleigh.is_some())
-        .collect();
+    let (seed_runs, dt_runs) = sort_runs(plan, &runs)?;
 
     progress(AccuracyEvent::Stage("DEM study (a)"));
     let (dem_rows, dem) = dem_study(
@@ -727,6 +674,92 @@ pub fn run_accuracy(
         files: Vec::new(),
     };
     Ok(AccuracyReport { rows, summary })
+}
+
+/// Settles the bed of every scene of `scenes` (one per seed), with its
+/// wall-clock time (s).
+fn settle_seeds(
+    scenes: &[Scene],
+    progress: &(dyn Fn(AccuracyEvent) + Sync),
+) -> Result<Vec<(SettledBed, f64)>, SceneError> {
+    let beds: Vec<Result<(SettledBed, f64), SceneError>> = run_queue(scenes, |s| {
+        let t = Instant::now();
+        let bed = settle_bed(s, &mut |_| {})?;
+        let wall = t.elapsed().as_secs_f64();
+        progress(AccuracyEvent::Stage(&format!(
+            "settled seed {} in {wall:.1} s",
+            s.simulation.seed
+        )));
+        Ok((bed, wall))
+    });
+    beds.into_iter().collect()
+}
+
+/// Relative cost of a drive: its steps.
+fn job_cost(plan: &AccuracyPlan, j: &DriveJob) -> f64 {
+    f64::from(plan.transient_cycles + j.steady_cycles) / j.dt_s
+}
+
+/// Every drive of `plan`, the longest first: one per time step of the
+/// time-step study (on the first seed's bed), one per seed at the scene's
+/// default step `default_dt` (s; the first records the truth for Yang).
+fn drive_jobs(plan: &AccuracyPlan, rayleigh: f64, default_dt: f64) -> Vec<DriveJob> {
+    let mut jobs: Vec<DriveJob> = Vec::new();
+    for &x in &plan.dt_over_rayleigh {
+        jobs.push(DriveJob {
+            label: format!("dt {x} x Rayleigh"),
+            seed_index: 0,
+            dt_s: x * rayleigh,
+            dt_over_rayleigh: Some(x),
+            steady_cycles: plan.dt_steady_cycles,
+            record_truth: false,
+        });
+    }
+    for (i, &seed) in plan.seeds.iter().enumerate() {
+        jobs.push(DriveJob {
+            label: format!("seed {seed}"),
+            seed_index: i,
+            dt_s: default_dt,
+            dt_over_rayleigh: None,
+            steady_cycles: plan.seed_steady_cycles,
+            record_truth: i == 0,
+        });
+    }
+    jobs.sort_by(|a, b| job_cost(plan, b).total_cmp(&job_cost(plan, a)));
+    jobs
+}
+
+/// The seeds' runs in seed order and the time-step study's runs; an error
+/// when a seed's run failed at the default step (the time-step study's
+/// runs may fail: that is a finding).
+fn sort_runs<'a>(
+    plan: &AccuracyPlan,
+    runs: &'a [DriveRun],
+) -> Result<(Vec<&'a DriveRun>, Vec<&'a DriveRun>), SceneError> {
+    let failed_hard: Vec<&DriveRun> = runs
+        .iter()
+        .filter(|r| r.job.dt_over_rayleigh.is_none() && r.outcome.is_err())
+        .collect();
+    if let Some(r) = failed_hard.first() {
+        let why = r.outcome.as_ref().err().cloned().unwrap_or_default();
+        return Err(SceneError::Invalid(InvalidParameter::new(
+            "seed",
+            plan.seeds[r.job.seed_index],
+            "",
+            format!("a bed that drives at the default time step: {why}"),
+        )));
+    }
+    let seed_runs: Vec<&DriveRun> = (0..plan.seeds.len())
+        .filter_map(|i| {
+            runs.iter()
+                .find(|r| r.job.dt_over_rayleigh.is_none() && r.job.seed_index == i)
+        })
+        .collect();
+    let dt_runs: Vec<&DriveRun> = runs
+        .iter()
+        .filter(|r| r.job.dt_over_rayleigh.is_some())
+        .collect();
+    Ok((seed_runs, dt_runs))
 }
 
 /// Drives a copy of `bed` as `job` says, with the clock (and the truth
@@ -823,19 +856,7 @@ fn dem_study(
     };
     for (i, m) in seed_stats.iter().enumerate() {
         let seed = plan.seeds[seed_runs[i].job.seed_index] as f64;
-        let wall = run_wall(i, t + s);
-        for (quantity, scale) in [("energy_per_cycle_j", 1.0), ("efficiency", 1.0 / e_max)] {
-            rows.push(AccuracyRow::new(
-                "dem",
-                "seed",
-                seed,
-                quantity,
-                m.mean * scale,
-                pooled * scale,
-                m.stderr / pooled,
-                wall,
-            ));
-        }
+        rows.extend(seed_rows(seed, m, pooled, e_max, run_wall(i, t + s)));
     }
     let seed_spread_rel = sample_sd(&means) / pooled;
     let seed_stderr_rms_rel = (seed_stats
@@ -845,7 +866,81 @@ fn dem_study(
         / seed_stats.len() as f64)
         .sqrt();
 
-    // Cycles.
+    rows.extend(cycle_rows(plan, &series, &seed_stats, pooled, &run_wall));
+    let pooled_series: Vec<f64> = series.iter().flatten().copied().collect();
+    let spread = sample_sd(&pooled_series) / pooled;
+    let lag1 = mean_stderr(&series[0]).lag1;
+    let cycles_for_1pct = (spread / 0.01).powi(2) * (1.0 + lag1) / (1.0 - lag1);
+
+    let default_x = default_dt / rayleigh;
+    let (dt_rows, step) =
+        time_step_study(plan, seed_runs, dt_runs, settle_wall_s, default_x, e_max);
+    rows.extend(dt_rows);
+    let dominant = dominant_error(
+        plan,
+        &step,
+        default_x,
+        seed_stats[0].relative(),
+        seed_spread_rel,
+    );
+    let dem = DemAccuracy {
+        rayleigh_step_s: rayleigh,
+        default_dt_s: default_dt,
+        default_dt_over_rayleigh: default_x,
+        reference_dt_over_rayleigh: step.ref_x,
+        default_dt_error_rel: step.default_err,
+        default_dt_error_stderr_rel: step.default_se,
+        default_dt_integrator_rel: step.default_integrator,
+        integrator_order: step.integrator_order,
+        failed: step.failed,
+        seed_energy_per_cycle_j: means,
+        pooled_energy_per_cycle_j: pooled,
+        pooled_stderr_rel: pooled_stderr / pooled,
+        pooled_efficiency: pooled / e_max,
+        seed_spread_rel,
+        seed_stderr_rms_rel,
+        cycles_for_1pct,
+        dominant,
+    };
+    (rows, dem)
+}
+
+/// Study (a)'s rows of one seed: its mean energy per cycle and efficiency
+/// against the seeds' `pooled` mean (J), `e_max` (J) scaling energies to
+/// efficiencies, `wall` its wall time (s).
+fn seed_rows(seed: f64, m: &MeanStderr, pooled: f64, e_max: f64, wall: f64) -> Vec<AccuracyRow> {
+    [("energy_per_cycle_j", 1.0), ("efficiency", 1.0 / e_max)]
+        .into_iter()
+        .map(|(quantity, scale)| {
+            AccuracyRow::new(
+                "dem",
+                "seed",
+                seed,
+                quantity,
+                m.mean * scale,
+                pooled * scale,
+                m.stderr / pooled,
+                wall,
+            )
+        })
+        .collect()
+}
+
+/// Study (a)'s rows of steady cycles: for each count of `plan`, the energy
+/// per cycle over that many cycles (of the first seed, or whole seeds'
+/// means) against the `pooled` mean, and the rms spread of disjoint blocks
+/// of `series` that long; `run_wall(i, cycles)` is seed run `i`'s wall time
+/// to `cycles` cycles (s).
+fn cycle_rows(
+    plan: &AccuracyPlan,
+    series: &[Vec<f64>],
+    seed_stats: &[MeanStderr],
+    pooled: f64,
+    run_wall: &dyn Fn(usize, usize) -> f64,
+) -> Vec<AccuracyRow> {
+    let t = plan.transient_cycles as usize;
+    let s = plan.seed_steady_cycles as usize;
+    let mut rows = Vec::new();
     for &n in &plan.cycle_counts {
         let n = n as usize;
         let (estimate, stderr, wall) = if n <= s {
@@ -853,7 +948,7 @@ fn dem_study(
             (m.mean, m.stderr, run_wall(0, t + n))
         } else {
             let k = n / s;
-            let m = means[..k].iter().sum::<f64>() / k as f64;
+            let m = seed_stats[..k].iter().map(|m| m.mean).sum::<f64>() / k as f64;
             let se = seed_stats[..k]
                 .iter()
                 .map(|m| m.stderr.powi(2))
@@ -872,14 +967,14 @@ fn dem_study(
             stderr / pooled,
             wall,
         );
-        if n == s * seed_runs.len() {
+        if n == s * series.len() {
             row.note = "the reference itself".into();
         }
         rows.push(row);
         let BlockSpread {
             rms_rel: rms,
             blocks,
-        } = block_rms_rel(&series, n, pooled);
+        } = block_rms_rel(series, n, pooled);
         if blocks >= 2 {
             let mut row = AccuracyRow::new(
                 "dem",
@@ -896,73 +991,98 @@ fn dem_study(
             rows.push(row);
         }
     }
-    let pooled_series: Vec<f64> = series.iter().flatten().copied().collect();
-    let spread = sample_sd(&pooled_series) / pooled;
-    let lag1 = mean_stderr(&series[0]).lag1;
-    let cycles_for_1pct = (spread / 0.01).powi(2) * (1.0 + lag1) / (1.0 - lag1);
+    rows
+}
 
-    // Time step.
+/// One time step of study (a): its energy per cycle over the first
+/// `dt_steady_cycles` steady cycles, the integrator's energy error, the
+/// fewest steps a collision got, the wall time (s), or why the run stopped.
+struct DtPoint {
+    x: f64,
+    mean: MeanStderr,
+    integrator_rel: f64,
+    fewest_steps: f64,
+    wall: f64,
+    error: Option<String>,
+}
+
+/// What the time-step study found, at the scene's default step against the
+/// finest one that ran (`ref_x`, × Rayleigh).
+struct TimeStepFindings {
+    ref_x: f64,
+    default_err: f64,
+    default_se: f64,
+    default_integrator: f64,
+    integrator_order: Option<f64>,
+    failed: Vec<String>,
+}
+
+/// The point of run `r` at `x` × Rayleigh.
+fn dt_point(plan: &AccuracyPlan, settle_wall_s: &[f64], x: f64, r: &DriveRun) -> DtPoint {
+    let t = plan.transient_cycles as usize;
     let n_dt = plan.dt_steady_cycles as usize;
-    struct DtPoint {
-        x: f64,
-        mean: MeanStderr,
-        integrator_rel: f64,
-        fewest_steps: f64,
-        wall: f64,
-        error: Option<String>,
-    }
-    let point = |x: f64, r: &DriveRun| -> DtPoint {
-        let wall_end = r.cycle_wall_s.get(t + n_dt).copied().unwrap_or(r.wall_s);
-        let wall = settle_wall_s[r.job.seed_index] + wall_end;
-        match &r.outcome {
-            Ok(o) => {
-                let snaps = &o.cycle_snapshots;
-                let e = energies(&snaps[..=(t + n_dt).min(snaps.len() - 1)], t);
-                let b = LedgerBalance::between(&snaps[0], &snaps[(t + n_dt).min(snaps.len() - 1)]);
-                DtPoint {
-                    x,
-                    mean: mean_stderr(&e),
-                    integrator_rel: b.integrator_j / b.dissipated_j,
-                    fewest_steps: o.fewest_steps_per_contact,
-                    wall,
-                    error: None,
-                }
-            }
-            Err(e) => DtPoint {
+    let wall_end = r.cycle_wall_s.get(t + n_dt).copied().unwrap_or(r.wall_s);
+    let wall = settle_wall_s[r.job.seed_index] + wall_end;
+    match &r.outcome {
+        Ok(o) => {
+            let snaps = &o.cycle_snapshots;
+            let e = energies(&snaps[..=(t + n_dt).min(snaps.len() - 1)], t);
+            let b = LedgerBalance::between(&snaps[0], &snaps[(t + n_dt).min(snaps.len() - 1)]);
+            DtPoint {
                 x,
-                mean: MeanStderr {
-                    mean: f64::NAN,
-                    ..MeanStderr::default()
-                },
-                integrator_rel: f64::NAN,
-                fewest_steps: f64::NAN,
+                mean: mean_stderr(&e),
+                integrator_rel: b.integrator_j / b.dissipated_j,
+                fewest_steps: o.fewest_steps_per_contact,
                 wall,
-                error: Some(e.clone()),
-            },
+                error: None,
+            }
         }
-    };
-    let default_x = default_dt / rayleigh;
+        Err(e) => DtPoint {
+            x,
+            mean: MeanStderr {
+                mean: f64::NAN,
+                ..MeanStderr::default()
+            },
+            integrator_rel: f64::NAN,
+            fewest_steps: f64::NAN,
+            wall,
+            error: Some(e.clone()),
+        },
+    }
+}
+
+/// Study (a)'s time steps: the runs of `dt_runs` and the first seed's run at
+/// the default step `default_x` (× Rayleigh), each against the finest step
+/// that ran; `e_max` (J) scales energies to efficiencies.
+fn time_step_study(
+    plan: &AccuracyPlan,
+    seed_runs: &[&DriveRun],
+    dt_runs: &[&DriveRun],
+    settle_wall_s: &[f64],
+    default_x: f64,
+    e_max: f64,
+) -> (Vec<AccuracyRow>, TimeStepFindings) {
     let mut points: Vec<DtPoint> = dt_runs
         .iter()
-        .filter_map(|r| r.job.dt_over_rayleigh.map(|x| point(x, r)))
+        .filter_map(|r| {
+            r.job
+                .dt_over_rayleigh
+                .map(|x| dt_point(plan, settle_wall_s, x, r))
+        })
         .collect();
-    points.push(point(default_x, seed_runs[0]));
+    points.push(dt_point(plan, settle_wall_s, default_x, seed_runs[0]));
     points.sort_by(|a, b| a.x.total_cmp(&b.x));
     let reference = points.iter().find(|p| p.error.is_none());
     let (ref_x, ref_mean) = reference
         .map(|p| (p.x, p.mean))
         .unwrap_or((f64::NAN, MeanStderr::default()));
+    let mut rows = Vec::new();
     let mut failed = Vec::new();
     for p in &points {
-        let se = if p.error.is_some() {
-            f64::NAN
-        } else {
-            (p.mean.stderr.powi(2) + ref_mean.stderr.powi(2)).sqrt() / ref_mean.mean
-        };
-        let mut note = if p.x == default_x {
+        let note = if p.x == default_x {
             format!(
-                "the scene's default step (seed {} run, first {n_dt} steady cycles)",
-                plan.seeds[0]
+                "the scene's default step (seed {} run, first {} steady cycles)",
+                plan.seeds[0], plan.dt_steady_cycles
             )
         } else if p.x == ref_x {
             "the reference (finest step)".into()
@@ -971,47 +1091,8 @@ fn dem_study(
         };
         if let Some(e) = &p.error {
             failed.push(format!("{} x Rayleigh: {e}", p.x));
-            note = format!("stopped: {e}");
         }
-        for (quantity, scale) in [("energy_per_cycle_j", 1.0), ("efficiency", 1.0 / e_max)] {
-            let mut row = AccuracyRow::new(
-                "dem",
-                "dt_over_rayleigh",
-                p.x,
-                quantity,
-                p.mean.mean * scale,
-                ref_mean.mean * scale,
-                se,
-                p.wall,
-            );
-            row.note = note.clone();
-            rows.push(row);
-        }
-        let mut row = AccuracyRow::new(
-            "dem",
-            "dt_over_rayleigh",
-            p.x,
-            "integrator_rel",
-            p.integrator_rel,
-            0.0,
-            f64::NAN,
-            p.wall,
-        );
-        row.error_rel = p.integrator_rel;
-        row.note = "integration energy error / dissipated energy, whole run".into();
-        rows.push(row);
-        let mut row = AccuracyRow::new(
-            "dem",
-            "dt_over_rayleigh",
-            p.x,
-            "fewest_steps_per_contact",
-            p.fewest_steps,
-            f64::NAN,
-            f64::NAN,
-            p.wall,
-        );
-        row.error_rel = f64::NAN;
-        rows.push(row);
+        rows.extend(dt_rows(p, ref_mean, e_max, note));
     }
     let at_default = points.iter().find(|p| p.x == default_x);
     let (default_err, default_se, default_integrator) = at_default
@@ -1030,14 +1111,94 @@ fn dem_study(
             .map(|p| (p.x, p.integrator_rel))
             .collect::<Vec<_>>(),
     );
-    let default_stderr = seed_stats[0].relative();
+    let findings = TimeStepFindings {
+        ref_x,
+        default_err,
+        default_se,
+        default_integrator,
+        integrator_order,
+        failed,
+    };
+    (rows, findings)
+}
+
+/// The rows of time-step point `p` against the reference `ref_mean`: energy
+/// per cycle and efficiency (with `note`, or why the run stopped), the
+/// integrator's error, the fewest steps per contact.
+fn dt_rows(p: &DtPoint, ref_mean: MeanStderr, e_max: f64, note: String) -> Vec<AccuracyRow> {
+    let mut rows = Vec::new();
+    let se = if p.error.is_some() {
+        f64::NAN
+    } else {
+        (p.mean.stderr.powi(2) + ref_mean.stderr.powi(2)).sqrt() / ref_mean.mean
+    };
+    let note = match &p.error {
+        Some(e) => format!("stopped: {e}"),
+        None => note,
+    };
+    for (quantity, scale) in [("energy_per_cycle_j", 1.0), ("efficiency", 1.0 / e_max)] {
+        let mut row = AccuracyRow::new(
+            "dem",
+            "dt_over_rayleigh",
+            p.x,
+            quantity,
+            p.mean.mean * scale,
+            ref_mean.mean * scale,
+            se,
+            p.wall,
+        );
+        row.note = note.clone();
+        rows.push(row);
+    }
+    let mut row = AccuracyRow::new(
+        "dem",
+        "dt_over_rayleigh",
+        p.x,
+        "integrator_rel",
+        p.integrator_rel,
+        0.0,
+        f64::NAN,
+        p.wall,
+    );
+    row.error_rel = p.integrator_rel;
+    row.note = "integration energy error / dissipated energy, whole run".into();
+    rows.push(row);
+    let mut row = AccuracyRow::new(
+        "dem",
+        "dt_over_rayleigh",
+        p.x,
+        "fewest_steps_per_contact",
+        p.fewest_steps,
+        f64::NAN,
+        f64::NAN,
+        p.wall,
+    );
+    row.error_rel = f64::NAN;
+    rows.push(row);
+    rows
+}
+
+/// Which error dominates at the default step, in words: the discretisation
+/// error of `step` against the relative standard error of one run
+/// (`default_stderr`) and the seeds' spread.
+fn dominant_error(
+    plan: &AccuracyPlan,
+    step: &TimeStepFindings,
+    default_x: f64,
+    default_stderr: f64,
+    seed_spread_rel: f64,
+) -> String {
+    let (default_err, default_se) = (step.default_err, step.default_se);
     let resolved = default_err.abs() > 2.0 * default_se;
-    let dominant = if !resolved {
+    if !resolved {
         format!(
-            "statistics: at the default time step ({default_x:.3} x Rayleigh) the discretisation error of the energy per cycle is not resolved, {:+.2} % +- {:.2} % against {ref_x} x Rayleigh over {n_dt} cycles (the integrator's own energy error is {:.1e} of the dissipation), while one run of {s} steady cycles has a standard error of {:.2} % and the seeds' means spread by {:.2} %",
+            "statistics: at the default time step ({default_x:.3} x Rayleigh) the discretisation error of the energy per cycle is not resolved, {:+.2} % +- {:.2} % against {} x Rayleigh over {} cycles (the integrator's own energy error is {:.1e} of the dissipation), while one run of {} steady cycles has a standard error of {:.2} % and the seeds' means spread by {:.2} %",
             100.0 * default_err,
             100.0 * default_se,
-            default_integrator,
+            step.ref_x,
+            plan.dt_steady_cycles,
+            step.default_integrator,
+            plan.seed_steady_cycles,
             100.0 * default_stderr,
             100.0 * seed_spread_rel
         )
@@ -1055,27 +1216,7 @@ fn dem_study(
             100.0 * default_se,
             100.0 * seed_spread_rel
         )
-    };
-    let dem = DemAccuracy {
-        rayleigh_step_s: rayleigh,
-        default_dt_s: default_dt,
-        default_dt_over_rayleigh: default_x,
-        reference_dt_over_rayleigh: ref_x,
-        default_dt_error_rel: default_err,
-        default_dt_error_stderr_rel: default_se,
-        default_dt_integrator_rel: default_integrator,
-        integrator_order,
-        failed,
-        seed_energy_per_cycle_j: means,
-        pooled_energy_per_cycle_j: pooled,
-        pooled_stderr_rel: pooled_stderr / pooled,
-        pooled_efficiency: pooled / e_max,
-        seed_spread_rel,
-        seed_stderr_rms_rel,
-        cycles_for_1pct,
-        dominant,
-    };
-    (rows, dem)
+    }
 }
 
 /// Study (b): one collision per resolution.
@@ -1106,73 +1247,7 @@ fn impact_study(
     let mut at_scene = (f64::NAN, f64::NAN, f64::NAN, f64::NAN);
     let mut best_gap = f64::INFINITY;
     for &n in &plan.steps_per_contact {
-        let dt = t_c / n;
-        let t0 = Instant::now();
-        let elastic = run_impact(&ImpactSetup {
-            restitution: 1.0,
-            friction: 0.0,
-            dt_s: Some(dt),
-            ..base
-        })?;
-        let wall_elastic = t0.elapsed().as_secs_f64();
-        let t1 = Instant::now();
-        let damped = run_impact(&ImpactSetup {
-            dt_s: Some(dt),
-            ..base
-        })?;
-        let wall_damped = t1.elapsed().as_secs_f64();
-        let exact_duration = 2.0 * HERTZ_DURATION_INTEGRAL * elastic.hertz_max_overlap_m / speed;
-        let mut push = |quantity, estimate, reference, wall, note: &str| {
-            let mut row = AccuracyRow::new(
-                "impact",
-                "steps_per_contact",
-                n,
-                quantity,
-                estimate,
-                reference,
-                f64::NAN,
-                wall,
-            );
-            row.note = note.into();
-            let e = row.error_rel;
-            rows.push(row);
-            e
-        };
-        let e_overlap = push(
-            "max_overlap_m",
-            elastic.max_overlap_m,
-            elastic.hertz_max_overlap_m,
-            wall_elastic,
-            "e = 1 against Terzioglu 2023, eq. 5.8",
-        );
-        let e_dur = push(
-            "contact_duration_s",
-            elastic.contact_duration_s,
-            elastic.hertz_duration_s,
-            wall_elastic,
-            "e = 1 against twice Terzioglu 2023, eq. 5.10",
-        );
-        let e_exact = push(
-            "contact_duration_exact_s",
-            elastic.contact_duration_s,
-            exact_duration,
-            wall_elastic,
-            "e = 1 against the exact Hertz integral 2 I delta_max / v",
-        );
-        push(
-            "elastic_restitution",
-            elastic.normal_restitution,
-            1.0,
-            wall_elastic,
-            "e = 1: energy the integration loses or makes",
-        );
-        let e_rest = push(
-            "restitution",
-            damped.normal_restitution,
-            base.restitution,
-            wall_damped,
-            "the scene's particle-wall law against its configured e (wall time includes calibrating the exact-restitution damping)",
-        );
+        let (e_overlap, e_dur, e_exact, e_rest) = impact_rows(&base, n, t_c / n, &mut rows)?;
         overlap_pts.push((n, e_overlap));
         duration_pts.push((n, e_exact));
         restitution_pts.push((n, e_rest));
@@ -1197,6 +1272,86 @@ fn impact_study(
             restitution_error_rel: at_scene.3,
         },
     ))
+}
+
+/// The collision of `base` at `n` steps per contact (time step `dt` s),
+/// elastic and with the scene's law, as rows added to `rows`; returns the
+/// relative errors of the overlap, the duration against eq. 5.10 and against
+/// the exact integral, and of the restitution.
+fn impact_rows(
+    base: &ImpactSetup,
+    n: f64,
+    dt: f64,
+    rows: &mut Vec<AccuracyRow>,
+) -> Result<(f64, f64, f64, f64), SceneError> {
+    let speed = base.speed_mps;
+    let t0 = Instant::now();
+    let elastic = run_impact(&ImpactSetup {
+        restitution: 1.0,
+        friction: 0.0,
+        dt_s: Some(dt),
+        ..*base
+    })?;
+    let wall_elastic = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let damped = run_impact(&ImpactSetup {
+        dt_s: Some(dt),
+        ..*base
+    })?;
+    let wall_damped = t1.elapsed().as_secs_f64();
+    let exact_duration = 2.0 * HERTZ_DURATION_INTEGRAL * elastic.hertz_max_overlap_m / speed;
+    let mut push = |quantity, estimate, reference, wall, note: &str| {
+        let mut row = AccuracyRow::new(
+            "impact",
+            "steps_per_contact",
+            n,
+            quantity,
+            estimate,
+            reference,
+            f64::NAN,
+            wall,
+        );
+        row.note = note.into();
+        let e = row.error_rel;
+        rows.push(row);
+        e
+    };
+    let e_overlap = push(
+        "max_overlap_m",
+        elastic.max_overlap_m,
+        elastic.hertz_max_overlap_m,
+        wall_elastic,
+        "e = 1 against Terzioglu 2023, eq. 5.8",
+    );
+    let e_dur = push(
+        "contact_duration_s",
+        elastic.contact_duration_s,
+        elastic.hertz_duration_s,
+        wall_elastic,
+        "e = 1 against twice Terzioglu 2023, eq. 5.10",
+    );
+    let e_exact = push(
+        "contact_duration_exact_s",
+        elastic.contact_duration_s,
+        exact_duration,
+        wall_elastic,
+        "e = 1 against the exact Hertz integral 2 I delta_max / v",
+    );
+    push(
+        "elastic_restitution",
+        elastic.normal_restitution,
+        1.0,
+        wall_elastic,
+        "e = 1: energy the integration loses or makes",
+    );
+    let e_rest = push(
+        "restitution",
+        damped.normal_restitution,
+        base.restitution,
+        wall_damped,
+        "the scene's particle-wall law against its configured e (wall time includes calibrating the exact-restitution damping)",
+    );
+    Ok((e_overlap, e_dur, e_exact, e_rest))
 }
 
 /// A chain's record of the truth: force and acceleration, and the sample rate.
@@ -1246,6 +1401,87 @@ fn rechain(
     })
 }
 
+/// The rig's chain replayed on the first seed's truth record, and Yang's
+/// method on what it records (study (c)).
+struct YangBench<'a> {
+    truth: &'a TruthSamples,
+    /// Drive frequency (Hz) and its angular frequency (rad/s).
+    freq_hz: f64,
+    omega: f64,
+    feed_start_s: f64,
+    record_start_s: f64,
+    static_weight_n: f64,
+    seed: u64,
+    /// The calibration record's noise seed.
+    calibration_seed: u64,
+}
+
+impl YangBench<'_> {
+    /// A chain setting `r`: the record, its calibration record (the empty
+    /// enclosure) and the wall time both took (s).
+    fn chain(&self, r: &RigSpec) -> Result<(Chained, Chained, f64), SceneError> {
+        let t0 = Instant::now();
+        let (feed, record, weight) = (self.feed_start_s, self.record_start_s, self.static_weight_n);
+        let full = rechain(r, self.truth, feed, record, weight, self.seed, true)?;
+        let empty = rechain(
+            r,
+            self.truth,
+            feed,
+            record,
+            weight,
+            self.calibration_seed,
+            false,
+        )?;
+        Ok((full, empty, t0.elapsed().as_secs_f64()))
+    }
+
+    /// Samples of `c` in `n` periods.
+    fn samples(&self, c: &Chained, n: usize) -> usize {
+        ((n as f64 * c.fs_hz / self.freq_hz).round() as usize).min(c.force.len())
+    }
+
+    /// The empty enclosure's phase error over the first n periods.
+    fn calibrate(&self, c: &Chained, n: usize) -> Result<f64, SceneError> {
+        let len = self.samples(c, n);
+        Ok(
+            estimate_phase_error(&c.force[..len], &c.accel[..len], c.fs_hz, self.freq_hz)?
+                .phase_error_rad,
+        )
+    }
+
+    /// Yang over the first n periods, less the phase error `phi_rad`.
+    fn estimate(&self, c: &Chained, n: usize, phi_rad: f64) -> Result<f64, SceneError> {
+        let len = self.samples(c, n);
+        let options = PowerOptions {
+            phase_correction: PhaseCorrection::TimeDelay(phi_rad / self.omega),
+            ..PowerOptions::default()
+        };
+        Ok(yang_power(
+            &c.force[..len],
+            &c.accel[..len],
+            c.fs_hz,
+            self.freq_hz,
+            &options,
+        )?
+        .energy_per_cycle_j)
+    }
+}
+
+/// The DEM's truth over the cycles of run `run` after `transient` cycles:
+/// dissipation and work per cycle over the first `n`.
+fn truth_window(run: &DriveRun, transient: usize, n: usize) -> (f64, f64) {
+    let snaps: &[LedgerSnapshot] = run
+        .outcome
+        .as_ref()
+        .map(|o| o.cycle_snapshots.as_slice())
+        .unwrap_or(&[]);
+    let (Some(a), Some(b)) = (snaps.get(transient), snaps.get(transient + n)) else {
+        return (f64::NAN, f64::NAN);
+    };
+    let bal = LedgerBalance::between(a, b);
+    (bal.dissipated_j / n as f64, bal.work_in_j / n as f64)
+}
+
 /// Study (c): Yang's method on the first seed's record.
 fn yang_study(
     scene: &Scene,
@@ -1259,12 +1495,6 @@ fn yang_study(
     let period = 1.0 / f;
     let t = plan.transient_cycles as usize;
     let empty = TruthSamples::default();
-    let truth = run.truth.as_ref().unwrap_or(&empty);
-    let snaps: &[LedgerSnapshot] = run
-        .outcome
-        .as_ref()
-        .map(|o| o.cycle_snapshots.as_slice())
-        .unwrap_or(&[]);
     let weight = match scene.enclosure.orientation {
         Orientation::Vertical => rig.enclosure.mass_kg * scene.simulation.gravity_mps2,
         Orientation::Horizontal => 0.0,
@@ -1275,68 +1505,139 @@ fn yang_study(
     // rig's 60-sphere test bed) that an AC-coupled chain turns into a slowly
     // decaying offset across the record. A lab's chain runs long before the
     // record; feed it from the end of the first cycle.
-    let feed_start = period.min(record_start);
-    let omega = 2.0 * PI * f;
-    let seed = scene.simulation.seed;
-    // The calibration's noise: another seed, so its noise is its own.
-    let calibration_seed = seed ^ 0x5eed_ca1b;
+    let bench = YangBench {
+        truth: run.truth.as_ref().unwrap_or(&empty),
+        freq_hz: f,
+        omega: 2.0 * PI * f,
+        feed_start_s: period.min(record_start),
+        record_start_s: record_start,
+        static_weight_n: weight,
+        seed: scene.simulation.seed,
+        // The calibration's noise: another seed, so its noise is its own.
+        calibration_seed: scene.simulation.seed ^ 0x5eed_ca1b,
+    };
     let baseline = plan.baseline_record_periods() as usize;
-    let pooled = dem.pooled_energy_per_cycle_j;
     let dem_wall =
         |n: usize| settle_wall_s + run.cycle_wall_s.get(t + n).copied().unwrap_or(run.wall_s);
 
-    // DEM truth over cycles t..t+n: dissipation and work per cycle.
-    let window = |n: usize| -> (f64, f64) {
-        let (Some(a), Some(b)) = (snaps.get(t), snaps.get(t + n)) else {
-            return (f64::NAN, f64::NAN);
-        };
-        let bal = LedgerBalance::between(a, b);
-        (bal.dissipated_j / n as f64, bal.work_in_j / n as f64)
+    let (full, empty_rec, chain_s) = bench.chain(rig)?;
+    let RecordPeriods {
+        mut rows,
+        baseline_err,
+        baseline_phi,
+    } = record_period_rows(
+        &bench,
+        plan,
+        run,
+        (&full, &empty_rec),
+        &|n| dem_wall(n) + chain_s,
+        dem.pooled_energy_per_cycle_j,
+    )?;
+    let (dissipated, _) = truth_window(run, t, baseline);
+    let base_wall = dem_wall(baseline);
+    rows.extend(chain_setting_rows(
+        &bench, rig, plan, baseline, dissipated, base_wall,
+    )?);
+    let mut phase_pts = Vec::new();
+    for &mrad in &plan.residual_phase_mrad {
+        let t1 = Instant::now();
+        let e = bench.estimate(&full, baseline, baseline_phi + 1e-3 * mrad)?;
+        let row = residual_phase_row(
+            mrad,
+            e,
+            dissipated,
+            base_wall + chain_s + t1.elapsed().as_secs_f64(),
+            baseline,
+            baseline_phi,
+        );
+        phase_pts.push((mrad, row.error_rel));
+        rows.push(row);
+    }
+    let error_per_mrad = {
+        let zero = phase_pts.iter().find(|p| p.0 == 0.0).map(|p| p.1);
+        let far = phase_pts
+            .iter()
+            .filter(|p| p.0 != 0.0)
+            .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
+        zero.zip(far).map(|(z, (m, e))| (e - z) / m)
     };
-    let samples =
-        |c: &Chained, n: usize| ((n as f64 * c.fs_hz / f).round() as usize).min(c.force.len());
-    // The empty enclosure's phase error over the first n periods.
-    let calibrate = |c: &Chained, n: usize| -> Result<f64, SceneError> {
-        let len = samples(c, n);
-        Ok(estimate_phase_error(&c.force[..len], &c.accel[..len], c.fs_hz, f)?.phase_error_rad)
-    };
-    // Yang over the first n periods, less the phase error `phi_rad`.
-    let estimate = |c: &Chained, n: usize, phi_rad: f64| -> Result<f64, SceneError> {
-        let len = samples(c, n);
-        let options = PowerOptions {
-            phase_correction: PhaseCorrection::TimeDelay(phi_rad / omega),
-            ..PowerOptions::default()
-        };
-        Ok(yang_power(&c.force[..len], &c.accel[..len], c.fs_hz, f, &options)?.energy_per_cycle_j)
-    };
-    // A chain setting: the record, and its calibration record.
-    let chain = |r: &RigSpec| -> Result<(Chained, Chained, f64), SceneError> {
-        let t0 = Instant::now();
-        let full = rechain(r, truth, feed_start, record_start, weight, seed, true)?;
-        let empty = rechain(
-            r,
-            truth,
-            feed_start,
-            record_start,
-            weight,
-            calibration_seed,
-            false,
-        )?;
-        Ok((full, empty, t0.elapsed().as_secs_f64()))
-    };
+    Ok((
+        rows,
+        YangAccuracy {
+            rig: rig.name.clone(),
+            baseline_record_periods: baseline as u32,
+            baseline_error_rel: baseline_err.0,
+            baseline_error_vs_work_rel: baseline_err.1,
+            rig_phase_error_rad: rig.expected_phase_error_rad(f),
+            calibrated_phase_error_rad: baseline_phi,
+            error_per_mrad,
+        },
+    ))
+}
 
+/// Study (c)'s row of a residual phase error of `mrad` left after the
+/// calibrated `baseline_phi` (rad) over `baseline` periods: Yang's estimate
+/// `e` against the DEM's `dissipated` energy per cycle (J).
+fn residual_phase_row(
+    mrad: f64,
+    e: f64,
+    dissipated: f64,
+    wall: f64,
+    baseline: usize,
+    baseline_phi: f64,
+) -> AccuracyRow {
+    let mut row = AccuracyRow::new(
+        "yang",
+        "residual_phase_mrad",
+        mrad,
+        "energy_per_cycle_j",
+        e,
+        dissipated,
+        f64::NAN,
+        wall,
+    );
+    row.note = format!(
+        "correction {:.4} mrad (calibrated {:.4} mrad + residual), {baseline} periods",
+        1e3 * baseline_phi + mrad,
+        1e3 * baseline_phi
+    );
+    row
+}
+
+/// What [`record_period_rows`] gives.
+struct RecordPeriods {
+    rows: Vec<AccuracyRow>,
+    /// Errors at the baseline length: against dissipation, against work.
+    baseline_err: (f64, f64),
+    /// The phase error calibrated at the baseline length (rad).
+    baseline_phi: f64,
+}
+
+/// Study (c)'s rows of record lengths: Yang on the `record` (and on its
+/// empty-enclosure `calibration`) over each length of `plan`, against the
+/// DEM's dissipation and work over the same cycles and the `pooled` mean
+/// (J); `wall(n)` is the wall time to `n` periods (s).
+fn record_period_rows(
+    bench: &YangBench,
+    plan: &AccuracyPlan,
+    run: &DriveRun,
+    (record, calibration): (&Chained, &Chained),
+    wall: &dyn Fn(usize) -> f64,
+    pooled: f64,
+) -> Result<RecordPeriods, SceneError> {
+    let t = plan.transient_cycles as usize;
+    let baseline = plan.baseline_record_periods() as usize;
     let mut rows = Vec::new();
-    let (full, empty_rec, chain_s) = chain(rig)?;
     let mut baseline_err = (f64::NAN, f64::NAN);
     let mut baseline_phi = f64::NAN;
     let cycle_energies = run.cycle_energies(t);
     for &n in &plan.record_periods {
         let n = n as usize;
         let t1 = Instant::now();
-        let phi = calibrate(&empty_rec, n)?;
-        let e = estimate(&full, n, phi)?;
-        let wall = dem_wall(n) + chain_s + t1.elapsed().as_secs_f64();
-        let (dissipated, work) = window(n);
+        let phi = bench.calibrate(calibration, n)?;
+        let e = bench.estimate(record, n, phi)?;
+        let wall = wall(n) + t1.elapsed().as_secs_f64();
+        let (dissipated, work) = truth_window(run, t, n);
         let note = format!("calibrated phase error {:.4} mrad", 1e3 * phi);
         let mut row = AccuracyRow::new(
             "yang",
@@ -1370,7 +1671,7 @@ fn yang_study(
         }
         rows.push(row);
         // The chain's false energy: Yang on the calibration record itself.
-        let false_e = estimate(&empty_rec, n, phi)?;
+        let false_e = bench.estimate(calibration, n, phi)?;
         let mut row = AccuracyRow::new(
             "yang",
             "record_periods",
@@ -1398,18 +1699,35 @@ fn yang_study(
         row.note = "against the bed's long-run mean (all seeds): chain and statistics".into();
         rows.push(row);
     }
-    let (dissipated, _) = window(baseline);
-    let base_wall = dem_wall(baseline);
+    Ok(RecordPeriods {
+        rows,
+        baseline_err,
+        baseline_phi,
+    })
+}
 
+/// Study (c)'s rows of chain settings: the noise factors and ADC bits of
+/// `plan` on `rig`, each calibrated and estimated over `baseline` periods
+/// against the DEM's `dissipated` energy per cycle (J); `base_wall` is the
+/// DEM's wall time to there (s).
+fn chain_setting_rows(
+    bench: &YangBench,
+    rig: &RigSpec,
+    plan: &AccuracyPlan,
+    baseline: usize,
+    dissipated: f64,
+    base_wall: f64,
+) -> Result<Vec<AccuracyRow>, SceneError> {
+    let mut rows = Vec::new();
     let mut setting = |parameter: &'static str,
                        value: f64,
                        r: &RigSpec,
                        note: String|
      -> Result<(), SceneError> {
         let t1 = Instant::now();
-        let (full, empty_rec, _) = chain(r)?;
-        let phi = calibrate(&empty_rec, baseline)?;
-        let e = estimate(&full, baseline, phi)?;
+        let (full, empty_rec, _) = bench.chain(r)?;
+        let phi = bench.calibrate(&empty_rec, baseline)?;
+        let e = bench.estimate(&full, baseline, phi)?;
         let mut row = AccuracyRow::new(
             "yang",
             parameter,
@@ -1451,48 +1769,7 @@ fn yang_study(
             format!("force LSB {lsb_n:.3e} N"),
         )?;
     }
-    let mut phase_pts = Vec::new();
-    for &mrad in &plan.residual_phase_mrad {
-        let t1 = Instant::now();
-        let e = estimate(&full, baseline, baseline_phi + 1e-3 * mrad)?;
-        let mut row = AccuracyRow::new(
-            "yang",
-            "residual_phase_mrad",
-            mrad,
-            "energy_per_cycle_j",
-            e,
-            dissipated,
-            f64::NAN,
-            base_wall + chain_s + t1.elapsed().as_secs_f64(),
-        );
-        row.note = format!(
-            "correction {:.4} mrad (calibrated {:.4} mrad + residual), {baseline} periods",
-            1e3 * baseline_phi + mrad,
-            1e3 * baseline_phi
-        );
-        phase_pts.push((mrad, row.error_rel));
-        rows.push(row);
-    }
-    let error_per_mrad = {
-        let zero = phase_pts.iter().find(|p| p.0 == 0.0).map(|p| p.1);
-        let far = phase_pts
-            .iter()
-            .filter(|p| p.0 != 0.0)
-            .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
-        zero.zip(far).map(|(z, (m, e))| (e - z) / m)
-    };
-    Ok((
-        rows,
-        YangAccuracy {
-            rig: rig.name.clone(),
-            baseline_record_periods: baseline as u32,
-            baseline_error_rel: baseline_err.0,
-            baseline_error_vs_work_rel: baseline_err.1,
-            rig_phase_error_rad: rig.expected_phase_error_rad(f),
-            calibrated_phase_error_rad: baseline_phi,
-            error_per_mrad,
-        },
-    ))
+    Ok(rows)
 }
 
 impl AccuracyReport {
@@ -1562,7 +1839,18 @@ mod plots {
         rows: &[AccuracyRow],
         summary: &AccuracySummary,
     ) -> Result<Vec<String>, SceneError> {
-        let mut files = Vec::new();
+        let mut files = vec![accuracy_plot(dir, rows, summary)?];
+        files.extend(impact_plot(dir, rows, summary)?);
+        files.extend(yang_plot(dir, rows, summary)?);
+        Ok(files)
+    }
+
+    /// `accuracy.svg`: every study's error against its run time.
+    fn accuracy_plot(
+        dir: &Path,
+        rows: &[AccuracyRow],
+        summary: &AccuracySummary,
+    ) -> Result<String, SceneError> {
         let dem_q = "energy_per_cycle_j";
         let wall_err = |r: &AccuracyRow| (r.wall_s, r.error_rel.abs());
         let wall_se = |r: &AccuracyRow| (r.wall_s, r.stderr_rel);
@@ -1639,8 +1927,16 @@ mod plots {
             "log10 relative error",
             &main,
         )?;
-        files.push("accuracy.svg".to_string());
+        Ok("accuracy.svg".to_string())
+    }
 
+    /// `impact.svg`: the collision's errors against its resolution (none
+    /// without points).
+    fn impact_plot(
+        dir: &Path,
+        rows: &[AccuracyRow],
+        summary: &AccuracySummary,
+    ) -> Result<Option<String>, SceneError> {
         let imp = |q: &str, name: &str| {
             series(
                 name,
@@ -1674,9 +1970,19 @@ mod plots {
                 "log10 |relative error|",
                 &impact,
             )?;
-            files.push("impact.svg".to_string());
+            return Ok(Some("impact.svg".to_string()));
         }
+        Ok(None)
+    }
 
+    /// `yang.svg`: Yang's error against the chain's settings (none without
+    /// points).
+    fn yang_plot(
+        dir: &Path,
+        rows: &[AccuracyRow],
+        summary: &AccuracySummary,
+    ) -> Result<Option<String>, SceneError> {
+        let dem_q = "energy_per_cycle_j";
         let yang: Vec<Series> = [
             series(
                 "noise factor (x rig rms)",
@@ -1714,9 +2020,9 @@ mod plots {
                 "log10 |relative error|",
                 &yang,
             )?;
-            files.push("yang.svg".to_string());
+            return Ok(Some("yang.svg".to_string()));
         }
-        Ok(files)
+        Ok(None)
     }
 }
 

@@ -34,7 +34,7 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 
 use crate::atomic_write::write_atomic;
 use crate::experiment::bed_cache::BedSource;
@@ -44,10 +44,11 @@ use crate::experiment::shake::{check_drive, check_record_window, resolve_rig, ru
 use crate::rig::{RigFile, RigSpec, ShakerKind};
 use crate::scene::{CyclesSpec, Orientation, Scene, SceneError};
 use crate::study::phases::{
-    PhaseIndicators, PhaseObserver, PhaseThresholds, classify, collective_impacts,
+    MotionalPhase, PhaseIndicators, PhaseObserver, PhaseThresholds, classify, collective_impacts,
 };
 use crate::study::predict::{CLOSE_PACKING, effective_clearance_m};
 use crate::validation::InvalidParameter;
+use crate::warning::RunWarning;
 
 /// First line of every sweep file.
 pub const SWEEP_MAGIC: &str = "# vlab sweep";
@@ -90,6 +91,9 @@ pub enum SweepError {
     Merge(String),
 }
 
+/// Identity of a settled bed: fill ratio (bits), orientation, seed.
+type BedKey = (u64, &'static str, u64);
+
 /// One condition of a sweep.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Condition {
@@ -114,7 +118,7 @@ impl Condition {
     }
 
     /// Identity of the settled bed this condition drives.
-    fn bed_key(&self) -> (u64, &'static str, u64) {
+    fn bed_key(&self) -> BedKey {
         (
             self.fill_ratio.to_bits(),
             self.orientation.as_str(),
@@ -182,7 +186,74 @@ impl std::fmt::Display for Shard {
     }
 }
 
-/// What to sweep.
+/// The lists a sweep crosses, each resolved (one value at least): what a
+/// [`SweepPlan`] and the [`SweepHeader`] of its file both hold.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepGrid {
+    pub freqs_hz: Vec<f64>,
+    pub gammas: Vec<f64>,
+    pub seeds: Vec<u64>,
+    pub fill_ratios: Vec<f64>,
+    pub orientations: Vec<Orientation>,
+}
+
+impl SweepGrid {
+    /// Every condition, in canonical order (fill ratio, orientation,
+    /// frequency, Γ, seed: the last varies fastest).
+    pub fn conditions(&self) -> Vec<Condition> {
+        let mut out = Vec::new();
+        for &fill_ratio in &self.fill_ratios {
+            for &orientation in &self.orientations {
+                for &freq_hz in &self.freqs_hz {
+                    for &gamma in &self.gammas {
+                        for &seed in &self.seeds {
+                            out.push(Condition {
+                                fill_ratio,
+                                orientation,
+                                freq_hz,
+                                gamma,
+                                seed,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The `# freq_hz:` to `# orientation:` lines of a sweep file.
+    fn lists_text(&self) -> String {
+        let join = |v: &[f64]| {
+            v.iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        format!(
+            "# freq_hz: {}\n# gamma: {}\n# seeds: {}\n# fill_ratio: {}\n# orientation: {}\n",
+            join(&self.freqs_hz),
+            join(&self.gammas),
+            self.seeds
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+            join(&self.fill_ratios),
+            self.orientations
+                .iter()
+                .map(|o| o.as_str())
+                .collect::<Vec<_>>()
+                .join(","),
+        )
+    }
+}
+
+/// What to sweep. The file's [`SweepHeader`] is derived from it
+/// ([`SweepPlan::header`]) and is not the same type, because a plan holds what
+/// a file cannot (the scene itself, the bed source) and a header what only a
+/// file has (fingerprints, names, the shard); the lists both hold are one
+/// [`SweepGrid`].
 #[derive(Debug, Clone)]
 pub struct SweepPlan {
     /// The scene; each condition sets its seed, orientation and fill ratio.
@@ -220,27 +291,21 @@ impl SweepPlan {
         }
     }
 
+    /// The lists this plan crosses, the scene's own fill ratio and
+    /// orientation where the plan gives none.
+    pub fn grid(&self) -> SweepGrid {
+        SweepGrid {
+            freqs_hz: self.freqs_hz.clone(),
+            gammas: self.gammas.clone(),
+            seeds: self.seeds.clone(),
+            fill_ratios: self.fills(),
+            orientations: self.orients(),
+        }
+    }
+
     /// Every condition, in canonical order.
     pub fn conditions(&self) -> Vec<Condition> {
-        let mut out = Vec::new();
-        for fill_ratio in self.fills() {
-            for orientation in self.orients() {
-                for &freq_hz in &self.freqs_hz {
-                    for &gamma in &self.gammas {
-                        for &seed in &self.seeds {
-                            out.push(Condition {
-                                fill_ratio,
-                                orientation,
-                                freq_hz,
-                                gamma,
-                                seed,
-                            });
-                        }
-                    }
-                }
-            }
-        }
-        out
+        self.grid().conditions()
     }
 
     /// The conditions of `shard`, in canonical order.
@@ -330,32 +395,11 @@ impl SweepPlan {
 
     /// Fingerprint of the protocol and the lists: one sweep.
     pub fn sweep_id(&self) -> String {
-        fingerprint(&format!("{}\n{}", self.protocol_id(), self.lists_text()))
-    }
-
-    fn lists_text(&self) -> String {
-        let join = |v: &[f64]| {
-            v.iter()
-                .map(|x| x.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        };
-        format!(
-            "# freq_hz: {}\n# gamma: {}\n# seeds: {}\n# fill_ratio: {}\n# orientation: {}\n",
-            join(&self.freqs_hz),
-            join(&self.gammas),
-            self.seeds
-                .iter()
-                .map(|s| s.to_string())
-                .collect::<Vec<_>>()
-                .join(","),
-            join(&self.fills()),
-            self.orients()
-                .iter()
-                .map(|o| o.as_str())
-                .collect::<Vec<_>>()
-                .join(","),
-        )
+        fingerprint(&format!(
+            "{}\n{}",
+            self.protocol_id(),
+            self.grid().lists_text()
+        ))
     }
 
     fn header(&self, shard: Shard) -> SweepHeader {
@@ -368,11 +412,7 @@ impl SweepPlan {
             shaker: self.shaker.map_or("rig default", ShakerKind::as_str).into(),
             cycles: cycles_text(&self.scene),
             steady_cycles: self.scene.drive.steady_cycles,
-            freqs_hz: self.freqs_hz.clone(),
-            gammas: self.gammas.clone(),
-            seeds: self.seeds.clone(),
-            fill_ratios: self.fills(),
-            orientations: self.orients(),
+            grid: self.grid(),
             particle_count: self.scene.particles.count,
             inner_length_m: self.scene.enclosure.inner_length_m,
             scene_fill_ratio: self.scene.fill_ratio(),
@@ -418,7 +458,8 @@ pub enum RowStatus {
 }
 
 impl RowStatus {
-    fn as_str(self) -> &'static str {
+    /// The word in `sweep.csv`.
+    pub fn as_str(self) -> &'static str {
         match self {
             RowStatus::Ok => "ok",
             RowStatus::Unreachable => "unreachable",
@@ -433,6 +474,52 @@ impl RowStatus {
             "failed" => Some(RowStatus::Failed),
             _ => None,
         }
+    }
+}
+
+/// Whether a row's steady window met the scene's steady criteria (column
+/// `steady`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Steady {
+    /// The window met them.
+    #[serde(rename = "yes")]
+    Yes,
+    /// A drive run until steady stopped at its most cycles.
+    #[serde(rename = "capped")]
+    Capped,
+    /// A fixed number of cycles that did not meet them.
+    #[serde(rename = "no")]
+    No,
+}
+
+impl Steady {
+    /// The word in `sweep.csv`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Steady::Yes => "yes",
+            Steady::Capped => "capped",
+            Steady::No => "no",
+        }
+    }
+
+    fn parse(s: &str) -> Option<Self> {
+        [Steady::Yes, Steady::Capped, Steady::No]
+            .into_iter()
+            .find(|w| w.as_str() == s)
+    }
+}
+
+/// The name of `phase` as `sweep.csv` writes it: empty for none.
+pub fn phase_name(phase: Option<MotionalPhase>) -> &'static str {
+    phase.map_or("", MotionalPhase::as_str)
+}
+
+/// Serialises an absent word (a row that is not ok) as the empty text the
+/// CSV has, not `null`.
+fn word_or_empty<T: Serialize, S: Serializer>(v: &Option<T>, s: S) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(w) => w.serialize(s),
+        None => s.serialize_str(""),
     }
 }
 
@@ -457,18 +544,19 @@ pub struct SweepRow {
     pub e_max_j: f64,
     /// (work in − dissipated) / dissipated over the steady cycles.
     pub steadiness_rel: f64,
-    /// `yes` when the window met the scene's steady criteria, `capped` when a
-    /// drive run until steady stopped at its most cycles, else `no` (a fixed
-    /// number of cycles that did not); empty unless ok.
-    pub steady: String,
+    /// Whether the window met the scene's steady criteria; none unless ok
+    /// (nor in files written before the column).
+    #[serde(serialize_with = "word_or_empty")]
+    pub steady: Option<Steady>,
     /// Dissipation shares: particle-particle and particle-wall, normal and tangential.
     pub share_pp_normal: f64,
     pub share_pp_tangential: f64,
     pub share_pw_normal: f64,
     pub share_pw_tangential: f64,
     pub indicators: Option<PhaseIndicators>,
-    /// The heuristic's name of the motional phase (empty unless ok).
-    pub phase: String,
+    /// The heuristic's motional phase (none unless ok).
+    #[serde(serialize_with = "word_or_empty")]
+    pub phase: Option<MotionalPhase>,
     pub cycles: u32,
     pub steady_cycles: u32,
     pub steps: u64,
@@ -491,13 +579,13 @@ impl SweepRow {
             energy_per_cycle_se_j: f64::NAN,
             e_max_j: f64::NAN,
             steadiness_rel: f64::NAN,
-            steady: String::new(),
+            steady: None,
             share_pp_normal: f64::NAN,
             share_pp_tangential: f64::NAN,
             share_pw_normal: f64::NAN,
             share_pw_tangential: f64::NAN,
             indicators: None,
-            phase: String::new(),
+            phase: None,
             cycles: 0,
             steady_cycles: 0,
             steps: 0,
@@ -575,19 +663,18 @@ fn try_condition(
         energy_per_cycle_se_j: s.dem.energy_per_cycle_stderr_j,
         e_max_j: s.dem.e_max_j,
         steadiness_rel: s.dem.steadiness_rel,
-        steady: if st.capped {
-            "capped"
+        steady: Some(if st.capped {
+            Steady::Capped
         } else if st.reached {
-            "yes"
+            Steady::Yes
         } else {
-            "no"
-        }
-        .into(),
+            Steady::No
+        }),
         share_pp_normal: pc.pp_normal / total,
         share_pp_tangential: pc.pp_tangential / total,
         share_pw_normal: pc.pw_normal / total,
         share_pw_tangential: pc.pw_tangential / total,
-        phase: classify(&ind, &PhaseThresholds::default()).as_str().into(),
+        phase: Some(classify(&ind, &PhaseThresholds::default())),
         indicators: Some(ind),
         cycles: s.cycles,
         steady_cycles: s.steady_cycles,
@@ -613,7 +700,7 @@ pub enum SweepEvent<'a> {
         /// Read from the bed cache rather than settled.
         from_cache: bool,
         /// What the bed's source had to say (a cache entry rebuilt, say).
-        warnings: &'a [String],
+        warnings: &'a [RunWarning],
     },
     /// A condition finished and its row is in the file.
     ConditionDone {
@@ -637,11 +724,8 @@ pub struct SweepHeader {
     /// A number of cycles, or `steady (...)`: the drive runs until steady.
     pub cycles: String,
     pub steady_cycles: u32,
-    pub freqs_hz: Vec<f64>,
-    pub gammas: Vec<f64>,
-    pub seeds: Vec<u64>,
-    pub fill_ratios: Vec<f64>,
-    pub orientations: Vec<Orientation>,
+    /// The lists of conditions.
+    pub grid: SweepGrid,
     /// The scene's particle count, enclosure length and fill ratio (for the
     /// bouncing-bed prediction at other fill ratios), and gravity.
     pub particle_count: usize,
@@ -653,25 +737,7 @@ pub struct SweepHeader {
 impl SweepHeader {
     /// Every condition of the sweep in canonical order.
     pub fn conditions(&self) -> Vec<Condition> {
-        let mut out = Vec::new();
-        for &fill_ratio in &self.fill_ratios {
-            for &orientation in &self.orientations {
-                for &freq_hz in &self.freqs_hz {
-                    for &gamma in &self.gammas {
-                        for &seed in &self.seeds {
-                            out.push(Condition {
-                                fill_ratio,
-                                orientation,
-                                freq_hz,
-                                gamma,
-                                seed,
-                            });
-                        }
-                    }
-                }
-            }
-        }
-        out
+        self.grid.conditions()
     }
 
     /// The enclosure length (m) that gives `fill_ratio` with the scene's particles.
@@ -680,12 +746,6 @@ impl SweepHeader {
     }
 
     fn text(&self) -> String {
-        let join = |v: &[f64]| {
-            v.iter()
-                .map(|x| x.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        };
         let mut t = String::new();
         let _ = writeln!(
             t,
@@ -700,27 +760,7 @@ impl SweepHeader {
         let _ = writeln!(t, "# shaker: {}", self.shaker);
         let _ = writeln!(t, "# cycles: {}", self.cycles);
         let _ = writeln!(t, "# steady_cycles: {}", self.steady_cycles);
-        let _ = writeln!(t, "# freq_hz: {}", join(&self.freqs_hz));
-        let _ = writeln!(t, "# gamma: {}", join(&self.gammas));
-        let _ = writeln!(
-            t,
-            "# seeds: {}",
-            self.seeds
-                .iter()
-                .map(|s| s.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        );
-        let _ = writeln!(t, "# fill_ratio: {}", join(&self.fill_ratios));
-        let _ = writeln!(
-            t,
-            "# orientation: {}",
-            self.orientations
-                .iter()
-                .map(|o| o.as_str())
-                .collect::<Vec<_>>()
-                .join(",")
-        );
+        t += &self.grid.lists_text();
         let _ = writeln!(t, "# particle_count: {}", self.particle_count);
         let _ = writeln!(t, "# inner_length_m: {}", self.inner_length_m);
         let _ = writeln!(t, "# scene_fill_ratio: {}", self.scene_fill_ratio);
@@ -770,23 +810,25 @@ impl SweepHeader {
             shaker: get("shaker")?,
             cycles: get("cycles")?,
             steady_cycles: whole("steady_cycles")? as u32,
-            freqs_hz: floats("freq_hz")?,
-            gammas: floats("gamma")?,
-            seeds: get("seeds")?
-                .split(',')
-                .map(|s| {
-                    s.trim()
-                        .parse::<u64>()
-                        .map_err(|_| bad(format!("'# seeds:' has '{s}'")))
-                })
-                .collect::<Result<_, _>>()?,
-            fill_ratios: floats("fill_ratio")?,
-            orientations: get("orientation")?
-                .split(',')
-                .map(|s| {
-                    parse_orientation(s.trim()).ok_or_else(|| bad(format!("orientation '{s}'")))
-                })
-                .collect::<Result<_, _>>()?,
+            grid: SweepGrid {
+                freqs_hz: floats("freq_hz")?,
+                gammas: floats("gamma")?,
+                seeds: get("seeds")?
+                    .split(',')
+                    .map(|s| {
+                        s.trim()
+                            .parse::<u64>()
+                            .map_err(|_| bad(format!("'# seeds:' has '{s}'")))
+                    })
+                    .collect::<Result<_, _>>()?,
+                fill_ratios: floats("fill_ratio")?,
+                orientations: get("orientation")?
+                    .split(',')
+                    .map(|s| {
+                        parse_orientation(s.trim()).ok_or_else(|| bad(format!("orientation '{s}'")))
+                    })
+                    .collect::<Result<_, _>>()?,
+            },
             particle_count: whole("particle_count")? as usize,
             inner_length_m: num("inner_length_m")?,
             scene_fill_ratio: num("scene_fill_ratio")?,
@@ -866,7 +908,7 @@ fn row_record(r: &SweepRow) -> Vec<String> {
         f(r.energy_per_cycle_se_j),
         f(r.e_max_j),
         f(r.steadiness_rel),
-        r.steady.clone(),
+        r.steady.map_or("", Steady::as_str).into(),
         f(r.share_pp_normal),
         f(r.share_pp_tangential),
         f(r.share_pw_normal),
@@ -881,7 +923,7 @@ fn row_record(r: &SweepRow) -> Vec<String> {
         ind(|p| p.com_offset_rel),
         ind(|p| p.com_range_rel),
         ind(|p| p.granular_temperature_rel),
-        r.phase.clone(),
+        phase_name(r.phase).into(),
         r.cycles.to_string(),
         r.steady_cycles.to_string(),
         r.steps.to_string(),
@@ -905,42 +947,62 @@ fn column_index(names: &csv::StringRecord) -> Result<ColumnIndex, String> {
     Ok(index)
 }
 
-fn parse_row(
-    rec: &csv::StringRecord,
-    index: &ColumnIndex,
+/// The cells of one row of a sweep file, read by column name.
+struct RowCells<'a> {
+    rec: &'a csv::StringRecord,
+    index: &'a ColumnIndex,
     line: u64,
-    path: &Path,
-) -> Result<SweepRow, SweepError> {
-    let bad = |what: String| SweepError::NotASweep {
-        path: path.to_path_buf(),
-        reason: format!("line {line}: {what}"),
-    };
-    // The cell of column `name`; empty for a later column the file lacks.
-    let cell = |name: &str| -> &str {
+    path: &'a Path,
+}
+
+impl RowCells<'_> {
+    fn bad(&self, what: String) -> SweepError {
+        SweepError::NotASweep {
+            path: self.path.to_path_buf(),
+            reason: format!("line {}: {what}", self.line),
+        }
+    }
+
+    /// The cell of column `name`; empty for a later column the file lacks.
+    fn cell(&self, name: &str) -> &str {
         COLUMNS
             .iter()
             .position(|c| *c == name)
-            .and_then(|k| index[k])
-            .and_then(|k| rec.get(k))
+            .and_then(|k| self.index[k])
+            .and_then(|k| self.rec.get(k))
             .unwrap_or("")
-    };
-    let f = |name: &str| -> Result<f64, SweepError> {
-        let v = cell(name);
+    }
+
+    /// A number; NaN for a later column the file lacks.
+    fn num(&self, name: &str) -> Result<f64, SweepError> {
+        let v = self.cell(name);
         if v.is_empty() && LATER_COLUMNS.contains(&name) {
             return Ok(f64::NAN);
         }
         v.parse::<f64>()
-            .map_err(|_| bad(format!("{name} = '{v}' is not a number")))
-    };
-    let u = |name: &str| -> Result<u64, SweepError> {
-        let v = cell(name);
+            .map_err(|_| self.bad(format!("{name} = '{v}' is not a number")))
+    }
+
+    fn whole(&self, name: &str) -> Result<u64, SweepError> {
+        let v = self.cell(name);
         v.parse::<u64>()
-            .map_err(|_| bad(format!("{name} = '{v}' is not a whole number")))
-    };
-    let status = RowStatus::parse(cell("status"))
-        .ok_or_else(|| bad(format!("status '{}'", cell("status"))))?;
-    let indicators = if status == RowStatus::Ok {
-        Some(PhaseIndicators {
+            .map_err(|_| self.bad(format!("{name} = '{v}' is not a whole number")))
+    }
+
+    /// One of a column's few words, or none for an empty cell.
+    fn word<T>(&self, name: &str, parse: fn(&str) -> Option<T>) -> Result<Option<T>, SweepError> {
+        let v = self.cell(name);
+        if v.is_empty() {
+            return Ok(None);
+        }
+        parse(v)
+            .map(Some)
+            .ok_or_else(|| self.bad(format!("{name} = '{v}' is not one of its words")))
+    }
+
+    fn indicators(&self) -> Result<PhaseIndicators, SweepError> {
+        let f = |name: &str| self.num(name);
+        Ok(PhaseIndicators {
             impacts_per_cycle: f("impacts_per_cycle")?,
             bottom_impacts_per_cycle: f("bottom_impacts_per_cycle")?,
             lid_impacts_per_cycle: f("lid_impacts_per_cycle")?,
@@ -952,19 +1014,33 @@ fn parse_row(
             com_range_rel: f("com_range_rel")?,
             granular_temperature_rel: f("granular_temperature_rel")?,
         })
+    }
+
+    fn condition(&self) -> Result<Condition, SweepError> {
+        let orientation = self.cell("orientation");
+        Ok(Condition {
+            fill_ratio: self.num("fill_ratio")?,
+            orientation: parse_orientation(orientation)
+                .ok_or_else(|| self.bad(format!("orientation '{orientation}'")))?,
+            freq_hz: self.num("freq_hz")?,
+            gamma: self.num("gamma")?,
+            seed: self.whole("seed")?,
+        })
+    }
+}
+
+fn parse_row(cells: &RowCells) -> Result<SweepRow, SweepError> {
+    let f = |name: &str| cells.num(name);
+    let u = |name: &str| cells.whole(name);
+    let status = RowStatus::parse(cells.cell("status"))
+        .ok_or_else(|| cells.bad(format!("status '{}'", cells.cell("status"))))?;
+    let indicators = if status == RowStatus::Ok {
+        Some(cells.indicators()?)
     } else {
         None
     };
-    let orientation = cell("orientation");
     Ok(SweepRow {
-        condition: Condition {
-            fill_ratio: f("fill_ratio")?,
-            orientation: parse_orientation(orientation)
-                .ok_or_else(|| bad(format!("orientation '{orientation}'")))?,
-            freq_hz: f("freq_hz")?,
-            gamma: f("gamma")?,
-            seed: u("seed")?,
-        },
+        condition: cells.condition()?,
         status,
         efficiency: f("efficiency")?,
         efficiency_se: f("efficiency_se")?,
@@ -974,18 +1050,18 @@ fn parse_row(
         energy_per_cycle_se_j: f("energy_per_cycle_se_j")?,
         e_max_j: f("e_max_j")?,
         steadiness_rel: f("steadiness_rel")?,
-        steady: cell("steady").to_string(),
+        steady: cells.word("steady", Steady::parse)?,
         share_pp_normal: f("share_pp_normal")?,
         share_pp_tangential: f("share_pp_tangential")?,
         share_pw_normal: f("share_pw_normal")?,
         share_pw_tangential: f("share_pw_tangential")?,
         indicators,
-        phase: cell("phase").to_string(),
+        phase: cells.word("phase", MotionalPhase::parse)?,
         cycles: u("cycles")? as u32,
         steady_cycles: u("steady_cycles")? as u32,
         steps: u("steps")?,
         wall_time_s: f("wall_time_s")?,
-        note: cell("note").to_string(),
+        note: cells.cell("note").to_string(),
     })
 }
 
@@ -1038,7 +1114,12 @@ impl SweepFile {
                 reason: e.to_string(),
             })?;
             let line = rec.position().map_or(0, |p| p.line());
-            rows.push(parse_row(&rec, &index, line, path)?);
+            rows.push(parse_row(&RowCells {
+                rec: &rec,
+                index: &index,
+                line,
+                path,
+            })?);
         }
         Ok(SweepFile { header, rows })
     }
@@ -1099,37 +1180,7 @@ pub fn run_sweep(
 ) -> Result<SweepFile, SweepError> {
     plan.validate()?;
     let path = dir.join("sweep.csv");
-    let header = plan.header(shard);
-    let mut file = if path.exists() {
-        if !resume {
-            return Err(SweepError::Exists { path });
-        }
-        let old = SweepFile::read(&path)?;
-        for (what, same) in [
-            (
-                "the scene, rig or protocol",
-                old.header.protocol_id == header.protocol_id,
-            ),
-            (
-                "the lists of conditions",
-                old.header.sweep_id == header.sweep_id,
-            ),
-            ("the shards", old.header.shard == header.shard),
-        ] {
-            if !same {
-                return Err(SweepError::OtherSweep {
-                    path,
-                    what: what.into(),
-                });
-            }
-        }
-        old
-    } else {
-        SweepFile {
-            header: header.clone(),
-            rows: Vec::new(),
-        }
-    };
+    let mut file = open_sweep_file(&path, plan.header(shard), resume)?;
     let conditions = plan.shard_conditions(shard);
     let done: std::collections::HashSet<_> = file.rows.iter().map(|r| r.condition.key()).collect();
     let mut pending: Vec<Condition> = conditions
@@ -1160,9 +1211,65 @@ pub fn run_sweep(
         beds: bed_keys.len(),
     });
     file.write(&path)?;
-    let total = conditions.len();
-    let done_count = already_done + unreachable.len();
+    let progress = Progress {
+        done: already_done + unreachable.len(),
+        total: conditions.len(),
+    };
+    let beds = settle_beds(plan, &bed_keys, on_event)?;
+    let mut file = run_conditions(plan, &beds, reachable, file, &path, progress, on_event)?;
+    file.sort_canonical();
+    file.write(&path)?;
+    Ok(file)
+}
 
+/// The sweep file at `path` to continue, checked to be of the sweep of
+/// `header` (only with `resume`), or a new one.
+fn open_sweep_file(
+    path: &Path,
+    header: SweepHeader,
+    resume: bool,
+) -> Result<SweepFile, SweepError> {
+    if !path.exists() {
+        return Ok(SweepFile {
+            header,
+            rows: Vec::new(),
+        });
+    }
+    if !resume {
+        return Err(SweepError::Exists {
+            path: path.to_path_buf(),
+        });
+    }
+    let old = SweepFile::read(path)?;
+    for (what, same) in [
+        (
+            "the scene, rig or protocol",
+            old.header.protocol_id == header.protocol_id,
+        ),
+        (
+            "the lists of conditions",
+            old.header.sweep_id == header.sweep_id,
+        ),
+        ("the shards", old.header.shard == header.shard),
+    ] {
+        if !same {
+            return Err(SweepError::OtherSweep {
+                path: path.to_path_buf(),
+                what: what.into(),
+            });
+        }
+    }
+    Ok(old)
+}
+
+/// Settled beds by [`Condition::bed_key`], one per condition of `bed_keys`,
+/// settled in parallel. A bed that cannot be settled is a fault of the scene,
+/// not of a condition: the sweep stops (the rows so far stay in the file).
+fn settle_beds(
+    plan: &SweepPlan,
+    bed_keys: &[Condition],
+    on_event: &(dyn Fn(SweepEvent) + Sync),
+) -> Result<HashMap<BedKey, SettledBed>, SweepError> {
     let beds: Vec<Result<SettledBed, SceneError>> = bed_keys
         .par_iter()
         .with_max_len(1)
@@ -1178,15 +1285,32 @@ pub fn run_sweep(
             Ok(bed)
         })
         .collect();
-    // A bed that cannot be settled is a fault of the scene, not of a
-    // condition: stop (the rows so far stay in the file).
     let mut by_key = HashMap::new();
     for (c, bed) in bed_keys.iter().zip(beds) {
         by_key.insert(c.bed_key(), bed?);
     }
+    Ok(by_key)
+}
 
-    // Longest first, so the last conditions to finish are short ones.
-    let mut jobs = reachable;
+/// Conditions of a shard finished (rows in the file) and in all.
+#[derive(Debug, Clone, Copy)]
+struct Progress {
+    done: usize,
+    total: usize,
+}
+
+/// Runs `jobs` in parallel on their `beds`, longest first (so the last to
+/// finish are short ones), adding each row to `file` and writing it to
+/// `path` as it comes.
+fn run_conditions(
+    plan: &SweepPlan,
+    beds: &HashMap<BedKey, SettledBed>,
+    mut jobs: Vec<Condition>,
+    file: SweepFile,
+    path: &Path,
+    progress: Progress,
+    on_event: &(dyn Fn(SweepEvent) + Sync),
+) -> Result<SweepFile, SweepError> {
     jobs.sort_by(|a, b| b.cost().total_cmp(&a.cost()));
     let total_cost: f64 = jobs.iter().map(Condition::cost).sum();
     let started = Instant::now();
@@ -1198,12 +1322,12 @@ pub fn run_sweep(
     }
     let shared = Mutex::new(Shared {
         file,
-        done: done_count,
+        done: progress.done,
         cost_done: 0.0,
         error: None,
     });
     jobs.par_iter().with_max_len(1).for_each(|c| {
-        let row = match by_key.get(&c.bed_key()) {
+        let row = match beds.get(&c.bed_key()) {
             Some(bed) => run_condition(plan, bed, c),
             None => SweepRow::empty(*c, RowStatus::Failed, "no bed".into()),
         };
@@ -1211,7 +1335,7 @@ pub fn run_sweep(
         s.done += 1;
         s.cost_done += c.cost();
         s.file.rows.push(row);
-        if let Err(e) = s.file.write(&path) {
+        if let Err(e) = s.file.write(path) {
             s.error.get_or_insert(e);
         }
         let elapsed = started.elapsed().as_secs_f64();
@@ -1221,19 +1345,16 @@ pub fn run_sweep(
             on_event(SweepEvent::ConditionDone {
                 row,
                 done,
-                total,
+                total: progress.total,
                 eta_s,
             });
         }
     });
     let s = shared.into_inner().unwrap_or_else(|e| e.into_inner());
-    if let Some(e) = s.error {
-        return Err(e);
+    match s.error {
+        Some(e) => Err(e),
+        None => Ok(s.file),
     }
-    let mut file = s.file;
-    file.sort_canonical();
-    file.write(&path)?;
-    Ok(file)
 }
 
 /// Joins the shard files of one sweep into the file the unsharded sweep
@@ -1312,9 +1433,9 @@ impl SweepFile {
         let mut changed = 0;
         for r in self.rows.iter_mut() {
             if let Some(ind) = &r.indicators {
-                let name = classify(ind, thresholds).as_str();
-                if r.phase != name {
-                    r.phase = name.to_string();
+                let phase = Some(classify(ind, thresholds));
+                if r.phase != phase {
+                    r.phase = phase;
                     changed += 1;
                 }
             }
@@ -1338,20 +1459,21 @@ pub struct ConditionSummary {
     /// one row's cycle-to-cycle standard error.
     pub efficiency_se: f64,
     pub efficiency_measured: f64,
-    /// The most common phase name over seeds (empty if none ok).
-    pub phase: String,
+    /// The most common phase over seeds (none if none ok).
+    #[serde(serialize_with = "word_or_empty")]
+    pub phase: Option<MotionalPhase>,
     /// `ok`, or the status of the rows when none is ok.
-    pub status: String,
+    pub status: RowStatus,
 }
 
 /// Summaries over seeds of every (fill, orientation, frequency, Γ) of the header.
 pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
     let h = &file.header;
     let mut out = Vec::new();
-    for &fill_ratio in &h.fill_ratios {
-        for &orientation in &h.orientations {
-            for &freq_hz in &h.freqs_hz {
-                for &gamma in &h.gammas {
+    for &fill_ratio in &h.grid.fill_ratios {
+        for &orientation in &h.grid.orientations {
+            for &freq_hz in &h.grid.freqs_hz {
+                for &gamma in &h.grid.gammas {
                     let rows: Vec<&SweepRow> = file
                         .rows
                         .iter()
@@ -1386,15 +1508,19 @@ pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
                     } else {
                         f64::NAN
                     };
-                    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+                    // Counted by name, so that a tie goes to the same phase
+                    // as ever (the last name in alphabetical order).
+                    let mut counts: BTreeMap<&str, (usize, Option<MotionalPhase>)> =
+                        BTreeMap::new();
                     for r in &ok {
-                        *counts.entry(r.phase.as_str()).or_default() += 1;
+                        let entry = counts.entry(phase_name(r.phase)).or_default();
+                        entry.0 += 1;
+                        entry.1 = r.phase;
                     }
                     let phase = counts
-                        .iter()
-                        .max_by_key(|(_, c)| **c)
-                        .map(|(p, _)| p.to_string())
-                        .unwrap_or_default();
+                        .values()
+                        .max_by_key(|(c, _)| *c)
+                        .and_then(|(_, p)| *p);
                     out.push(ConditionSummary {
                         fill_ratio,
                         orientation,
@@ -1405,11 +1531,7 @@ pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
                         efficiency_se: se,
                         efficiency_measured: mean(|r| r.efficiency_measured),
                         phase,
-                        status: if n > 0 {
-                            "ok".into()
-                        } else {
-                            rows[0].status.as_str().into()
-                        },
+                        status: if n > 0 { RowStatus::Ok } else { rows[0].status },
                     });
                 }
             }
@@ -1511,7 +1633,8 @@ mod tests {
             com_range_rel: 0.9,
             granular_temperature_rel: 0.05,
         });
-        ok.phase = "bouncing bed".into();
+        ok.phase = Some(MotionalPhase::BouncingBed);
+        ok.steady = Some(Steady::Capped);
         ok.steps = 123;
         let far = SweepRow::empty(
             p.conditions()[5],

@@ -16,8 +16,9 @@ use crate::signals::{
     SignalsError, plot_heat_map, plot_log_x,
 };
 use crate::study::phases::MotionalPhase;
+use crate::study::predict::BouncingBedPrediction;
 use crate::study::predict::predict_bouncing_bed;
-use crate::study::sweep::{ConditionSummary, SweepFile, summarise};
+use crate::study::sweep::{ConditionSummary, RowStatus, SweepFile, SweepHeader, summarise};
 
 /// Draws `efficiency.{svg,png}` and `map.{svg,png}` of `file` into `dir`
 /// (one pair per fill ratio and orientation, suffixed when there are
@@ -26,9 +27,10 @@ pub fn plot_sweep(file: &SweepFile, dir: &Path) -> Result<Vec<PathBuf>, SignalsE
     let h = &file.header;
     let summary = summarise(file);
     let groups: Vec<(f64, Orientation)> = h
+        .grid
         .fill_ratios
         .iter()
-        .flat_map(|&f| h.orientations.iter().map(move |&o| (f, o)))
+        .flat_map(|&f| h.grid.orientations.iter().map(move |&o| (f, o)))
         .collect();
     let mut written = Vec::new();
     for &(fill, orientation) in &groups {
@@ -45,14 +47,19 @@ pub fn plot_sweep(file: &SweepFile, dir: &Path) -> Result<Vec<PathBuf>, SignalsE
             continue;
         }
         let length = h.length_for_fill_m(fill);
-        let prediction = predict_bouncing_bed(&h.freqs_hz, fill, length, h.gravity_mps2).ok();
+        let prediction = predict_bouncing_bed(&h.grid.freqs_hz, fill, length, h.gravity_mps2).ok();
         let what = format!(
             "{} damper, fill {:.3}, {}",
             h.scene,
             fill,
             orientation.as_str()
         );
-        let curve = efficiency_curves(&what, h.freqs_hz.as_slice(), &rows, prediction.as_ref());
+        let curve = efficiency_curves(
+            &what,
+            h.grid.freqs_hz.as_slice(),
+            &rows,
+            prediction.as_ref(),
+        );
         let map = efficiency_map(&what, h, &rows, prediction.as_ref());
         for ext in ["svg", "png"] {
             let e = dir.join(format!("efficiency{suffix}.{ext}"));
@@ -70,7 +77,7 @@ fn efficiency_curves(
     what: &str,
     freqs: &[f64],
     rows: &[&ConditionSummary],
-    prediction: Option<&crate::study::predict::BouncingBedPrediction>,
+    prediction: Option<&BouncingBedPrediction>,
 ) -> LogXPlot {
     let mut series = Vec::new();
     let mut markers = Vec::new();
@@ -129,90 +136,21 @@ fn efficiency_curves(
 
 fn efficiency_map(
     what: &str,
-    h: &crate::study::sweep::SweepHeader,
+    h: &SweepHeader,
     rows: &[&ConditionSummary],
-    prediction: Option<&crate::study::predict::BouncingBedPrediction>,
+    prediction: Option<&BouncingBedPrediction>,
 ) -> HeatMap {
     // Rows of the map: the amplitudes in ascending order.
-    let mut gammas = h.gammas.clone();
+    let mut gammas = h.grid.gammas.clone();
     gammas.sort_by(f64::total_cmp);
     gammas.dedup();
-    let mut freqs = h.freqs_hz.clone();
+    let mut freqs = h.grid.freqs_hz.clone();
     freqs.sort_by(f64::total_cmp);
     freqs.dedup();
-    let mut cells = Vec::new();
-    let mut hi: f64 = 0.0;
-    for r in rows {
-        let col = freqs
-            .iter()
-            .position(|f| f.to_bits() == r.freq_hz.to_bits());
-        let row = gammas.iter().position(|g| g.to_bits() == r.gamma.to_bits());
-        let (Some(col), Some(row)) = (col, row) else {
-            continue;
-        };
-        let (value, text) = if r.n > 0 {
-            hi = hi.max(r.efficiency);
-            let tag = MotionalPhase::parse(&r.phase).map_or("?", MotionalPhase::abbreviation);
-            (Some(r.efficiency), format!("{tag}\n{:.2}", r.efficiency))
-        } else if r.status == "unreachable" {
-            (None, "rig".to_string())
-        } else {
-            (None, r.status.clone())
-        };
-        cells.push(HeatCell {
-            col,
-            row,
-            value,
-            text,
-        });
-    }
-    let mut overlays = Vec::new();
-    if let Some(p) = prediction {
-        let lg: Vec<f64> = gammas.iter().map(|g| g.ln()).collect();
-        let y_of = |g: f64| -> Option<f64> {
-            let x = g.ln();
-            if lg.len() < 2 || x < lg[0] || x > lg[lg.len() - 1] {
-                return None;
-            }
-            let k = lg.partition_point(|&v| v <= x).clamp(1, lg.len() - 1);
-            let f = (x - lg[k - 1]) / (lg[k] - lg[k - 1]);
-            Some((k - 1) as f64 + 0.5 + f)
-        };
-        let segments = |gs: &[f64]| -> Vec<[(f64, f64); 2]> {
-            freqs
-                .iter()
-                .enumerate()
-                .filter_map(|(c, f)| {
-                    let k = h.freqs_hz.iter().position(|x| x.to_bits() == f.to_bits())?;
-                    let c = c as f64;
-                    y_of(gs[k]).map(|y| [(c + 0.05, y), (c + 0.95, y)])
-                })
-                .collect()
-        };
-        for (name, gammas, dash) in [
-            (
-                "bouncing-bed onset, close packing (eq. 6.11-6.13)",
-                Some(&p.close_packing_gamma),
-                LineDash::Long,
-            ),
-            (
-                "bouncing-bed onset, loose packing",
-                p.loose_packing_gamma.as_ref(),
-                LineDash::Short,
-            ),
-        ] {
-            let Some(gammas) = gammas else { continue };
-            let segments = segments(gammas);
-            if !segments.is_empty() {
-                overlays.push(HeatOverlay {
-                    name: name.into(),
-                    segments,
-                    color: RgbColor(230, 30, 30),
-                    dash,
-                });
-            }
-        }
-    }
+    let (cells, hi) = map_cells(rows, &freqs, &gammas);
+    let overlays = prediction.map_or_else(Vec::new, |p| {
+        onset_overlays(p, &h.grid.freqs_hz, &freqs, &gammas)
+    });
     HeatMap {
         title: format!("{what}: efficiency and motional phase"),
         x_label: "drive frequency (Hz)".into(),
@@ -225,4 +163,97 @@ fn efficiency_map(
         overlays,
         footnote: "phase (a heuristic, vlab::study::phases): S solid-like, LF/GF local/global fluidisation, BB bouncing bed, C convection/Leidenfrost; rig: beyond the rig".into(),
     }
+}
+
+/// The map's cells (column: frequency in `freqs`, row: Γ in `gammas`) with
+/// the phase's tag and the efficiency, or why there is none; and the largest
+/// efficiency.
+fn map_cells(rows: &[&ConditionSummary], freqs: &[f64], gammas: &[f64]) -> (Vec<HeatCell>, f64) {
+    let mut cells = Vec::new();
+    let mut hi: f64 = 0.0;
+    for r in rows {
+        let col = freqs
+            .iter()
+            .position(|f| f.to_bits() == r.freq_hz.to_bits());
+        let row = gammas.iter().position(|g| g.to_bits() == r.gamma.to_bits());
+        let (Some(col), Some(row)) = (col, row) else {
+            continue;
+        };
+        let (value, text) = if r.n > 0 {
+            hi = hi.max(r.efficiency);
+            let tag = r.phase.map_or("?", MotionalPhase::abbreviation);
+            (Some(r.efficiency), format!("{tag}\n{:.2}", r.efficiency))
+        } else if r.status == RowStatus::Unreachable {
+            (None, "rig".to_string())
+        } else {
+            (None, r.status.as_str().to_string())
+        };
+        cells.push(HeatCell {
+            col,
+            row,
+            value,
+            text,
+        });
+    }
+    (cells, hi)
+}
+
+/// The predicted bouncing-bed onsets `p` (one per frequency of the sweep's
+/// `sweep_freqs`) as a segment across each column of the map whose columns
+/// are `freqs` and rows `gammas` (log-interpolated between rows).
+fn onset_overlays(
+    p: &BouncingBedPrediction,
+    sweep_freqs: &[f64],
+    freqs: &[f64],
+    gammas: &[f64],
+) -> Vec<HeatOverlay> {
+    let mut overlays = Vec::new();
+    let lg: Vec<f64> = gammas.iter().map(|g| g.ln()).collect();
+    let y_of = |g: f64| -> Option<f64> {
+        let x = g.ln();
+        if lg.len() < 2 || x < lg[0] || x > lg[lg.len() - 1] {
+            return None;
+        }
+        let k = lg.partition_point(|&v| v <= x).clamp(1, lg.len() - 1);
+        let f = (x - lg[k - 1]) / (lg[k] - lg[k - 1]);
+        Some((k - 1) as f64 + 0.5 + f)
+    };
+    let segments = |gs: &[f64]| -> Vec<[(f64, f64); 2]> {
+        freqs
+            .iter()
+            .enumerate()
+            .filter_map(|(c, f)| {
+                let k = sweep_freqs
+                    .iter()
+                    .position(|x| x.to_bits() == f.to_bits())?;
+                let c = c as f64;
+                y_of(gs[k]).map(|y| [(c + 0.05, y), (c + 0.95, y)])
+            })
+            .collect()
+    };
+    for (name, gammas, dash) in [
+        (
+            "bouncing-bed onset, close packing (eq. 6.11-6.13)",
+            Some(&p.close_packing_gamma),
+            LineDash::Long,
+        ),
+        (
+            "bouncing-bed onset, loose packing",
+            p.loose_packing_gamma.as_ref(),
+            LineDash::Short,
+        ),
+    ] {
+        // Loose packing has no onset above its own fill (0.55).
+        let Some(gammas) = gammas else { continue };
+        let segments = segments(gammas);
+        if !segments.is_empty() {
+            overlays.push(HeatOverlay {
+                name: name.into(),
+                segments,
+                color: RgbColor(230, 30, 30),
+                dash,
+            });
+        }
+    }
+    overlays
 }

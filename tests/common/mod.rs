@@ -93,3 +93,60 @@ pub fn refuses_in(dir: &Scratch, args: &[&str], must_mention: &[&str]) -> String
     assert_eq!(files_below(&dir.0), before, "{args:?} wrote files");
     first
 }
+
+/// A small, quick damper (150 spheres of the thesis scene, settled for
+/// 0.02 s) driven `cycles` cycles of which the last `steady_cycles` are kept;
+/// `simulation` is more lines of its `[simulation]` table (or empty).
+pub fn small_scene(cycles: u32, steady_cycles: u32, simulation: &str) -> String {
+    format!(
+        "\n[particles]\ncount = 150\n[simulation]\nsettle_s = 0.02\n{simulation}\
+         [drive]\ncycles = {cycles}\nsteady_cycles = {steady_cycles}\n"
+    )
+}
+
+/// A tiny scene (30 spheres, 4 cycles) on which a sweep's mechanics take
+/// seconds.
+pub const TINY_SCENE: &str = r#"
+name = "tiny"
+[particles]
+count = 30
+[enclosure]
+inner_diameter_m = 0.02
+inner_length_m = 0.03
+[simulation]
+dt_s = 4e-6
+settle_s = 0.05
+[drive]
+cycles = 4
+steady_cycles = 2
+"#;
+
+/// Runs `vlab ARGS --out OUT` in `dir`, which must succeed, and returns the
+/// run's output and its `OUT/summary.json`.
+pub fn run_summary(dir: &Scratch, args: &[&str], out: &str) -> (Output, serde_json::Value) {
+    let mut all = args.to_vec();
+    all.extend(["--out", out]);
+    let o = vlab(&dir.0, &all);
+    assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+    let summary = json(&dir.path(&format!("{out}/summary.json")));
+    (o, summary)
+}
+
+/// The wall-clock keys of a shake's `summary.json` (they differ between two
+/// runs of the same physics).
+pub const TIMING_KEYS: [&str; 5] = [
+    "wall_time_s",
+    "particle_steps_per_s",
+    "settle_wall_time_s",
+    "rig_wall_time_s",
+    "threads",
+];
+
+/// `summary` without `keys`, each of which it must have.
+pub fn without_keys(mut summary: serde_json::Value, keys: &[&str]) -> serde_json::Value {
+    let obj = summary.as_object_mut().expect("a JSON object");
+    for key in keys {
+        assert!(obj.remove(*key).is_some(), "{key} missing");
+    }
+    summary
+}
