@@ -405,15 +405,17 @@ fn base64_decode(text: &str) -> Option<Vec<u8>> {
         return None;
     }
     let mut out = Vec::with_capacity(text.len() / 4 * 3);
-    for chunk in text.as_bytes().chunks(4) {
+    let chunks = text.len() / 4;
+    for (k, chunk) in text.as_bytes().chunks(4).enumerate() {
         let pad = chunk.iter().rev().take_while(|&&c| c == b'=').count();
-        if pad > 2 {
+        if pad > 2 || (pad > 0 && k + 1 != chunks) {
             return None;
         }
         let mut n = 0u32;
-        for &c in chunk {
+        for (i, &c) in chunk.iter().enumerate() {
+            // `=` only as the padding at the very end.
             let v = match c {
-                b'=' => 0,
+                b'=' if i >= 4 - pad => 0,
                 c => BASE64.iter().position(|&b| b == c)? as u32,
             };
             n = (n << 6) | v;
@@ -588,6 +590,7 @@ mod tests {
         }
         assert_eq!(base64_decode("Zm9v!"), None);
         assert_eq!(base64_decode("Zg=a"), None);
+        assert_eq!(base64_decode("Zg==Zm9v"), None);
     }
 
     #[test]
