@@ -13,13 +13,13 @@
 //! serde knows its keys and an accelerometer section cannot stand where a
 //! force section is expected; [`ChannelParams`] is the same channel with the
 //! quantity turned into data (its name, units and keys as text), made only by
-//! [`ChannelSpec::params`] and never read from a file, so that
-//! [`super::channel`], the DAQ and validation run one code path for both
+//! [`ChannelSpec::params`] and never read from a file, so that the channel
+//! (`channel.rs`), the DAQ and validation run one code path for both
 //! quantities. The channel's response and its checks live on
 //! [`ChannelParams`] alone.
 //!
-//! This file imports nothing else of the rig's specs: [`super::spec`] and
-//! [`super::drop_spec`] build on it.
+//! This file imports nothing else of the rig's specs: the shaker and drop
+//! rigs (`spec.rs`, `drop_spec.rs`) build on it.
 
 use std::f64::consts::PI;
 use std::fmt;
@@ -162,7 +162,8 @@ impl<Q: ChannelQuantity> ChannelSpec<Q> {
     }
 }
 
-/// One measurement channel, in common terms: what [`super::channel`] runs.
+/// One measurement channel, in common terms: what the channel (`channel.rs`)
+/// runs, made by [`ChannelSpec::params`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChannelParams {
     /// Trace channel name (`acceleration`, `force`).

@@ -26,9 +26,9 @@
 //!
 //! # Across frequency
 //!
-//! [`super::phase_point::estimate_phase_error`] measures one point (that file
-//! runs Yang's spectra, so this one stays below [`super::power`], which
-//! applies the table); [`PhaseCalibration::from_points`]
+//! `estimate_phase_error` (`phase_point.rs`) measures one point (that file
+//! runs Yang's spectra, so this one stays below Yang's power, `power.rs`,
+//! which applies the table); [`PhaseCalibration::from_points`]
 //! averages the points of each frequency over the amplitudes tested (the
 //! thesis' amplitude-averaged error) into a table and, from two or more
 //! frequencies, fits the chain's high-pass + skew model

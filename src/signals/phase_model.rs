@@ -25,7 +25,8 @@
 //! fitted model puts it on one channel (the force channel when it leads).
 //!
 //! [`wrap_phase_rad`], the wrap of every phase difference to (-pi, pi], lives
-//! here, below both [`super::power`] and [`super::calibration`].
+//! here, below both Yang's power (`power.rs`) and the calibration table
+//! (`calibration.rs`), which import it.
 
 use std::f64::consts::PI;
 

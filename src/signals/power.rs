@@ -56,7 +56,7 @@
 //! active record may lie anywhere) but still reports whether the record looks
 //! reversed; `vlab analyze` and a measured shake detect. On the empty
 //! enclosure the same flip reads as a phase error near `pi`
-//! ([`super::calibration::estimate_phase_error`]).
+//! (`estimate_phase_error`, `phase_point.rs`).
 //!
 //! For signals whose content lies on bins below Nyquist, `P` equals the
 //! time-domain mean of `f(t) v(t)` over the window ([`mean_power_time_domain`]),

@@ -6,9 +6,9 @@
 //! is not assumed to be uniformly sampled, so that a record with a missing
 //! stretch or a time axis that runs backwards (two runs concatenated, a
 //! restart) can be refused with the line at fault rather than misread.
-//! [`Table::uniform_step_s`] is that check. Read one with
-//! [`super::table_file::read_table`]: a CSV through [`super::csv`], the text
-//! LAMMPS and LIGGGHTS write through [`super::lammps`].
+//! [`Table::uniform_step_s`] is that check. Read one with `read_table`
+//! (`table_file.rs`): a CSV through the CSV reader (`csv.rs`), the text
+//! LAMMPS and LIGGGHTS write through `lammps.rs`.
 //!
 //! The time column is the one the caller names, else the first whose name is
 //! a time name (`t`, `time`, `Time`, `TIME`, `time_s`, `v_time`, a CSV's

@@ -21,7 +21,7 @@ use super::table::Table;
 /// [`super::csv`], anything else as LAMMPS / LIGGGHTS text through
 /// [`super::lammps`]. Its time column is the one called `time_column` when
 /// given (exactly as written, without a CSV header's unit), else the first of
-/// [`super::table::TIME_NAMES`].
+/// [`super::column_names::TIME_NAMES`].
 pub fn read_table(path: &Path, time_column: Option<&str>) -> Result<Table> {
     let is_csv = path
         .extension()
