@@ -351,6 +351,106 @@ fn unusable_records_are_refused_with_the_reason() {
     );
 }
 
+/// The time column under each name labs give it, or named with `--column
+/// time=NAME` wherever it stands; an unknown name is refused with the names
+/// vlab knows and the flag that names it.
+#[test]
+fn time_columns_by_their_common_names_or_named() {
+    let dir = Scratch::new("replay-time");
+    let rows = rows(25e-6, 4.0);
+    let csv = |header: &str, time_at: usize| {
+        let mut s = format!("{header}\n");
+        for (t, v, _, f) in &rows {
+            let mut cells = vec![v.to_string(), f.to_string()];
+            cells.insert(time_at, t.to_string());
+            let _ = writeln!(s, "{}", cells.join(","));
+        }
+        s
+    };
+    let truth = truth_w();
+    for (k, name) in ["t", "time", "Time", "time_s", "time [s]", "TIME"]
+        .into_iter()
+        .enumerate()
+    {
+        let file = format!("r{k}.csv");
+        let header = format!("{name},enclosure_velocity [m/s],particle_force_axial [N]");
+        dir.write(&file, &csv(&header, 0));
+        let out = format!("o{k}");
+        let o = vlab(
+            &dir.0,
+            &[
+                "replay", &file, "--rig", "ideal", "--freq", "40", "--out", &out,
+            ],
+        );
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let s = json(&dir.path(&format!("{out}/summary.json")));
+        assert_eq!(s["columns"]["time"], name);
+        let t = s["truth"]["power_w"].as_f64().expect("truth");
+        assert!((t / truth - 1.0).abs() < 1e-4, "{name}: {t} vs {truth}");
+    }
+    // Named on the command line, in the middle of the header.
+    dir.write(
+        "stamp.csv",
+        &csv(
+            "enclosure_velocity [m/s],stamp [s],particle_force_axial [N]",
+            1,
+        ),
+    );
+    let o = vlab(
+        &dir.0,
+        &[
+            "replay",
+            "stamp.csv",
+            "--rig",
+            "ideal",
+            "--freq",
+            "40",
+            "--column",
+            "time=stamp",
+            "--out",
+            "o-stamp",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = json(&dir.path("o-stamp/summary.json"));
+    assert_eq!(s["columns"]["time"], "stamp [s]");
+    let t = s["truth"]["power_w"].as_f64().expect("truth");
+    assert!((t / truth - 1.0).abs() < 1e-4, "stamp: {t} vs {truth}");
+    // Not a name vlab knows: refused with the names it knows and the flag.
+    refuses_in(
+        &dir,
+        &["replay", "stamp.csv", "--out", "o"],
+        &[
+            "no time column among [enclosure_velocity, stamp, particle_force_axial]",
+            "t, time, time_s or t_s",
+            "'time [s]'",
+            "--column time=NAME",
+        ],
+    );
+    refuses_in(
+        &dir,
+        &[
+            "replay",
+            "stamp.csv",
+            "--column",
+            "time=clock",
+            "--out",
+            "o",
+        ],
+        &["no column 'clock' (given as the time column)", "stamp"],
+    );
+    // LAMMPS text: a time column under its own name.
+    dir.write("clock.txt", "step clock v f\n1 0 1 2\n2 1 1 2\n");
+    refuses_in(
+        &dir,
+        &["replay", "clock.txt", "--out", "o"],
+        &[
+            "no time column among [step, clock, v, f]",
+            "--column time=NAME",
+        ],
+    );
+}
+
 /// A small damper shaken through the thesis rig, prescribed drive; its own
 /// kinematics.csv replayed through the same rig gives the
 /// shake's measurement back, and the record's truth is the DEM's input work.

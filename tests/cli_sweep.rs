@@ -344,31 +344,24 @@ fn shake_dump_is_readable_vtk_and_snapshots_are_drawn() {
 }
 
 /// Points, point-data names and the summed dissipation rate of a .vtp file,
-/// read back through vtkio.
+/// read back through the dump's own reader.
 fn vlab_vtk(path: &Path) -> (usize, Vec<String>, f64) {
-    use vtkio::model::{Attribute, DataSet, Piece};
-    let vtk = vtkio::Vtk::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let DataSet::PolyData { pieces, .. } = vtk.data else {
-        panic!("not poly data");
-    };
-    let Some(Piece::Inline(p)) = pieces.into_iter().next() else {
-        panic!("no inline piece");
-    };
-    let n = p.points.len() / 3;
-    let mut names = Vec::new();
-    let mut rate = 0.0;
-    for a in &p.data.point {
-        if let Attribute::DataArray(d) = a {
-            names.push(d.name.clone());
-            if d.name == "dissipation_rate_w" {
-                rate = d
-                    .data
-                    .clone()
-                    .into_vec::<f64>()
-                    .map(|v| v.iter().sum())
-                    .unwrap_or(0.0);
-            }
-        }
-    }
-    (n, names, rate)
+    let vtk = vlab::export::vtk_dump::read_vtp(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let points = vtk
+        .arrays
+        .iter()
+        .find(|a| a.section == "Points")
+        .expect("points");
+    assert_eq!(points.values.len(), 3 * vtk.n_points);
+    let names = vtk
+        .arrays
+        .iter()
+        .filter(|a| a.section == "PointData")
+        .map(|a| a.name.clone())
+        .collect();
+    let rate = vtk
+        .point_data("dissipation_rate_w")
+        .map_or(0.0, |a| a.values.iter().sum());
+    (vtk.n_points, names, rate)
 }

@@ -17,7 +17,7 @@ use std::error::Error;
 use vlab::experiment::replay::ReplayOption;
 use vlab::rig::RigError;
 use vlab::scene::SceneError;
-use vlab::signals::{CsvErrorKind, SignalsError};
+use vlab::signals::{CsvErrorKind, RecordErrorKind, SignalsError};
 use vlab::study::sweep::SweepError;
 
 /// The flags that take the advice of `err` (of the first cause that gives
@@ -88,6 +88,16 @@ fn signals_hint(e: &SignalsError) -> Option<&'static str> {
             parameter: "freq_hz",
             ..
         } => Some("--freq HZ"),
+        // Only a record of named columns (`vlab replay`) looks for its time
+        // column by name.
+        SignalsError::Csv {
+            kind: CsvErrorKind::NoTimeColumn { .. },
+            ..
+        }
+        | SignalsError::Record {
+            kind: RecordErrorKind::NoTimeColumn { .. },
+            ..
+        } => Some("--column time=NAME"),
         _ => None,
     }
 }

@@ -47,6 +47,7 @@ pub struct ReplayArgs {
     #[arg(long, value_name = "N")]
     steady_cycles: Option<u32>,
     /// A column of the record by role, when its name is not one vlab knows:
+    /// time=NAME (s; known: t, time, time_s, t_s in any case, 'time [s]'),
     /// force=NAME (the particles' force on the enclosure, N), velocity=NAME (m/s),
     /// displacement=NAME (m), acceleration=NAME (m/s^2). Repeatable.
     #[arg(long = "column", value_name = "ROLE=NAME")]
@@ -75,12 +76,13 @@ fn column_map(flags: &[String]) -> Result<ColumnMap> {
             bail!("--column = '{flag}': must be ROLE=NAME, e.g. force=particle_force_axial");
         };
         let slot = match role.trim() {
+            "time" => &mut map.time,
             "force" => &mut map.force,
             "velocity" => &mut map.velocity,
             "displacement" => &mut map.displacement,
             "acceleration" => &mut map.acceleration,
             other => bail!(
-                "--column = '{flag}': role '{other}' must be force, velocity, displacement or acceleration"
+                "--column = '{flag}': role '{other}' must be time, force, velocity, displacement or acceleration"
             ),
         };
         if name.trim().is_empty() {

@@ -8,6 +8,9 @@
 //! the axis), sampled at the DEM step or averaged over windows: vlab's own
 //! `kinematics.csv`, a plain CSV with named columns, or the text LAMMPS and
 //! LIGGGHTS `fix ave/time` / `fix print` write ([`crate::signals::table`]).
+//! Its time column (s) is found by name (`t`, `time`, `Time`, `TIME`,
+//! `time_s`, a CSV's `time [s]`, LAMMPS' `v_time`) or named by the caller
+//! ([`ColumnMap::time`]).
 //!
 //! The rig then does what it does in a shake, with the recorded motion as a
 //! prescribed drive ([`RecordedMotion`]): every push step the transducer
@@ -68,7 +71,7 @@ use crate::rig::{
     transducer_force_n,
 };
 use crate::scene::{Orientation, Scene, SceneError};
-use crate::signals::lammps::strip_lammps_prefix;
+use crate::signals::column_names::strip_lammps_prefix;
 use crate::signals::{
     Channel, PhaseCalibration, Table, Trace, TraceMetadata, efficiency, max_energy_per_cycle_j,
     read_table,
@@ -98,9 +101,12 @@ pub const DISPLACEMENT_NAMES: [&str; 2] = ["enclosure_displacement", "displaceme
 pub const ACCELERATION_NAMES: [&str; 2] = ["enclosure_acceleration", "acceleration"];
 
 /// Columns named by the caller, overriding the names above (`None`: found by
-/// name).
+/// name; time by [`crate::signals::column_names::TIME_NAMES`]).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ColumnMap {
+    /// The time column (s), exactly as written (a CSV header's name without
+    /// its unit, or the whole cell).
+    pub time: Option<String>,
     pub force: Option<String>,
     pub velocity: Option<String>,
     pub displacement: Option<String>,
@@ -218,12 +224,14 @@ pub fn read_enclosure_record(
     path: &Path,
     names: &ColumnMap,
 ) -> Result<EnclosureRecord, SceneError> {
-    let table = read_table(path)?;
+    let table = read_table(path, names.time.as_deref())?;
     EnclosureRecord::from_table(table, names)
 }
 
 impl EnclosureRecord {
-    /// Picks the columns of `table` and checks its time axis.
+    /// Picks the columns of `table` and checks its time axis. The time column
+    /// is the one `table` was read with ([`read_enclosure_record`] reads it
+    /// with `names.time`).
     pub fn from_table(table: Table, names: &ColumnMap) -> Result<EnclosureRecord, SceneError> {
         let refuse = |problem: String| SceneError::Record {
             path: table.path.clone(),

@@ -33,10 +33,11 @@
 //! [`MeasurementChannel::push`] does O(1) work and does not allocate once
 //! [`MeasurementChannel::reserve`] has sized the record.
 
+use super::channel_spec::{ChannelParams, Sampling};
 use super::error::{InvalidParameter, RigError, positive};
 use super::filter::{Biquad, Cascade};
 use super::noise::GaussianNoise;
-use super::spec::{ChannelParams, DaqSpec, Sampling};
+use super::spec::DaqSpec;
 
 /// The ADC's quantiser.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -338,7 +339,8 @@ mod tests {
 
     use super::*;
     use crate::rig::RigFile;
-    use crate::rig::spec::{LowPassSpec, RigSpec};
+    use crate::rig::channel_spec::LowPassSpec;
+    use crate::rig::spec::RigSpec;
 
     const DT: f64 = 1e-6;
 

@@ -6,17 +6,56 @@
 //! The keys carry the quantity's unit, as every rig-file key carries its
 //! unit: `[accelerometer]` has `sensitivity_v_per_mps2` and `noise_rms_mps2`,
 //! `[force]` has `sensitivity_v_per_n` and `noise_rms_n`; a key of the other
-//! quantity is refused as unknown. [`ChannelSpec::params`] gives the channel
-//! in common terms ([`ChannelParams`]), what [`super::channel`] runs.
+//! quantity is refused as unknown.
+//!
+//! Two types describe a channel, one derived from the other:
+//! [`ChannelSpec<Q>`] is the rig-file section, typed by its quantity so that
+//! serde knows its keys and an accelerometer section cannot stand where a
+//! force section is expected; [`ChannelParams`] is the same channel with the
+//! quantity turned into data (its name, units and keys as text), made only by
+//! [`ChannelSpec::params`] and never read from a file, so that the channel
+//! (`channel.rs`), the DAQ and validation run one code path for both
+//! quantities. The channel's response and its checks live on
+//! [`ChannelParams`] alone.
+//!
+//! This file imports nothing else of the rig's specs: the shaker and drop
+//! rigs (`spec.rs`, `drop_spec.rs`) build on it.
 
+use std::f64::consts::PI;
 use std::fmt;
 use std::marker::PhantomData;
 
+use realfft::num_complex::Complex64;
 use serde::de::{self, MapAccess, Visitor};
 use serde::ser::SerializeStruct;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use super::spec::{ChannelParams, LowPassSpec, Sampling};
+use super::error::{InvalidParameter, RigError, finite, non_negative, positive};
+use super::filter::{MAX_LOW_PASS_ORDER, butterworth_response, high_pass_response};
+
+/// How a channel turns its filtered signal into samples.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sampling {
+    /// Track-and-hold at the (skewed) sample instant, linearly interpolated
+    /// between DEM steps.
+    #[default]
+    Point,
+    /// Mean over the DEM steps nearest the (skewed) sample instant, a window
+    /// of one sample period centred on it: no phase lag, and an impulsive
+    /// force does not alias.
+    Boxcar,
+}
+
+/// An anti-alias low-pass.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LowPassSpec {
+    /// -3 dB cutoff, Hz.
+    pub cutoff_hz: f64,
+    /// Butterworth order, 1..=8.
+    pub order: u32,
+}
 
 /// The quantity a channel measures: its trace channel, units and rig-file keys.
 pub trait ChannelQuantity: Copy + Default + PartialEq + fmt::Debug {
@@ -120,6 +159,114 @@ impl<Q: ChannelQuantity> ChannelSpec<Q> {
             sample_skew_s: self.sample_skew_s,
             sampling: self.sampling,
         }
+    }
+}
+
+/// One measurement channel, in common terms: what the channel (`channel.rs`)
+/// runs, made by [`ChannelSpec::params`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelParams {
+    /// Trace channel name (`acceleration`, `force`).
+    pub name: &'static str,
+    /// Physical unit of the channel (`m/s^2`, `N`).
+    pub unit: &'static str,
+    /// Unit of the sensitivity (`V/(m/s^2)`, `V/N`).
+    pub sensitivity_unit: &'static str,
+    /// Rig-file section (`accelerometer`, `force`), for messages.
+    pub section: &'static str,
+    /// Keys of the sensitivity and the noise in that section.
+    pub sensitivity_key: &'static str,
+    pub noise_key: &'static str,
+    /// Transducer sensitivity, V per physical unit.
+    pub sensitivity: f64,
+    /// Noise rms in physical units, referred to the input.
+    pub noise_rms: f64,
+    /// Conditioner gain, V/V.
+    pub conditioner_gain: f64,
+    /// AC-coupling corner, Hz (0 = DC-coupled).
+    pub high_pass_hz: f64,
+    /// Anti-alias low-pass.
+    pub low_pass: Option<LowPassSpec>,
+    /// Sample skew, s.
+    pub sample_skew_s: f64,
+    /// Sampling method.
+    pub sampling: Sampling,
+}
+
+impl ChannelParams {
+    /// Volts at the ADC input per physical unit at the channel input
+    /// (sensitivity x conditioner gain).
+    pub fn volts_per_unit(&self) -> f64 {
+        self.sensitivity * self.conditioner_gain
+    }
+
+    /// The channel's analogue response at `freq_hz` (sampled at
+    /// `sample_rate_hz`): high-pass x low-pass x skew `exp(j w tau)` x (boxcar
+    /// sampling) `sin(pi f / fs) / (pi f / fs)`. Sensitivity and gain excluded:
+    /// 1 means the trace reproduces the input.
+    pub fn response(&self, freq_hz: f64, sample_rate_hz: f64) -> Complex64 {
+        let mut h = high_pass_response(self.high_pass_hz, freq_hz);
+        if let Some(lp) = self.low_pass {
+            h *= butterworth_response(lp.order, lp.cutoff_hz, freq_hz);
+        }
+        h *= Complex64::from_polar(1.0, 2.0 * PI * freq_hz * self.sample_skew_s);
+        if self.sampling == Sampling::Boxcar && freq_hz > 0.0 {
+            let x = PI * freq_hz / sample_rate_hz;
+            h *= x.sin() / x;
+        }
+        h
+    }
+
+    /// Checks every value for a DAQ sampling at `sample_rate_hz`; the error
+    /// names the rig-file key, its unit and valid range.
+    pub fn validate(&self, sample_rate_hz: f64) -> Result<(), RigError> {
+        let key = |k: &str| format!("{}.{k}", self.section);
+        positive(
+            &key(self.sensitivity_key),
+            self.sensitivity,
+            self.sensitivity_unit,
+        )?;
+        non_negative(&key(self.noise_key), self.noise_rms, self.unit)?;
+        positive(&key("conditioner_gain"), self.conditioner_gain, "V/V")?;
+        non_negative(&key("high_pass_hz"), self.high_pass_hz, "Hz")?;
+        if let Some(lp) = self.low_pass {
+            positive(&key("low_pass.cutoff_hz"), lp.cutoff_hz, "Hz")?;
+            if !(1..=MAX_LOW_PASS_ORDER).contains(&lp.order) {
+                return Err(RigError::from(InvalidParameter::new(
+                    key("low_pass.order"),
+                    lp.order,
+                    "",
+                    format!("an integer in 1..={MAX_LOW_PASS_ORDER}"),
+                )));
+            }
+            if lp.cutoff_hz <= self.high_pass_hz {
+                return Err(RigError::from(InvalidParameter::new(
+                    key("low_pass.cutoff_hz"),
+                    lp.cutoff_hz,
+                    "Hz",
+                    format!(
+                        "above the high-pass corner {} Hz ({})",
+                        self.high_pass_hz,
+                        key("high_pass_hz")
+                    ),
+                )));
+            }
+        }
+        finite(&key("sample_skew_s"), self.sample_skew_s, "s")?;
+        let period = 1.0 / sample_rate_hz;
+        if self.sample_skew_s.abs() >= 0.5 * period {
+            return Err(RigError::from(InvalidParameter::new(
+                key("sample_skew_s"),
+                self.sample_skew_s,
+                "s",
+                format!(
+                    "less than half a sample period ({} s at daq.sample_rate_hz = {} Hz) in magnitude",
+                    0.5 * period,
+                    sample_rate_hz
+                ),
+            )));
+        }
+        Ok(())
     }
 }
 

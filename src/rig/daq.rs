@@ -13,10 +13,11 @@
 use serde_json::json;
 
 use super::channel::MeasurementChannel;
+use super::channel_spec::{ChannelParams, Sampling};
 use super::error::{RigError, non_negative};
 use super::file::RigFile;
 use super::noise::GaussianNoise;
-use super::spec::{ChannelParams, RigSpec, Sampling};
+use super::spec::RigSpec;
 use crate::signals::{Sensitivity, Trace, TraceMetadata};
 use crate::warning::RunWarning;
 

@@ -17,11 +17,11 @@ use super::file::RigFile;
 use serde_json::json;
 
 use super::channel::MeasurementChannel;
+use super::channel_spec::Sampling;
 use super::drop_spec::DropRigSpec;
 use super::error::RigError;
 use super::noise::GaussianNoise;
 use super::plate::Plate;
-use super::spec::Sampling;
 use crate::signals::{Sensitivity, Trace, TraceMetadata};
 
 /// Name of the force channel in a drop record.

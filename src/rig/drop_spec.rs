@@ -13,9 +13,10 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::channel_spec::ChannelParams;
 use super::error::{RigError, positive};
 use super::file::{RigFile, RigKind, check_header, drop_test_kind};
-use super::spec::{ChannelParams, DaqSpec, ForceSpec};
+use super::spec::{DaqSpec, ForceSpec};
 use crate::validation::{Bound, in_range};
 
 /// Name of the built-in drop rig.

@@ -6,6 +6,9 @@
 //!   strict keys, validation ([`RigFile`]);
 //! - [`spec`]: shaker rigs (`kind = "shaker"`) and the built-in rigs
 //!   `thesis-shaker` (default) and `ideal`; the model's own phase error;
+//! - [`channel_spec`]: one transducer channel as a rig file gives it
+//!   ([`ChannelSpec`]) and in common terms ([`ChannelParams`]), with its
+//!   response and checks;
 //! - [`motion`]: the one enclosure-motion abstraction ([`EnclosureMotion`],
 //!   [`Kinematics`]), the prescribed sine of eq. 6.2 / 7.6 ([`SineMotion`])
 //!   and a recorded motion replayed ([`RecordedMotion`], `vlab replay`);
@@ -49,7 +52,9 @@ pub mod spec;
 pub mod transducer;
 
 pub use channel::{Adc, MeasurementChannel};
-pub use channel_spec::{Acceleration, ChannelQuantity, ChannelSpec, Force};
+pub use channel_spec::{
+    Acceleration, ChannelParams, ChannelQuantity, ChannelSpec, Force, LowPassSpec, Sampling,
+};
 pub use daq::{ACCEL_CHANNEL, ChannelReport, Daq, DaqReport, FORCE_CHANNEL};
 pub use drop_rig::{DROP_FORCE_CHANNEL, DropRig, DropRigReport};
 pub use drop_spec::{DROP_RIG, DropRigSpec, MountSpec, PlateSpec, RecordSpec};
@@ -59,7 +64,7 @@ pub use motion::{EnclosureMotion, Kinematics, RecordedMotion, SineMotion};
 pub use plate::Plate;
 pub use shaker::{ElectrodynamicShaker, Shaker, ShakerReport, check_limits};
 pub use spec::{
-    AccelerometerSpec, ChannelParams, DEFAULT_RIG, DaqSpec, ElectrodynamicSpec, EnclosureSpec,
-    ForceSpec, LowPassSpec, RigSpec, Sampling, ShakerKind, ShakerSpec,
+    AccelerometerSpec, DEFAULT_RIG, DaqSpec, ElectrodynamicSpec, EnclosureSpec, ForceSpec, RigSpec,
+    ShakerKind, ShakerSpec,
 };
 pub use transducer::transducer_force_n;

@@ -20,9 +20,13 @@
 //!   [`TraceMetadata`]); other comment lines are ignored.
 //! - A header whose cells are `name [unit]`: the unit in square brackets after
 //!   the name (`force [N]`, `acceleration [m/s^2]`; `gain []` for an empty
-//!   unit). The first column is time in seconds: `time [s]` (also read:
-//!   `t [s]`, `time_s`, `t_s`). A header cell without brackets is read as a
-//!   name with an empty unit, so plain lab headers such as `force_n` load.
+//!   unit). The first column is time in seconds: `time [s]` (also read: `t`,
+//!   `time`, `Time`, `TIME`, `time_s`, `t_s`, any of them with the unit
+//!   `[s]`; see [`super::column_names`]). A header cell without brackets is
+//!   read as a name with an empty unit, so plain lab headers such as
+//!   `force_n` load. A record read as a [`Table`] ([`read_csv_table`]) may
+//!   have its time column anywhere, found by those names or named by the
+//!   caller.
 //! - One row per sample, comma-separated, no quoting (a channel name or unit
 //!   that would need quotes is refused). Samples are written with Rust's
 //!   shortest round-trip formatting (`{}`), so reading back gives
@@ -74,6 +78,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
 
+use super::column_names::{is_time_name, time_column_index};
 use super::error::{CsvErrorKind, InvalidParameter, Result, SignalsError};
 use super::table::{Table, TableFormat};
 use super::trace::{Channel, Trace, TraceMetadata};
@@ -279,7 +284,7 @@ fn parse_csv(text: &str) -> Result<Trace, ParseError> {
 
 /// Parses CSV text into a trace; errors carry one-based line numbers.
 fn parse_csv_with(text: &str, options: &CsvReadOptions) -> Result<Trace, ParseError> {
-    let raw = parse_rows(text, options)?;
+    let raw = parse_rows(text, options, TimeAt::First)?;
     let header_line = raw.header_line;
     if raw.time.len() < 2 {
         return Err((
@@ -322,15 +327,24 @@ fn parse_csv_with(text: &str, options: &CsvReadOptions) -> Result<Trace, ParseEr
 /// Reads a CSV file as a [`Table`]: the same dialects, header and comments as
 /// [`read_csv_with`], but the time column is kept as written, not checked
 /// against a uniform grid (a record from another program, whose time axis the
-/// caller validates, e.g. with [`Table::uniform_step_s`]).
-pub fn read_csv_table(path: &Path, options: &CsvReadOptions) -> Result<Table> {
+/// caller validates, e.g. with [`Table::uniform_step_s`]). The time column
+/// may stand anywhere: it is the one called `time_column` when given (its
+/// name without the unit, or the whole header cell), else the first of a time
+/// name ([`super::column_names`]); its unit, when the header gives one, must
+/// be `s`.
+pub fn read_csv_table(
+    path: &Path,
+    options: &CsvReadOptions,
+    time_column: Option<&str>,
+) -> Result<Table> {
     let csv_err = |line, kind| SignalsError::Csv {
         path: path.to_path_buf(),
         line,
         kind,
     };
     let text = read_utf8(path)?;
-    let raw = parse_rows(&text, options).map_err(|(line, kind)| csv_err(line, kind))?;
+    let raw = parse_rows(&text, options, TimeAt::Named(time_column))
+        .map_err(|(line, kind)| csv_err(line, kind))?;
     let time_header = raw.time_header.clone();
     let columns = raw
         .columns
@@ -373,9 +387,19 @@ struct RawRows {
     row_lines: Vec<usize>,
 }
 
+/// Which column of a CSV holds time.
+#[derive(Debug, Clone, Copy)]
+enum TimeAt<'a> {
+    /// The first, which must have a time name (a vlab trace).
+    First,
+    /// The one of the name given, else the first of a time name (a record of
+    /// named columns).
+    Named(Option<&'a str>),
+}
+
 /// Parses CSV text of any dialect into its rows; errors carry one-based line
 /// numbers. The time axis is not checked here.
-fn parse_rows(text: &str, options: &CsvReadOptions) -> Result<RawRows, ParseError> {
+fn parse_rows(text: &str, options: &CsvReadOptions, time: TimeAt) -> Result<RawRows, ParseError> {
     if let Some(d) = options.delimiter
         && !DELIMITERS.contains(&d)
     {
@@ -387,14 +411,76 @@ fn parse_rows(text: &str, options: &CsvReadOptions) -> Result<RawRows, ParseErro
         ));
     }
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let lead = leading_block(text)?;
+    let (kept, record_lines) = kept_records(&text[lead.offset..], lead.header_line)?;
+    let named = options.delimiter.or(lead.sep);
+    let delimiter = match named {
+        Some(d) => d,
+        None => detect_delimiter(lead.header_line, &kept)?,
+    };
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .delimiter(delimiter)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(kept.as_bytes());
+    let mut rows = Rows {
+        mark: DecimalMark::new(options.decimal_comma),
+        detected_comma: named.is_none() && delimiter == b',',
+        header: None,
+        time: Vec::new(),
+        data: Vec::new(),
+        row_lines: Vec::new(),
+    };
+    let mut record = csv::StringRecord::new();
+    for &n in &record_lines {
+        match reader.read_record(&mut record) {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => {
+                return Err((
+                    n,
+                    CsvErrorKind::Syntax {
+                        problem: e.to_string(),
+                    },
+                ));
+            }
+        }
+        rows.record(n, &record, time)?;
+    }
+    let Some(header) = rows.header else {
+        return Err((lead.header_line, CsvErrorKind::Empty));
+    };
+    Ok(RawRows {
+        header_line: lead.header_line,
+        time_header: header.time_header,
+        columns: header.columns,
+        time: rows.time,
+        data: rows.data,
+        declared: lead.declared,
+        row_lines: rows.row_lines,
+    })
+}
 
-    // The leading block, read line by line: blank lines, `# key: value`
-    // comments, a spreadsheet's `sep=` line. The header follows it.
+/// The block before a CSV's header: blank lines, `# key: value` comments, a
+/// spreadsheet's `sep=` line.
+struct Leading {
+    declared: Declared,
+    /// The separator a `sep=` line names.
+    sep: Option<u8>,
+    /// One-based line of the header.
+    header_line: usize,
+    /// Byte offset of the header line in the text.
+    offset: usize,
+}
+
+/// Reads the leading block of `text` line by line, up to the header.
+fn leading_block(text: &str) -> Result<Leading, ParseError> {
     let mut declared = Declared::default();
-    let mut sep_line = None;
+    let mut sep = None;
     let mut offset = 0;
     let mut line = 0;
-    let header_line = loop {
+    loop {
         let rest = &text[offset..];
         if rest.is_empty() {
             return Err((1, CsvErrorKind::Empty));
@@ -405,28 +491,35 @@ fn parse_rows(text: &str, options: &CsvReadOptions) -> Result<RawRows, ParseErro
         let trimmed = raw.trim();
         if trimmed.starts_with('#') {
             parse_comment(line, trimmed, &mut declared)?;
-        } else if let Some(sep) = raw.strip_prefix("sep=") {
-            sep_line = Some(match sep.as_bytes() {
+        } else if let Some(named) = raw.strip_prefix("sep=") {
+            sep = Some(match named.as_bytes() {
                 [d] if DELIMITERS.contains(d) => *d,
                 _ => {
                     return Err((
                         line,
                         CsvErrorKind::AmbiguousDelimiter {
-                            problem: format!("'sep={sep}' names no separator vlab reads"),
+                            problem: format!("'sep={named}' names no separator vlab reads"),
                         },
                     ));
                 }
             });
         } else if !trimmed.is_empty() {
-            break line;
+            return Ok(Leading {
+                declared,
+                sep,
+                header_line: line,
+                offset,
+            });
         }
         offset += end;
-    };
-    let body = &text[offset..];
+    }
+}
 
-    // The csv crate does not report reliable line numbers around comments and
-    // blank lines, so they are taken out here, one record per kept line, and
-    // each record's file line remembered.
+/// The lines from the header on, with comments and blank lines taken out:
+/// one record per kept line, and each record's file line. The csv crate does
+/// not report reliable line numbers around comments and blank lines, hence
+/// this pass.
+fn kept_records(body: &str, header_line: usize) -> Result<(String, Vec<usize>), ParseError> {
     let mut kept = String::with_capacity(body.len());
     let mut record_lines = Vec::new();
     for (k, l) in body.lines().enumerate() {
@@ -457,107 +550,96 @@ fn parse_rows(text: &str, options: &CsvReadOptions) -> Result<RawRows, ParseErro
         kept.push('\n');
         record_lines.push(n);
     }
+    Ok((kept, record_lines))
+}
 
-    let delimiter = match options.delimiter.or(sep_line) {
-        Some(d) => d,
-        None => detect_delimiter(header_line, &kept)?,
-    };
-    let detected_comma = options.delimiter.or(sep_line).is_none() && delimiter == b',';
+/// A CSV header as read: the data columns and where time is.
+struct Header {
+    /// (name, unit) per data column, in file order.
+    columns: Vec<(String, String)>,
+    /// Zero-based cell of the time column.
+    time_index: usize,
+    /// The time column's header cell.
+    time_header: String,
+}
 
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .delimiter(delimiter)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(kept.as_bytes());
+/// The header and rows read so far.
+struct Rows {
+    mark: DecimalMark,
+    /// The separator was detected as `,` (rows longer than the header then
+    /// suggest decimal commas).
+    detected_comma: bool,
+    header: Option<Header>,
+    time: Vec<f64>,
+    data: Vec<Vec<f64>>,
+    row_lines: Vec<usize>,
+}
 
-    let mut mark = DecimalMark::new(options.decimal_comma);
-    let mut columns: Option<Vec<(String, String)>> = None;
-    let mut time_header = String::new();
-    let mut time = Vec::new();
-    let mut row_lines = Vec::new();
-    let mut data: Vec<Vec<f64>> = Vec::new();
-    let mut record = csv::StringRecord::new();
-    for &n in &record_lines {
-        match reader.read_record(&mut record) {
-            Ok(true) => {}
-            Ok(false) => break,
-            Err(e) => {
-                return Err((
-                    n,
-                    CsvErrorKind::Syntax {
-                        problem: e.to_string(),
-                    },
-                ));
-            }
-        }
+impl Rows {
+    /// Takes record `record` of file line `n`: the header if none was read
+    /// yet, else a row of numbers.
+    fn record(
+        &mut self,
+        n: usize,
+        record: &csv::StringRecord,
+        time: TimeAt,
+    ) -> Result<(), ParseError> {
         // A spreadsheet's empty rows (";;;") are blank lines.
         if record.iter().all(str::is_empty) {
-            continue;
+            return Ok(());
         }
         // A separator closing every line leaves an empty last cell: drop it.
         let used = match record.len() {
             k if k > 1 && record[k - 1].is_empty() => k - 1,
             k => k,
         };
-        let cells = || record.iter().take(used);
-        let Some(columns) = &columns else {
-            let header: Vec<&str> = cells().collect();
-            let parsed = parse_header(n, &header)?;
-            time_header = header.first().copied().unwrap_or_default().to_string();
-            data = vec![Vec::new(); parsed.len()];
-            columns = Some(parsed);
-            continue;
+        let Some(header) = &self.header else {
+            let cells: Vec<&str> = record.iter().take(used).collect();
+            let header = parse_header(n, &cells, time)?;
+            self.data = vec![Vec::new(); header.columns.len()];
+            self.header = Some(header);
+            return Ok(());
         };
-        let n_cols = columns.len() + 1;
+        let n_cols = header.columns.len() + 1;
         if used != n_cols {
-            if detected_comma && used > n_cols {
-                return Err((
-                    n,
-                    CsvErrorKind::AmbiguousDelimiter {
-                        problem: format!(
-                            "the header splits into {n_cols} columns at ',' but this row into \
-                             {used} cells: numbers with decimal commas in a ','-separated file? \
-                             They cannot be told apart from the separators unless quoted"
-                        ),
-                    },
-                ));
-            }
-            return Err((
-                n,
-                CsvErrorKind::Ragged {
-                    expected: n_cols,
-                    got: used,
-                },
-            ));
+            return Err(ragged(n, n_cols, used, self.detected_comma));
         }
-        row_lines.push(n);
-        for (j, cell) in cells().enumerate() {
-            let header = if j == 0 {
-                "time"
+        self.row_lines.push(n);
+        for (j, cell) in record.iter().take(used).enumerate() {
+            if j == header.time_index {
+                let value = self.mark.parse(n, "time", cell)?;
+                self.time.push(value);
             } else {
-                columns[j - 1].0.as_str()
-            };
-            let value = mark.parse(n, header, cell)?;
-            if j == 0 {
-                time.push(value);
-            } else {
-                data[j - 1].push(value);
+                let k = if j < header.time_index { j } else { j - 1 };
+                let value = self.mark.parse(n, &header.columns[k].0, cell)?;
+                self.data[k].push(value);
             }
         }
+        Ok(())
     }
-    let Some(columns) = columns else {
-        return Err((header_line, CsvErrorKind::Empty));
-    };
-    Ok(RawRows {
-        header_line,
-        time_header,
-        columns,
-        time,
-        data,
-        declared,
-        row_lines,
-    })
+}
+
+/// A row of line `n` with `used` cells where the header has `n_cols`.
+fn ragged(n: usize, n_cols: usize, used: usize, detected_comma: bool) -> ParseError {
+    if detected_comma && used > n_cols {
+        return (
+            n,
+            CsvErrorKind::AmbiguousDelimiter {
+                problem: format!(
+                    "the header splits into {n_cols} columns at ',' but this row into \
+                     {used} cells: numbers with decimal commas in a ','-separated file? \
+                     They cannot be told apart from the separators unless quoted"
+                ),
+            },
+        );
+    }
+    (
+        n,
+        CsvErrorKind::Ragged {
+            expected: n_cols,
+            got: used,
+        },
+    )
 }
 
 /// How often `d` occurs in `line` outside double quotes.
@@ -742,26 +824,52 @@ fn parse_comment(line: usize, text: &str, declared: &mut Declared) -> Result<(),
     Ok(())
 }
 
-/// Splits the header cells into (name, unit) per data column, checking the
-/// time column.
-fn parse_header(line: usize, cells: &[&str]) -> Result<Vec<(String, String)>, ParseError> {
-    let first = cells.first().copied().unwrap_or_default();
-    let (time_name, time_unit) = split_name_unit(first);
-    let is_time = matches!(
-        (time_name.to_ascii_lowercase().as_str(), time_unit),
-        ("time" | "t", Some("s")) | ("time_s" | "t_s", None)
-    );
-    if !is_time {
+/// Splits the header cells into (name, unit) per data column and finds the
+/// time column (`time`), checking its unit.
+fn parse_header(line: usize, cells: &[&str], time: TimeAt) -> Result<Header, ParseError> {
+    let split: Vec<(&str, Option<&str>)> = cells.iter().map(|c| split_name_unit(c)).collect();
+    let names: Vec<&str> = split.iter().map(|&(name, _)| name).collect();
+    let time_index = match time {
+        TimeAt::First => {
+            if !names.first().is_some_and(|name| is_time_name(name)) {
+                return Err((
+                    line,
+                    CsvErrorKind::MissingTimeColumn {
+                        found: cells.first().copied().unwrap_or_default().to_string(),
+                    },
+                ));
+            }
+            0
+        }
+        TimeAt::Named(given) => time_column_index(&names, given)
+            .or_else(|| given.and_then(|g| cells.iter().position(|c| *c == g)))
+            .ok_or_else(|| {
+                (
+                    line,
+                    CsvErrorKind::NoTimeColumn {
+                        given: given.map(str::to_string),
+                        names: names.join(", "),
+                    },
+                )
+            })?,
+    };
+    if let (_, Some(unit)) = split[time_index]
+        && unit != "s"
+    {
         return Err((
             line,
-            CsvErrorKind::MissingTimeColumn {
-                found: first.to_string(),
+            CsvErrorKind::TimeUnit {
+                header: cells[time_index].to_string(),
+                unit: unit.to_string(),
             },
         ));
     }
     let mut seen = BTreeSet::new();
     let mut columns = Vec::new();
-    for (j, &cell) in cells.iter().enumerate().skip(1) {
+    for (j, &cell) in cells.iter().enumerate() {
+        if j == time_index {
+            continue;
+        }
         let column = j + 1;
         let bad = |problem: &str| {
             (
@@ -773,7 +881,7 @@ fn parse_header(line: usize, cells: &[&str]) -> Result<Vec<(String, String)>, Pa
                 },
             )
         };
-        let (name, unit) = split_name_unit(cell);
+        let (name, unit) = split[j];
         if name.is_empty() {
             return Err(bad("empty channel name"));
         }
@@ -785,7 +893,11 @@ fn parse_header(line: usize, cells: &[&str]) -> Result<Vec<(String, String)>, Pa
     if columns.is_empty() {
         return Err((line, CsvErrorKind::NoDataColumns));
     }
-    Ok(columns)
+    Ok(Header {
+        columns,
+        time_index,
+        time_header: cells[time_index].to_string(),
+    })
 }
 
 /// `"force [N]"` -> `("force", Some("N"))`; `"force_n"` -> `("force_n", None)`.
@@ -1010,6 +1122,53 @@ mod tests {
     }
 
     #[test]
+    fn time_column_by_any_common_name_in_seconds() {
+        for name in [
+            "t", "time", "Time", "TIME", "time_s", "t_s", "time [s]", "t [s]",
+        ] {
+            let t = parse_csv(&format!("{name},x [m]\n0,1\n0.5,2\n"))
+                .unwrap_or_else(|e| panic!("{name}: {}", e.1));
+            assert_eq!(t.sample_rate_hz, 2.0, "{name}");
+        }
+        let (line, k) = kind("time [ms],x\n0,1\n1,2\n");
+        assert_eq!(line, 1);
+        assert!(k.to_string().contains("'time [ms]' is in ms"), "{k}");
+        let (_, k) = kind("zeit,x\n0,1\n1,2\n");
+        assert!(
+            k.to_string().contains("'zeit'") && k.to_string().contains("t, time, time_s or t_s"),
+            "{k}"
+        );
+        // A record of named columns: time anywhere, found or named.
+        let text = "x [m],Time [s],stamp [s]\n1,0,5\n3,1,6\n";
+        let options = CsvReadOptions::default();
+        let raw = parse_rows(text, &options, TimeAt::Named(None)).expect("found");
+        assert_eq!(raw.time_header, "Time [s]");
+        assert_eq!(raw.time, vec![0.0, 1.0]);
+        assert_eq!(raw.data, vec![vec![1.0, 3.0], vec![5.0, 6.0]]);
+        for given in ["stamp", "stamp [s]"] {
+            let raw = parse_rows(text, &options, TimeAt::Named(Some(given))).expect("named");
+            assert_eq!(raw.time, vec![5.0, 6.0], "{given}");
+            assert_eq!(raw.columns[1].0, "Time");
+        }
+        let (_, k) = parse_rows(text, &options, TimeAt::Named(Some("x")))
+            .err()
+            .expect("in m");
+        assert!(k.to_string().contains("'x [m]' is in m"), "{k}");
+        let (_, k) = parse_rows(text, &options, TimeAt::Named(Some("clock")))
+            .err()
+            .expect("absent");
+        assert!(
+            k.to_string()
+                .contains("no column 'clock' (given as the time column) among [x, Time, stamp]"),
+            "{k}"
+        );
+        let (_, k) = parse_rows("a,b\n0,1\n", &options, TimeAt::Named(None))
+            .err()
+            .expect("none");
+        assert!(k.to_string().contains("no time column among [a, b]"), "{k}");
+    }
+
+    #[test]
     fn each_bad_input_has_its_error() {
         assert!(matches!(kind(""), (1, CsvErrorKind::Empty)));
         assert!(matches!(
@@ -1132,6 +1291,8 @@ mod tests {
     }
 
     /// Each dialect a lab exports, with what it must be read as when named.
+    /// A table of fixtures, one entry per dialect: its length is the number
+    /// of dialects, not steps to split.
     fn dialects() -> Vec<(&'static str, String, CsvReadOptions)> {
         let named = |d: u8, comma: bool| CsvReadOptions {
             delimiter: Some(d),

@@ -10,6 +10,7 @@
 use std::io;
 use std::path::PathBuf;
 
+use super::column_names::TIME_NAMES_TEXT;
 pub use crate::validation::InvalidParameter;
 
 /// Result alias used throughout `signals`.
@@ -220,10 +221,26 @@ pub enum CsvErrorKind {
     #[error("the file is empty (expected a header such as 'time [s],force [N]')")]
     Empty,
     /// The first column is not a time column.
-    #[error("first column is '{found}'; expected a time column 'time [s]' or 'time_s'")]
+    #[error("first column is '{found}'; expected a time column named {known}", known = TIME_NAMES_TEXT)]
     MissingTimeColumn {
         /// The header cell found.
         found: String,
+    },
+    /// A record has no time column (of a known name, or of the name given).
+    #[error("{}", no_time_column(.given.as_deref(), .names))]
+    NoTimeColumn {
+        /// The name the caller gave the time column, if any.
+        given: Option<String>,
+        /// The header's column names.
+        names: String,
+    },
+    /// The time column's unit is not seconds.
+    #[error("time column '{header}' is in {unit}; vlab reads time in s")]
+    TimeUnit {
+        /// The header cell.
+        header: String,
+        /// Its unit.
+        unit: String,
     },
     /// Only a time column.
     #[error("the header has no data columns after the time column")]
@@ -339,6 +356,30 @@ pub enum CsvErrorKind {
     },
 }
 
+/// A record's missing time column, of a known name or of the name `given`.
+fn no_time_column(given: Option<&str>, names: &str) -> String {
+    match given {
+        Some(given) => format!("no column '{given}' (given as the time column) among [{names}]"),
+        None => format!(
+            "no time column among [{names}]: vlab knows a time column by the names \
+             {TIME_NAMES_TEXT}, or by the name given as the time column"
+        ),
+    }
+}
+
+/// [`no_time_column`] for LAMMPS text, with how to make LAMMPS write time.
+fn no_lammps_time_column(given: Option<&str>, names: &str) -> String {
+    let message = no_time_column(given, names);
+    if given.is_some() {
+        return message;
+    }
+    format!(
+        "{message} (in LAMMPS: variable time equal time, and v_time among the fix's values; fix \
+         ave/time then gives each averaging window's centre); a step number alone does not say \
+         where in an averaging window a row lies"
+    )
+}
+
 /// `line N: ` for a line, nothing for the whole file (line 0).
 fn at_line(line: usize) -> String {
     if line == 0 {
@@ -405,13 +446,11 @@ pub enum RecordErrorKind {
         /// The last comment line before the data.
         last_comment: String,
     },
-    /// No column holds time.
-    #[error(
-        "no time column among [{names}]: name one 'time' (in LAMMPS: variable time equal time, and \
-         v_time among the fix's values; fix ave/time then gives each averaging window's centre); \
-         a step number alone does not say where in an averaging window a row lies"
-    )]
+    /// No column holds time (of a known name, or of the name given).
+    #[error("{}", no_lammps_time_column(.given.as_deref(), .names))]
     NoTimeColumn {
+        /// The name the caller gave the time column, if any.
+        given: Option<String>,
         /// The columns present.
         names: String,
     },

@@ -181,7 +181,43 @@ pub fn detect_impacts(
         });
     }
     all_finite("force", force)?;
-    let polarity_sign = match params.polarity {
+    let polarity_sign = polarity_sign(force, params.polarity);
+    let y: Vec<f64> = force.iter().map(|x| polarity_sign * x).collect();
+    let peak = y.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let noise_std_n = robust_std(force);
+    let threshold_n = threshold_n(params.threshold_n, peak, noise_std_n)?;
+    let (release_n, holdoff_s) = release_and_holdoff(params, threshold_n)?;
+    let crossings = Crossings {
+        y: &y,
+        force,
+        start_time_s,
+        dt_s: 1.0 / sample_rate_hz,
+        threshold_n,
+        release_n,
+        holdoff_samples: (holdoff_s * sample_rate_hz).ceil() as usize,
+    };
+    let impacts = crossings.impacts();
+    if impacts.is_empty() {
+        return Err(SignalsError::NoImpacts {
+            reason: format!(
+                "no rising crossing of threshold_n = {threshold_n} N (largest peak {peak} N)"
+            ),
+        });
+    }
+    Ok(ImpactDetection {
+        impacts,
+        threshold_n,
+        release_n,
+        holdoff_s,
+        polarity_sign,
+        noise_std_n,
+    })
+}
+
+/// +1 or -1: the sign that makes impacts positive (for `Auto`, the sign of
+/// the sample of largest magnitude).
+fn polarity_sign(force: &[f64], polarity: Polarity) -> f64 {
+    match polarity {
         Polarity::Positive => 1.0,
         Polarity::Negative => -1.0,
         Polarity::Auto => {
@@ -190,29 +226,33 @@ pub fn detect_impacts(
                 .fold(0.0f64, |m, &x| if x.abs() > m.abs() { x } else { m });
             if extreme < 0.0 { -1.0 } else { 1.0 }
         }
-    };
-    let y: Vec<f64> = force.iter().map(|x| polarity_sign * x).collect();
-    let peak = y.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let noise_std_n = robust_std(force);
+    }
+}
 
-    let threshold_n = match params.threshold_n {
-        Some(t) => positive_finite("threshold_n", t, "N")?,
-        None => {
-            let t = DEFAULT_THRESHOLD_FRACTION * peak;
-            if !(peak > 0.0 && t >= MIN_THRESHOLD_TO_NOISE * noise_std_n) {
-                return Err(SignalsError::NoImpacts {
-                    reason: format!(
-                        "the largest force peak, {peak} N, is {:.1} noise standard deviations \
-                         ({noise_std_n:.3e} N); the default threshold ({}% of it) must be at least \
-                         {MIN_THRESHOLD_TO_NOISE} of them. Give threshold_n if the record holds impacts.",
-                        peak / noise_std_n,
-                        DEFAULT_THRESHOLD_FRACTION * 100.0
-                    ),
-                });
-            }
-            t
-        }
-    };
+/// The threshold, N: `given`, else a fraction of the `peak` that must stand
+/// clear of the noise.
+fn threshold_n(given: Option<f64>, peak: f64, noise_std_n: f64) -> Result<f64> {
+    if let Some(t) = given {
+        return positive_finite("threshold_n", t, "N");
+    }
+    let t = DEFAULT_THRESHOLD_FRACTION * peak;
+    if !(peak > 0.0 && t >= MIN_THRESHOLD_TO_NOISE * noise_std_n) {
+        return Err(SignalsError::NoImpacts {
+            reason: format!(
+                "the largest force peak, {peak} N, is {:.1} noise standard deviations \
+                 ({noise_std_n:.3e} N); the default threshold ({}% of it) must be at least \
+                 {MIN_THRESHOLD_TO_NOISE} of them. Give threshold_n if the record holds impacts.",
+                peak / noise_std_n,
+                DEFAULT_THRESHOLD_FRACTION * 100.0
+            ),
+        });
+    }
+    Ok(t)
+}
+
+/// The release level (N, below `threshold_n`) and the hold-off (s), given or
+/// defaults.
+fn release_and_holdoff(params: &ImpactParams, threshold_n: f64) -> Result<(f64, f64)> {
     let release_n = match params.release_n {
         Some(r) if r.is_finite() && r < threshold_n => r,
         Some(r) => {
@@ -237,62 +277,75 @@ pub fn detect_impacts(
         }
         None => DEFAULT_HOLDOFF_S,
     };
+    Ok((release_n, holdoff_s))
+}
 
-    let dt = 1.0 / sample_rate_hz;
-    let holdoff_samples = (holdoff_s * sample_rate_hz).ceil() as usize;
-    let time = |i: f64| start_time_s + i * dt;
-    let mut impacts = Vec::new();
-    let mut current: Option<(usize, f64, usize)> = None; // onset index, onset time, peak index
-    let mut ready = false;
-    let mut holdoff_until = 0usize;
-    let finish = |onset_index: usize, onset_time_s: f64, p: usize| Impact {
-        onset_time_s,
-        peak_time_s: time(p as f64 + parabolic_offset(&y, p)),
-        peak_force_n: force[p],
-        onset_index,
-    };
-    for (i, &yi) in y.iter().enumerate() {
-        if let Some((onset_i, onset_t, ref mut p)) = current {
-            if yi > y[*p] {
-                *p = i;
+/// The crossing detector over a record made positive (`y`).
+struct Crossings<'a> {
+    y: &'a [f64],
+    /// The record as given, for the peak force.
+    force: &'a [f64],
+    start_time_s: f64,
+    dt_s: f64,
+    threshold_n: f64,
+    release_n: f64,
+    holdoff_samples: usize,
+}
+
+impl Crossings<'_> {
+    /// Time of the (fractional) sample index `i`, s.
+    fn time(&self, i: f64) -> f64 {
+        self.start_time_s + i * self.dt_s
+    }
+
+    /// An impact from its onset and the index of its largest sample.
+    fn finish(&self, onset_index: usize, onset_time_s: f64, p: usize) -> Impact {
+        Impact {
+            onset_time_s,
+            peak_time_s: self.time(p as f64 + parabolic_offset(self.y, p)),
+            peak_force_n: self.force[p],
+            onset_index,
+        }
+    }
+
+    /// Every impact: armed once below the release level and past the
+    /// hold-off, an impact starts at a rising crossing of the threshold
+    /// (interpolated between samples) and ends below the release level.
+    fn impacts(&self) -> Vec<Impact> {
+        let y = self.y;
+        let mut impacts = Vec::new();
+        let mut current: Option<(usize, f64, usize)> = None; // onset index, onset time, peak index
+        let mut ready = false;
+        let mut holdoff_until = 0usize;
+        for (i, &yi) in y.iter().enumerate() {
+            if let Some((onset_i, onset_t, ref mut p)) = current {
+                if yi > y[*p] {
+                    *p = i;
+                }
+                if yi < self.release_n {
+                    impacts.push(self.finish(onset_i, onset_t, *p));
+                    current = None;
+                }
+                continue;
             }
-            if yi < release_n {
-                impacts.push(finish(onset_i, onset_t, *p));
-                current = None;
+            if !ready {
+                ready = yi < self.release_n && i >= holdoff_until;
+                continue;
             }
-            continue;
+            if yi >= self.threshold_n {
+                // Armed implies y[i-1] < threshold <= y[i], and i >= 1.
+                let prev = y[i - 1];
+                let frac = (self.threshold_n - prev) / (yi - prev);
+                current = Some((i, self.time(i as f64 - 1.0 + frac), i));
+                holdoff_until = i + self.holdoff_samples;
+                ready = false;
+            }
         }
-        if !ready {
-            ready = yi < release_n && i >= holdoff_until;
-            continue;
+        if let Some((onset_i, onset_t, p)) = current {
+            impacts.push(self.finish(onset_i, onset_t, p));
         }
-        if yi >= threshold_n {
-            // Armed implies y[i-1] < threshold <= y[i], and i >= 1.
-            let prev = y[i - 1];
-            let frac = (threshold_n - prev) / (yi - prev);
-            current = Some((i, time(i as f64 - 1.0 + frac), i));
-            holdoff_until = i + holdoff_samples;
-            ready = false;
-        }
+        impacts
     }
-    if let Some((onset_i, onset_t, p)) = current {
-        impacts.push(finish(onset_i, onset_t, p));
-    }
-    if impacts.is_empty() {
-        return Err(SignalsError::NoImpacts {
-            reason: format!(
-                "no rising crossing of threshold_n = {threshold_n} N (largest peak {peak} N)"
-            ),
-        });
-    }
-    Ok(ImpactDetection {
-        impacts,
-        threshold_n,
-        release_n,
-        holdoff_s,
-        polarity_sign,
-        noise_std_n,
-    })
 }
 
 /// Sub-sample offset of the vertex of the parabola through y[p-1], y[p],

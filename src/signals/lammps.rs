@@ -17,8 +17,9 @@
 //!   (a `fix print` title without `#`). Names are kept as written (`v_time`).
 //! - Values are separated by spaces or tabs; every row has one value per
 //!   column; NaN and infinities are refused.
-//! - Time is the column named `time`, `t`, `time_s` or `t_s`, with or without
-//!   LAMMPS' `v_` / `c_` / `f_` prefix. A step column (`TimeStep`) alone is
+//! - Time is the column the caller names, else the first named `time`, `t`,
+//!   `time_s` or `t_s` in any case, with or without LAMMPS' `v_` / `c_` /
+//!   `f_` prefix ([`super::column_names`]). A step column (`TimeStep`) alone is
 //!   not read as time: a value `fix ave/time` averaged over `N` steps belongs
 //!   to the middle of its window, not to the step it is printed with; averaging
 //!   `time` itself (`variable time equal time`) gives exactly that middle.
@@ -32,31 +33,18 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use super::column_names::time_column_index;
 use super::csv::read_utf8;
 use super::error::{RecordErrorKind, Result, SignalsError};
 use super::table::{Table, TableFormat};
 use super::trace::{Channel, TraceMetadata};
 
-/// Names of a time column (after [`strip_lammps_prefix`], case-insensitive).
-pub const TIME_NAMES: [&str; 4] = ["time", "t", "time_s", "t_s"];
-
-/// `v_time` -> `time`, `c_force[3]` -> `force[3]`, `f_avg` -> `avg`; other
-/// names unchanged.
-pub fn strip_lammps_prefix(name: &str) -> &str {
-    for prefix in ["v_", "c_", "f_"] {
-        if let Some(rest) = name.strip_prefix(prefix)
-            && !rest.is_empty()
-        {
-            return rest;
-        }
-    }
-    name
-}
-
-/// Reads `fix ave/time` / `fix print` text (see the module docs).
-pub fn read_lammps_text(path: &Path) -> Result<Table> {
+/// Reads `fix ave/time` / `fix print` text (see the module docs); the time
+/// column is the one called `time_column` when given (exactly as written),
+/// else the first of a time name.
+pub fn read_lammps_text(path: &Path, time_column: Option<&str>) -> Result<Table> {
     let text = read_utf8(path)?;
-    parse(&text)
+    parse(&text, time_column)
         .map_err(|(line, kind)| SignalsError::Record {
             path: path.to_path_buf(),
             line,
@@ -70,153 +58,206 @@ pub fn read_lammps_text(path: &Path) -> Result<Table> {
 
 type ParseError = (usize, RecordErrorKind);
 
-fn parse(text: &str) -> std::result::Result<Table, ParseError> {
-    let mut comments = BTreeMap::new();
-    let mut last_comment: Option<(usize, String)> = None;
-    let mut names: Option<Vec<String>> = None;
-    let mut rows: Vec<Vec<f64>> = Vec::new();
-    let mut lines = Vec::new();
+fn parse(text: &str, time_column: Option<&str>) -> std::result::Result<Table, ParseError> {
+    let mut lines = Lines::default();
     for (k, raw) in text.lines().enumerate() {
         let n = k + 1;
         let line = raw.trim();
         if line.is_empty() {
             continue;
         }
-        if let Some(body) = line.strip_prefix('#') {
-            let body = body.trim();
-            if let Some((key, value)) = body.split_once(':')
-                && !key.trim().is_empty()
-                && !key.trim().contains(char::is_whitespace)
-            {
-                comments.insert(key.trim().to_string(), value.trim().to_string());
-            }
-            if rows.is_empty() {
-                last_comment = Some((n, body.to_string()));
-            }
-            continue;
+        match line.strip_prefix('#') {
+            Some(body) => lines.comment(n, body.trim()),
+            None => lines.data(n, line)?,
         }
+    }
+    lines.into_table(time_column)
+}
+
+/// The file as read so far, line by line.
+#[derive(Default)]
+struct Lines {
+    /// Every `# key: value` comment.
+    comments: BTreeMap<String, String>,
+    /// The last comment line before the first row: its line and text.
+    last_comment: Option<(usize, String)>,
+    /// The column names, once known.
+    names: Option<Vec<String>>,
+    rows: Vec<Vec<f64>>,
+    /// File line of each row.
+    lines: Vec<usize>,
+}
+
+impl Lines {
+    /// A comment line `# body`: kept as a declaration when it is `key: value`
+    /// (one word before the colon), and as the candidate names line while no
+    /// row has been read.
+    fn comment(&mut self, n: usize, body: &str) {
+        if let Some((key, value)) = body.split_once(':')
+            && !key.trim().is_empty()
+            && !key.trim().contains(char::is_whitespace)
+        {
+            self.comments
+                .insert(key.trim().to_string(), value.trim().to_string());
+        }
+        if self.rows.is_empty() {
+            self.last_comment = Some((n, body.to_string()));
+        }
+    }
+
+    /// A line that is not a comment: a `fix print` title naming the columns,
+    /// or a row of numbers (named by the last comment when nothing named the
+    /// columns yet).
+    fn data(&mut self, n: usize, line: &str) -> std::result::Result<(), ParseError> {
         for separator in [',', ';'] {
             if line.contains(separator) {
                 return Err((n, RecordErrorKind::Separator { separator }));
             }
         }
         let tokens: Vec<&str> = line.split_whitespace().collect();
-        let numeric = tokens.iter().all(|t| t.parse::<f64>().is_ok());
-        if names.is_none() {
-            if !numeric && rows.is_empty() {
-                names = Some(tokens.iter().map(|t| t.to_string()).collect());
-                check_names(n, names.as_deref().unwrap_or_default())?;
-                continue;
+        if self.names.is_none() {
+            let numeric = tokens.iter().all(|t| t.parse::<f64>().is_ok());
+            if !numeric && self.rows.is_empty() {
+                let names: Vec<String> = tokens.iter().map(|t| t.to_string()).collect();
+                check_names(n, &names)?;
+                self.names = Some(names);
+                return Ok(());
             }
-            let from_comment = last_comment.as_ref().map(|(line, body)| {
-                (
-                    *line,
-                    body.split_whitespace()
-                        .map(str::to_string)
-                        .collect::<Vec<_>>(),
-                )
-            });
-            match from_comment {
-                Some((line, words)) if words.first().is_some_and(|w| w == "Row") => {
-                    return Err((line, RecordErrorKind::VectorMode));
-                }
-                Some((line, words)) if words.len() == tokens.len() => {
-                    check_names(line, &words)?;
-                    names = Some(words);
-                }
-                _ => {
-                    return Err((
-                        n,
-                        RecordErrorKind::NoColumnNames {
-                            columns: tokens.len(),
-                            last_comment: last_comment.map(|(_, b)| b).unwrap_or_default(),
-                        },
-                    ));
-                }
-            }
+            self.names = Some(self.names_from_comment(n, tokens.len())?);
         }
-        let header = names.as_deref().unwrap_or_default();
-        if tokens.len() != header.len() {
-            return Err((
+        let header = self.names.as_deref().unwrap_or_default();
+        let row = parse_row(n, &tokens, header)?;
+        self.rows.push(row);
+        self.lines.push(n);
+        Ok(())
+    }
+
+    /// The names of the last comment line before the first row, which must
+    /// have one word per value of that row (line `n`, `columns` values).
+    fn names_from_comment(
+        &self,
+        n: usize,
+        columns: usize,
+    ) -> std::result::Result<Vec<String>, ParseError> {
+        let from_comment = self.last_comment.as_ref().map(|(line, body)| {
+            (
+                *line,
+                body.split_whitespace()
+                    .map(str::to_string)
+                    .collect::<Vec<_>>(),
+            )
+        });
+        match from_comment {
+            Some((line, words)) if words.first().is_some_and(|w| w == "Row") => {
+                Err((line, RecordErrorKind::VectorMode))
+            }
+            Some((line, words)) if words.len() == columns => {
+                check_names(line, &words)?;
+                Ok(words)
+            }
+            _ => Err((
                 n,
-                RecordErrorKind::Ragged {
-                    expected: header.len(),
-                    got: tokens.len(),
+                RecordErrorKind::NoColumnNames {
+                    columns,
+                    last_comment: self
+                        .last_comment
+                        .as_ref()
+                        .map(|(_, b)| b.clone())
+                        .unwrap_or_default(),
+                },
+            )),
+        }
+    }
+
+    /// The table: units checked, the time column picked.
+    fn into_table(self, time_column: Option<&str>) -> std::result::Result<Table, ParseError> {
+        if let Some(units) = self.comments.get("units")
+            && !units.eq_ignore_ascii_case("si")
+        {
+            return Err((
+                0,
+                RecordErrorKind::NotSi {
+                    units: units.clone(),
                 },
             ));
         }
-        let mut row = Vec::with_capacity(tokens.len());
-        for (token, column) in tokens.iter().zip(header) {
-            let value: f64 = token.parse().map_err(|_| {
-                (
-                    n,
-                    RecordErrorKind::NotANumber {
-                        column: column.clone(),
-                        text: token.to_string(),
-                    },
-                )
-            })?;
-            if !value.is_finite() {
-                return Err((
-                    n,
-                    RecordErrorKind::NonFinite {
-                        column: column.clone(),
-                        text: token.to_string(),
-                    },
-                ));
-            }
-            row.push(value);
+        let Some(names) = self.names else {
+            return Err((0, RecordErrorKind::Empty));
+        };
+        if self.rows.is_empty() {
+            return Err((0, RecordErrorKind::Empty));
         }
-        rows.push(row);
-        lines.push(n);
-    }
-    if let Some(units) = comments.get("units")
-        && !units.eq_ignore_ascii_case("si")
-    {
-        return Err((
-            0,
-            RecordErrorKind::NotSi {
-                units: units.clone(),
-            },
-        ));
-    }
-    let Some(names) = names else {
-        return Err((0, RecordErrorKind::Empty));
-    };
-    if rows.is_empty() {
-        return Err((0, RecordErrorKind::Empty));
-    }
-    let is_time = |name: &str| {
-        let bare = strip_lammps_prefix(name).to_ascii_lowercase();
-        TIME_NAMES.contains(&bare.as_str())
-    };
-    let Some(time_index) = names.iter().position(|n| is_time(n)) else {
-        return Err((
-            0,
-            RecordErrorKind::NoTimeColumn {
-                names: names.join(", "),
-            },
-        ));
-    };
-    let column = |j: usize| rows.iter().map(|r| r[j]).collect::<Vec<f64>>();
-    let columns = (0..names.len())
-        .filter(|&j| j != time_index)
-        .map(|j| Channel {
-            name: names[j].clone(),
-            unit: String::new(),
-            samples: column(j),
+        let bare: Vec<&str> = names.iter().map(String::as_str).collect();
+        let Some(time_index) = time_column_index(&bare, time_column) else {
+            return Err((
+                0,
+                RecordErrorKind::NoTimeColumn {
+                    given: time_column.map(str::to_string),
+                    names: names.join(", "),
+                },
+            ));
+        };
+        let rows = &self.rows;
+        let column = |j: usize| rows.iter().map(|r| r[j]).collect::<Vec<f64>>();
+        let columns = (0..names.len())
+            .filter(|&j| j != time_index)
+            .map(|j| Channel {
+                name: names[j].clone(),
+                unit: String::new(),
+                samples: column(j),
+            })
+            .collect();
+        Ok(Table {
+            path: Default::default(),
+            format: TableFormat::LammpsText,
+            time_column: names[time_index].clone(),
+            time_s: column(time_index),
+            columns,
+            metadata: TraceMetadata::default(),
+            comments: self.comments,
+            lines: self.lines,
         })
-        .collect();
-    Ok(Table {
-        path: Default::default(),
-        format: TableFormat::LammpsText,
-        time_column: names[time_index].clone(),
-        time_s: column(time_index),
-        columns,
-        metadata: TraceMetadata::default(),
-        comments,
-        lines,
-    })
+    }
+}
+
+/// One row of values, one per column of `header`, each a finite number.
+fn parse_row(
+    n: usize,
+    tokens: &[&str],
+    header: &[String],
+) -> std::result::Result<Vec<f64>, ParseError> {
+    if tokens.len() != header.len() {
+        return Err((
+            n,
+            RecordErrorKind::Ragged {
+                expected: header.len(),
+                got: tokens.len(),
+            },
+        ));
+    }
+    let mut row = Vec::with_capacity(tokens.len());
+    for (token, column) in tokens.iter().zip(header) {
+        let value: f64 = token.parse().map_err(|_| {
+            (
+                n,
+                RecordErrorKind::NotANumber {
+                    column: column.clone(),
+                    text: token.to_string(),
+                },
+            )
+        })?;
+        if !value.is_finite() {
+            return Err((
+                n,
+                RecordErrorKind::NonFinite {
+                    column: column.clone(),
+                    text: token.to_string(),
+                },
+            ));
+        }
+        row.push(value);
+    }
+    Ok(row)
 }
 
 /// Refuses a header of `fix ave/time` vector mode or with a name twice.
@@ -242,7 +283,7 @@ mod tests {
 
     #[test]
     fn reads_fix_ave_time_output() {
-        let t = parse(AVE_TIME).expect("parses");
+        let t = parse(AVE_TIME, None).expect("parses");
         assert_eq!(t.time_column, "v_time");
         assert_eq!(t.time_s, vec![1.2e-5, 3.7e-5, 6.2e-5]);
         let names: Vec<&str> = t.columns.iter().map(|c| c.name.as_str()).collect();
@@ -259,18 +300,18 @@ mod tests {
     #[test]
     fn reads_fix_print_with_a_title_line() {
         let text = "time enclosure_velocity particle_force_axial\n0.0 1 2\n0.1 1 2\n\n0.2 1 3\n";
-        let t = parse(text).expect("parses");
+        let t = parse(text, None).expect("parses");
         assert_eq!(t.time_column, "time");
         assert_eq!(t.columns.len(), 2);
         assert_eq!(t.lines, vec![2, 3, 5]);
         let text = "# time v\t f\n0 1 2\n1 1 2\n";
-        assert_eq!(parse(text).expect("tabs").columns[1].name, "f");
+        assert_eq!(parse(text, None).expect("tabs").columns[1].name, "f");
     }
 
     #[test]
     fn refusals_name_line_and_reason() {
         let err = |text: &str| {
-            let (line, kind) = parse(text).expect_err("must fail");
+            let (line, kind) = parse(text, None).expect_err("must fail");
             format!("line {line}: {kind}")
         };
         let e = err("# Fix print output for fix rec\n0 1 2\n1 1 2\n");
@@ -299,10 +340,29 @@ mod tests {
     }
 
     #[test]
-    fn prefixes_are_lammps_reference_kinds() {
-        assert_eq!(strip_lammps_prefix("v_time"), "time");
-        assert_eq!(strip_lammps_prefix("c_f[3]"), "f[3]");
-        assert_eq!(strip_lammps_prefix("v_"), "v_");
-        assert_eq!(strip_lammps_prefix("velocity"), "velocity");
+    fn time_is_found_by_its_names_or_the_name_given() {
+        for name in ["t", "time", "Time", "TIME", "time_s", "v_time", "T_S"] {
+            let text = format!("step {name} v\n1 0.0 2\n2 0.1 3\n");
+            let t = parse(&text, None).unwrap_or_else(|e| panic!("{name}: {}", e.1));
+            assert_eq!(t.time_column, name);
+            assert_eq!(t.time_s, vec![0.0, 0.1]);
+        }
+        let text = "stamp v time\n0.0 2 5\n0.1 3 6\n";
+        let t = parse(text, Some("stamp")).expect("given");
+        assert_eq!(t.time_column, "stamp");
+        let names: Vec<&str> = t.columns.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["v", "time"]);
+        let (_, kind) = parse(text, Some("clock")).expect_err("absent");
+        let e = kind.to_string();
+        assert!(
+            e.contains("no column 'clock' (given as the time column)") && e.contains("stamp, v"),
+            "{e}"
+        );
+        let (_, kind) = parse("zeit v\n0 1\n1 2\n", None).expect_err("unknown");
+        let e = kind.to_string();
+        assert!(
+            e.contains("[zeit, v]") && e.contains("t, time, time_s or t_s"),
+            "{e}"
+        );
     }
 }

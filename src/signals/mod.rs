@@ -9,16 +9,17 @@
 //! - [`power`]: Yang's structure-independent dissipated power, eq. 7.8-7.12,
 //!   and the damping efficiency, eq. 7.7 / 6.10;
 //! - [`calibration`]: the empty-enclosure phase-error table of Fig. 7.9;
+//!   [`phase_point`]: one point of it measured on an empty-enclosure record;
 //! - [`phase_model`]: the chain's phase error across frequency (high-pass +
 //!   skew), fitted to that table or taken from a rig;
 //! - [`analysis`]: Yang's method on a whole record as `vlab analyze` runs
 //!   it, with the warnings a lab user must see (clipping, missing inputs);
 //! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
 //! - [`trace_file`]: any of these formats, told apart by the file's extension;
-//! - [`table`], [`lammps`]: records of named columns from other programs (a
-//!   DEM code's enclosure motion and force): CSV, or the text LAMMPS and
-//!   LIGGGHTS write with `fix ave/time` / `fix print`; time axis checked for
-//!   gaps and reversals;
+//! - [`table`], [`table_file`], [`lammps`]: records of named columns from
+//!   other programs (a DEM code's enclosure motion and force): CSV, or the
+//!   text LAMMPS and LIGGGHTS write with `fix ave/time` / `fix print`; time
+//!   axis checked for gaps and reversals;
 //! - [`plot`]: small SVG and PNG plots (x-y, log x with error bars, heat maps);
 //! - [`bench`](mod@bench): a timing hook for `vlab bench`.
 //!
@@ -28,16 +29,19 @@
 pub mod analysis;
 pub mod bench;
 pub mod calibration;
+pub mod column_names;
 pub mod csv;
 pub mod error;
 pub mod impacts;
 pub mod lammps;
 pub mod phase_model;
+pub mod phase_point;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod power;
 pub mod spectrum;
 pub mod table;
+pub mod table_file;
 pub mod tdms;
 pub mod trace;
 pub mod trace_file;
@@ -50,9 +54,7 @@ pub use analysis::{
     Analysis, AnalysisError, AnalysisInput, AnalysisOptions, AnalysisWarning, analyse_trace,
 };
 pub use bench::{YangBenchReport, bench_yang_power};
-pub use calibration::{
-    CalibrationEntry, PhaseCalibration, PhaseErrorPoint, estimate_phase_error, split_polarity,
-};
+pub use calibration::{CalibrationEntry, PhaseCalibration, PhaseErrorPoint, split_polarity};
 pub use csv::{CsvReadOptions, read_csv, read_csv_table, read_csv_with, write_csv};
 pub use error::{CsvErrorKind, RecordErrorKind, Result, SignalsError, TdmsErrorKind, WavErrorKind};
 pub use impacts::{
@@ -61,7 +63,8 @@ pub use impacts::{
     restitution_from_impact_times,
 };
 pub use lammps::read_lammps_text;
-pub use phase_model::PhaseErrorModel;
+pub use phase_model::{PhaseErrorModel, wrap_phase_rad};
+pub use phase_point::estimate_phase_error;
 #[cfg(feature = "plot")]
 pub use plot::{
     CirclePanel, ErrorSeries, HeatCell, HeatMap, HeatOverlay, LineDash, LogXPlot, MarkerLine,
@@ -71,10 +74,11 @@ pub use plot::{
 pub use power::{
     BinSelection, ForcePolarity, HarmonicPower, PhaseCorrection, PolarityVerdict, PowerOptions,
     PowerResult, PowerWindow, WindowPlan, YangPower, efficiency, max_energy_per_cycle_j,
-    mean_power_time_domain, plan_window, wrap_phase_rad, yang_power, yang_power_of_trace,
+    mean_power_time_domain, plan_window, yang_power, yang_power_of_trace,
 };
 pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
-pub use table::{Table, TableFormat, read_table};
+pub use table::{Table, TableFormat};
+pub use table_file::read_table;
 pub use tdms::read_tdms;
 pub use trace::{Channel, Sensitivity, Trace, TraceMetadata};
 pub use trace_file::{TraceFormat, read_trace, read_trace_with};

@@ -23,6 +23,10 @@
 //! from (M1) by `(f_cF^3 - f_cA^3) / (3 f^3)`, below 2e-6 rad for sub-hertz
 //! corners above 10 Hz. Only the difference of the corners is observable; a
 //! fitted model puts it on one channel (the force channel when it leads).
+//!
+//! [`wrap_phase_rad`], the wrap of every phase difference to (-pi, pi], lives
+//! here, below both Yang's power (`power.rs`) and the calibration table
+//! (`calibration.rs`), which import it.
 
 use std::f64::consts::PI;
 
@@ -114,6 +118,17 @@ pub fn skew_lead_rad(skew_s: f64, freq_hz: f64) -> f64 {
     2.0 * PI * freq_hz * skew_s
 }
 
+/// Wraps an angle to (-pi, pi].
+pub fn wrap_phase_rad(phi: f64) -> f64 {
+    let wrapped = phi - 2.0 * PI * ((phi + PI) / (2.0 * PI)).floor();
+    // floor puts -pi at -pi; move it to +pi so the range is (-pi, pi].
+    if wrapped <= -PI {
+        wrapped + 2.0 * PI
+    } else {
+        wrapped
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -183,5 +198,22 @@ mod tests {
         };
         assert!(bad.validate().is_err());
         THESIS.validate().expect("valid");
+    }
+
+    #[test]
+    fn wrap_phase_range() {
+        for (x, want) in [
+            (PI, PI),
+            (-PI, PI),
+            (3.0 * PI, PI),
+            (0.5, 0.5),
+            (-0.5 - 2.0 * PI, -0.5),
+        ] {
+            assert!(
+                (wrap_phase_rad(x) - want).abs() < 1e-12,
+                "{x} -> {}",
+                wrap_phase_rad(x)
+            );
+        }
     }
 }

@@ -413,6 +413,10 @@ const LEGEND_SAMPLE_PX: i32 = 30;
 const LEGEND_LINE_PX: i32 = 19;
 
 impl Figure for LogXFigure<'_> {
+    /// One piece, in the order the figure is drawn (mesh, series, markers,
+    /// reference level, legend panel): plotters' chart context is generic in
+    /// its backend and coordinates, so helpers would carry those types for no
+    /// gain, and the SVG's element order is the statement order here.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
@@ -606,6 +610,10 @@ fn viridis(t: f64) -> RGBColor {
 }
 
 impl Figure for HeatFigure<'_> {
+    /// One piece, in the order the figure is drawn (cells, hatching, overlays,
+    /// cell texts, overlay legend, tick names, footnote, colour bar): the
+    /// chart context is generic in backend and coordinates, and the SVG's
+    /// element order is the statement order here.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
@@ -824,6 +832,9 @@ pub fn plot_panel_strip(path: &Path, strip: &PanelStrip) -> Result<()> {
 struct StripFigure<'a>(&'a PanelStrip);
 
 impl Figure for StripFigure<'_> {
+    /// One piece, panel by panel in drawing order, then the colour bar: the
+    /// chart context is generic in backend and coordinates, and the SVG's
+    /// element order is the statement order here.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
@@ -1059,7 +1070,8 @@ mod tests {
     /// its data area (the legend panel is the last
     /// `LOG_X_LEGEND_WIDTH_PX`), a heat map's below its cells (the
     /// bottom `HEAT_MAP_BOTTOM_PX` hold the legend and the footnote); exact
-    /// pixel bounds.
+    /// pixel bounds. One test over both figures: the fixtures are its
+    /// length, and each assertion reads against the fixture above it.
     #[test]
     fn legends_are_drawn_outside_the_data_area() {
         let dir = std::env::temp_dir().join(format!("vlab-plot-legend-{}", std::process::id()));

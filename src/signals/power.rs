@@ -56,7 +56,7 @@
 //! active record may lie anywhere) but still reports whether the record looks
 //! reversed; `vlab analyze` and a measured shake detect. On the empty
 //! enclosure the same flip reads as a phase error near `pi`
-//! ([`super::calibration::estimate_phase_error`]).
+//! (`estimate_phase_error`, `phase_point.rs`).
 //!
 //! For signals whose content lies on bins below Nyquist, `P` equals the
 //! time-domain mean of `f(t) v(t)` over the window ([`mean_power_time_domain`]),
@@ -592,20 +592,10 @@ fn check_pair(a: &[f64], a_name: &str, b: &[f64], b_name: &str) -> Result<()> {
     all_finite(b_name, b)
 }
 
-/// Wraps an angle to (-pi, pi].
-pub fn wrap_phase_rad(phi: f64) -> f64 {
-    let wrapped = phi - 2.0 * PI * ((phi + PI) / (2.0 * PI)).floor();
-    // floor puts -pi at -pi; move it to +pi so the range is (-pi, pi].
-    if wrapped <= -PI {
-        wrapped + 2.0 * PI
-    } else {
-        wrapped
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::signals::phase_model::wrap_phase_rad;
     use crate::signals::testutil::{gaussian, rng};
 
     const FS: f64 = 40_000.0;
@@ -939,23 +929,6 @@ mod tests {
         assert!((eta - 0.3).abs() < 1e-12);
         let err = efficiency(1.0, 0.0, 20.0, F_DRIVE, g).expect_err("zero mass");
         assert!(err.to_string().contains("particle_mass_kg = 0 kg"), "{err}");
-    }
-
-    #[test]
-    fn wrap_phase_range() {
-        for (x, want) in [
-            (PI, PI),
-            (-PI, PI),
-            (3.0 * PI, PI),
-            (0.5, 0.5),
-            (-0.5 - 2.0 * PI, -0.5),
-        ] {
-            assert!(
-                (wrap_phase_rad(x) - want).abs() < 1e-12,
-                "{x} -> {}",
-                wrap_phase_rad(x)
-            );
-        }
     }
 
     #[test]

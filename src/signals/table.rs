@@ -6,23 +6,25 @@
 //! is not assumed to be uniformly sampled, so that a record with a missing
 //! stretch or a time axis that runs backwards (two runs concatenated, a
 //! restart) can be refused with the line at fault rather than misread.
-//! [`Table::uniform_step_s`] is that check. Read one with [`read_table`]:
+//! [`Table::uniform_step_s`] is that check. Read one with `read_table`
+//! (`table_file.rs`): a CSV through the CSV reader (`csv.rs`), the text
+//! LAMMPS and LIGGGHTS write through `lammps.rs`.
 //!
-//! - `.csv`: any CSV [`super::csv`] reads (dialects, `name [unit]` headers,
-//!   `# key: value` comments), e.g. vlab's own `kinematics.csv`;
-//! - any other name: the whitespace-separated text LAMMPS and LIGGGHTS write
-//!   with `fix ave/time` and `fix print` ([`super::lammps`]).
+//! The time column is the one the caller names, else the first whose name is
+//! a time name (`t`, `time`, `Time`, `TIME`, `time_s`, `v_time`, a CSV's
+//! `time [s]`): [`super::column_names::time_column_index`] decides it for
+//! both readers.
 //!
 //! Units are SI; a CSV column's unit is its header's `[unit]`, a LAMMPS
 //! column has none (the file's `# units:` comment, when present, says which
 //! LAMMPS unit system wrote it, and only `si` is read).
+//!
+//! This file is the type alone: the readers import it, it imports neither.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use super::csv::{CsvReadOptions, read_csv_table};
 use super::error::{RecordErrorKind, Result, SignalsError};
-use super::lammps::read_lammps_text;
 use super::trace::{Channel, TraceMetadata};
 
 /// How far one time step may be from the record's step, as a fraction of it.
@@ -183,21 +185,6 @@ impl Table {
             line,
             kind,
         }
-    }
-}
-
-/// Reads a record of named columns: `.csv` (case-insensitive) through
-/// [`super::csv`], anything else as LAMMPS / LIGGGHTS text through
-/// [`super::lammps`].
-pub fn read_table(path: &Path) -> Result<Table> {
-    let is_csv = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-    if is_csv {
-        read_csv_table(path, &CsvReadOptions::default())
-    } else {
-        read_lammps_text(path)
     }
 }
 

@@ -39,7 +39,7 @@ use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
-use tdms_rs::{DataType, PropertyValue, TdmsFile};
+use tdms_rs::{DataType, PropertyValue, TdmsChannel, TdmsFile, TdmsGroup};
 
 use super::error::{Result, SignalsError, TdmsErrorKind};
 use super::trace::{Trace, TraceMetadata};
@@ -60,10 +60,7 @@ const UNFINISHED_SEGMENT: u64 = u64::MAX;
 /// Reads a TDMS record as a trace (see the module docs for what is read and
 /// what is refused).
 pub fn read_tdms(path: &Path) -> Result<Trace> {
-    let err = |kind| SignalsError::Tdms {
-        path: path.to_path_buf(),
-        kind,
-    };
+    let err = |kind| tdms_error(path, kind);
     let raw_bytes = scan_segments(path)?;
     let file = TdmsFile::open(path).map_err(|e| match e {
         tdms_rs::TdmsError::Io(source) => SignalsError::Io {
@@ -72,100 +69,11 @@ pub fn read_tdms(path: &Path) -> Result<Trace> {
         },
         e => err(TdmsErrorKind::Reader(e)),
     })?;
-
-    let groups: Vec<_> = file.groups().filter(|g| g.channels().count() > 0).collect();
-    let group = match groups.as_slice() {
-        [] => return Err(err(TdmsErrorKind::NoChannels)),
-        [g] => g,
-        _ => {
-            return Err(err(TdmsErrorKind::SeveralGroups {
-                count: groups.len(),
-                groups: groups
-                    .iter()
-                    .map(|g| format!("'{}'", g.name()))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            }));
-        }
-    };
+    let group = the_group(&file).map_err(err)?;
     let channels: Vec<_> = group.channels().collect();
-    for c in &channels {
-        if !matches!(c.dtype(), DataType::Double | DataType::Float) {
-            return Err(err(TdmsErrorKind::UnsupportedDataType {
-                channel: c.name().to_string(),
-                data_type: format!("{:?}", c.dtype()),
-            }));
-        }
-    }
-    let in_channels: u64 = channels
-        .iter()
-        .map(|c| (c.len() * c.dtype().itemsize()) as u64)
-        .sum();
-    if in_channels != raw_bytes {
-        return Err(err(TdmsErrorKind::RawDataUnaccounted {
-            in_segments: raw_bytes,
-            in_channels,
-        }));
-    }
-
+    check_channels(&channels, raw_bytes).map_err(err)?;
     let first = &channels[0];
-    let timing = |c: &tdms_rs::TdmsChannel| -> Result<(f64, f64)> {
-        let bad = |problem: String| {
-            err(TdmsErrorKind::BadTiming {
-                channel: c.name().to_string(),
-                problem,
-            })
-        };
-        let increment_s = match number(c.property("wf_increment")) {
-            Some(x) if x.is_finite() && x > 0.0 => x,
-            Some(x) => {
-                return Err(bad(format!(
-                    "wf_increment = {x} s: the sample period must be positive and finite"
-                )));
-            }
-            None => {
-                return Err(bad(
-                    "no numeric 'wf_increment' property: the sample period (s) is unknown, \
-                     so is the sample rate"
-                        .into(),
-                ));
-            }
-        };
-        let start_s = match number(c.property("wf_start_offset")) {
-            Some(x) if x.is_finite() => x,
-            Some(x) => return Err(bad(format!("wf_start_offset = {x} s: must be finite"))),
-            None => 0.0,
-        };
-        Ok((increment_s, start_s))
-    };
-    let (increment_s, start_time_s) = timing(first)?;
-    for c in &channels[1..] {
-        let (inc, start) = timing(c)?;
-        let differs = |what: &str, a: f64, b: f64| {
-            err(TdmsErrorKind::BadTiming {
-                channel: c.name().to_string(),
-                problem: format!(
-                    "{what} = {a} s but channel '{}' has {b} s: one record, one time base",
-                    first.name()
-                ),
-            })
-        };
-        if (inc - increment_s).abs() > 1e-12 * increment_s {
-            return Err(differs("wf_increment", inc, increment_s));
-        }
-        if start != start_time_s {
-            return Err(differs("wf_start_offset", start, start_time_s));
-        }
-        if c.len() != first.len() {
-            return Err(err(TdmsErrorKind::UnequalLength {
-                first: first.name().to_string(),
-                first_len: first.len(),
-                channel: c.name().to_string(),
-                len: c.len(),
-            }));
-        }
-    }
-
+    let (increment_s, start_time_s) = common_time_base(&channels).map_err(err)?;
     let mut trace = Trace::new(rate_from_increment(increment_s), start_time_s).map_err(|e| {
         err(TdmsErrorKind::BadTiming {
             channel: first.name().to_string(),
@@ -174,17 +82,7 @@ pub fn read_tdms(path: &Path) -> Result<Trace> {
     })?;
     trace.metadata = metadata(&file).map_err(err)?;
     for c in &channels {
-        let n = c.len();
-        let reader = |e| err(TdmsErrorKind::Reader(e));
-        let samples = if c.dtype() == DataType::Double {
-            let mut x = vec![0.0f64; n];
-            c.read(0..n, &mut x).map_err(reader)?;
-            x
-        } else {
-            let mut x = vec![0.0f32; n];
-            c.read(0..n, &mut x).map_err(reader)?;
-            x.into_iter().map(f64::from).collect()
-        };
+        let samples = read_samples(c).map_err(err)?;
         let unit = match c.property("unit_string") {
             Some(PropertyValue::String(u)) => u.clone(),
             _ => String::new(),
@@ -196,6 +94,131 @@ pub fn read_tdms(path: &Path) -> Result<Trace> {
         })?;
     }
     Ok(trace)
+}
+
+/// An error about the TDMS file at `path`.
+fn tdms_error(path: &Path, kind: TdmsErrorKind) -> SignalsError {
+    SignalsError::Tdms {
+        path: path.to_path_buf(),
+        kind,
+    }
+}
+
+/// The one group that holds channels.
+fn the_group(file: &TdmsFile) -> Result<TdmsGroup<'_>, TdmsErrorKind> {
+    let mut groups: Vec<_> = file.groups().filter(|g| g.channels().count() > 0).collect();
+    match groups.len() {
+        0 => Err(TdmsErrorKind::NoChannels),
+        1 => Ok(groups.remove(0)),
+        count => Err(TdmsErrorKind::SeveralGroups {
+            count,
+            groups: groups
+                .iter()
+                .map(|g| format!("'{}'", g.name()))
+                .collect::<Vec<_>>()
+                .join(", "),
+        }),
+    }
+}
+
+/// Refuses channels that are not floating point, and raw data in the
+/// segments that the channels do not account for (`raw_bytes` in all).
+fn check_channels(channels: &[TdmsChannel], raw_bytes: u64) -> Result<(), TdmsErrorKind> {
+    for c in channels {
+        if !matches!(c.dtype(), DataType::Double | DataType::Float) {
+            return Err(TdmsErrorKind::UnsupportedDataType {
+                channel: c.name().to_string(),
+                data_type: format!("{:?}", c.dtype()),
+            });
+        }
+    }
+    let in_channels: u64 = channels
+        .iter()
+        .map(|c| (c.len() * c.dtype().itemsize()) as u64)
+        .sum();
+    if in_channels != raw_bytes {
+        return Err(TdmsErrorKind::RawDataUnaccounted {
+            in_segments: raw_bytes,
+            in_channels,
+        });
+    }
+    Ok(())
+}
+
+/// A channel's sample period and start time, s (`wf_increment`,
+/// `wf_start_offset`, the latter 0 when absent).
+fn timing(c: &TdmsChannel) -> Result<(f64, f64), TdmsErrorKind> {
+    let bad = |problem: String| TdmsErrorKind::BadTiming {
+        channel: c.name().to_string(),
+        problem,
+    };
+    let increment_s = match number(c.property("wf_increment")) {
+        Some(x) if x.is_finite() && x > 0.0 => x,
+        Some(x) => {
+            return Err(bad(format!(
+                "wf_increment = {x} s: the sample period must be positive and finite"
+            )));
+        }
+        None => {
+            return Err(bad(
+                "no numeric 'wf_increment' property: the sample period (s) is unknown, \
+                 so is the sample rate"
+                    .into(),
+            ));
+        }
+    };
+    let start_s = match number(c.property("wf_start_offset")) {
+        Some(x) if x.is_finite() => x,
+        Some(x) => return Err(bad(format!("wf_start_offset = {x} s: must be finite"))),
+        None => 0.0,
+    };
+    Ok((increment_s, start_s))
+}
+
+/// The sample period and start time every channel shares (the first
+/// channel's), checking the others and their lengths against it.
+fn common_time_base(channels: &[TdmsChannel]) -> Result<(f64, f64), TdmsErrorKind> {
+    let first = &channels[0];
+    let (increment_s, start_time_s) = timing(first)?;
+    for c in &channels[1..] {
+        let (inc, start) = timing(c)?;
+        let differs = |what: &str, a: f64, b: f64| TdmsErrorKind::BadTiming {
+            channel: c.name().to_string(),
+            problem: format!(
+                "{what} = {a} s but channel '{}' has {b} s: one record, one time base",
+                first.name()
+            ),
+        };
+        if (inc - increment_s).abs() > 1e-12 * increment_s {
+            return Err(differs("wf_increment", inc, increment_s));
+        }
+        if start != start_time_s {
+            return Err(differs("wf_start_offset", start, start_time_s));
+        }
+        if c.len() != first.len() {
+            return Err(TdmsErrorKind::UnequalLength {
+                first: first.name().to_string(),
+                first_len: first.len(),
+                channel: c.name().to_string(),
+                len: c.len(),
+            });
+        }
+    }
+    Ok((increment_s, start_time_s))
+}
+
+/// A channel's samples as `f64` (single precision widened exactly).
+fn read_samples(c: &TdmsChannel) -> Result<Vec<f64>, TdmsErrorKind> {
+    let n = c.len();
+    if c.dtype() == DataType::Double {
+        let mut x = vec![0.0f64; n];
+        c.read(0..n, &mut x).map_err(TdmsErrorKind::Reader)?;
+        Ok(x)
+    } else {
+        let mut x = vec![0.0f32; n];
+        c.read(0..n, &mut x).map_err(TdmsErrorKind::Reader)?;
+        Ok(x.into_iter().map(f64::from).collect())
+    }
 }
 
 /// The sample rate for a period of `increment_s`, snapped to whole hertz

@@ -42,7 +42,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::error::{Result, SignalsError, WavErrorKind};
-use super::trace::{Trace, TraceMetadata};
+use super::trace::{Channel, Trace, TraceMetadata};
 use crate::atomic_write::write_bytes_atomic;
 use crate::validation::require;
 
@@ -130,52 +130,13 @@ pub fn write_wav_with_full_scale(
                 channels: trace.channels.len(),
             })
         })?;
-
-    let mut infos = Vec::with_capacity(trace.channels.len());
-    for c in &trace.channels {
-        let peak = c.samples.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let scale = match full_scale.get(&c.name) {
-            Some(&fs) => {
-                require(
-                    fs.is_finite() && fs > 0.0 && fs >= peak,
-                    &format!("full_scale[{}]", c.name),
-                    fs,
-                    &c.unit,
-                    format!(
-                        "positive, finite and at least the channel's largest |x| = {peak} {}",
-                        c.unit
-                    ),
-                )?;
-                fs
-            }
-            None if peak > 0.0 => peak,
-            None => 1.0,
-        };
-        infos.push(WavChannelInfo {
-            name: c.name.clone(),
-            unit: c.unit.clone(),
-            full_scale: scale,
-        });
-    }
-
-    let spec = hound::WavSpec {
-        channels: n_channels,
-        sample_rate: rate as u32,
-        bits_per_sample: 32,
-        sample_format: hound::SampleFormat::Float,
-    };
-    let mut bytes = Cursor::new(Vec::with_capacity(44 + 4 * trace.len() * infos.len()));
-    let hound_err = |e| wav_err(WavErrorKind::Hound(e));
-    let mut writer = hound::WavWriter::new(&mut bytes, spec).map_err(hound_err)?;
-    for i in 0..trace.len() {
-        for (c, info) in trace.channels.iter().zip(&infos) {
-            writer
-                .write_sample((c.samples[i] / info.full_scale) as f32)
-                .map_err(hound_err)?;
-        }
-    }
-    writer.finalize().map_err(hound_err)?;
-
+    let infos = trace
+        .channels
+        .iter()
+        .map(|c| channel_info(c, full_scale.get(&c.name).copied()))
+        .collect::<Result<Vec<_>>>()?;
+    let bytes =
+        wav_bytes(trace, &infos, n_channels).map_err(|e| wav_err(WavErrorKind::Hound(e)))?;
     let sidecar = WavSidecar {
         format: WAV_SIDECAR_FORMAT.into(),
         version: WAV_SIDECAR_VERSION,
@@ -191,7 +152,7 @@ pub fn write_wav_with_full_scale(
         source,
     })?;
     json.push('\n');
-    write_bytes_atomic(path, bytes.get_ref()).map_err(|source| SignalsError::Io {
+    write_bytes_atomic(path, &bytes).map_err(|source| SignalsError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -199,6 +160,59 @@ pub fn write_wav_with_full_scale(
         path: side_path,
         source,
     })
+}
+
+/// A channel's sidecar entry: its full scale is `given` (checked to be
+/// positive, finite and at least the largest |x|), else its largest |x|, else
+/// 1 for a silent channel.
+fn channel_info(c: &Channel, given: Option<f64>) -> Result<WavChannelInfo> {
+    let peak = c.samples.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let scale = match given {
+        Some(fs) => {
+            require(
+                fs.is_finite() && fs > 0.0 && fs >= peak,
+                &format!("full_scale[{}]", c.name),
+                fs,
+                &c.unit,
+                format!(
+                    "positive, finite and at least the channel's largest |x| = {peak} {}",
+                    c.unit
+                ),
+            )?;
+            fs
+        }
+        None if peak > 0.0 => peak,
+        None => 1.0,
+    };
+    Ok(WavChannelInfo {
+        name: c.name.clone(),
+        unit: c.unit.clone(),
+        full_scale: scale,
+    })
+}
+
+/// The WAV file's bytes: 32-bit float samples, interleaved, each channel over
+/// its full scale.
+fn wav_bytes(
+    trace: &Trace,
+    infos: &[WavChannelInfo],
+    n_channels: u16,
+) -> std::result::Result<Vec<u8>, hound::Error> {
+    let spec = hound::WavSpec {
+        channels: n_channels,
+        sample_rate: trace.sample_rate_hz as u32,
+        bits_per_sample: 32,
+        sample_format: hound::SampleFormat::Float,
+    };
+    let mut bytes = Cursor::new(Vec::with_capacity(44 + 4 * trace.len() * infos.len()));
+    let mut writer = hound::WavWriter::new(&mut bytes, spec)?;
+    for i in 0..trace.len() {
+        for (c, info) in trace.channels.iter().zip(infos) {
+            writer.write_sample((c.samples[i] / info.full_scale) as f32)?;
+        }
+    }
+    writer.finalize()?;
+    Ok(bytes.into_inner())
 }
 
 /// Reads a vlab WAV and its sidecar into a trace.
