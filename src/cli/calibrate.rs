@@ -10,6 +10,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::Serialize;
 
+use vlab::drive::Drive;
 use vlab::experiment::measurement::calibrate_rig;
 use vlab::experiment::shake::resolve_rig;
 use vlab::rig::ShakerKind;
@@ -72,8 +73,9 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
     let mut resolved = None;
     for &f in &a.freqs_hz {
         for &gamma in &a.gammas {
+            let drive = Drive::new(f, gamma, g)?;
             resolved = Some(
-                resolve_rig(&a.rig, a.shaker, f, gamma, g)
+                resolve_rig(&a.rig, a.shaker, &drive)
                     .with_context(|| format!("--rig {}", a.rig))?,
             );
         }

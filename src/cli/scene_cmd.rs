@@ -80,6 +80,7 @@ pub fn run(a: SceneArgs) -> Result<()> {
             realised_restitution(law.damping_factor)
         );
     }
+    let thesis_drive = scene.drive(40.0, 20.0)?;
     let dt_rule = match &scene.simulation.dt_s {
         TimeStepSpec::Seconds(_) => "fixed".to_string(),
         TimeStepSpec::Rule(TimeStepRule::Rayleigh) => format!(
@@ -89,12 +90,12 @@ pub fn run(a: SceneArgs) -> Result<()> {
         TimeStepSpec::Rule(TimeStepRule::Contacts) => format!(
             "{} steps per contact at the fastest expected impact ({:.2} m/s at 40 Hz, Gamma 20)",
             scene.simulation.steps_per_contact,
-            scene.expected_impact_speed_mps(40.0, 20.0)
+            scene.expected_impact_speed_mps(&thesis_drive)
         ),
     };
     println!(
         "  time step        {:.3e} s at 40 Hz, Gamma 20 ({dt_rule}); Rayleigh limit {:.3e} s (eq. 3.31)",
-        scene.drive_dt_s(40.0, 20.0),
+        scene.drive_dt_s(&thesis_drive),
         scene.rayleigh_limit_s()
     );
     if let Some(y) = scene.yield_velocities_mps() {

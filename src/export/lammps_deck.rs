@@ -79,7 +79,7 @@ use crate::dem::material::{effective_shear_pa, effective_youngs_pa};
 use crate::dem::{ContactLaw, RestitutionMode};
 use crate::experiment::damper::contact_laws;
 use crate::experiment::settle::SettledBed;
-use crate::experiment::shake::{TRUTH_SAMPLE_RATE_HZ, check_drive};
+use crate::experiment::shake::{TRUTH_SAMPLE_RATE_HZ, shake_drive};
 use crate::scene::{DriveLength, transient_cycles};
 use crate::scene::{Orientation, Scene, SceneError};
 use crate::validation::{InvalidParameter, count_in};
@@ -150,7 +150,7 @@ impl LammpsExport {
     /// took in vlab (`cycles`, `steady_cycles`), to give as `--cycles` and
     /// `--steady-cycles`.
     pub fn for_scene(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<Self, SceneError> {
-        check_drive(scene, freq_hz, gamma)?;
+        shake_drive(scene, freq_hz, gamma)?;
         let (cycles, steady_cycles) = match scene.drive_length() {
             DriveLength::Fixed {
                 cycles,
@@ -423,7 +423,7 @@ pub fn lammps_deck(
     bed: &SettledBed,
     export: &LammpsExport,
 ) -> Result<LammpsDeck, SceneError> {
-    check_drive(scene, export.freq_hz, export.gamma)?;
+    let drive = shake_drive(scene, export.freq_hz, export.gamma)?;
     count_in("cycles", export.cycles, "", MIN_EXPORT_CYCLES, None)?;
     count_in(
         "steady_cycles",
@@ -434,7 +434,7 @@ pub fn lammps_deck(
     )?;
     let world = &bed.world;
     let particles = &world.particles;
-    let dt = scene.drive_dt_s(export.freq_hz, export.gamma);
+    let dt = scene.drive_dt_s(&drive);
     let g = scene.simulation.gravity_mps2;
     let period = 1.0 / export.freq_hz;
     let omega = 2.0 * PI * export.freq_hz;
