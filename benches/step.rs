@@ -37,7 +37,7 @@ fn thesis_bed() -> &'static SettledBed {
 
 /// Times drive steps of the thesis bed under `scene`'s laws.
 fn drive_steps(bencher: Bencher, scene: &Scene) {
-    let dt = scene.drive_dt_s(40.0, 20.0);
+    let dt = scene.drive_dt_s(&scene.drive(40.0, 20.0).expect("valid drive"));
     let mut world: World = prepare_drive(thesis_bed(), scene, dt).expect("drive");
     let n = world.particles.len();
     let amplitude = 20.0 * 9.81 / (2.0 * PI * 40.0).powi(2);

@@ -8,7 +8,7 @@
 //! ```
 
 use vlab::experiment::measurement::{CalibrationSource, ShakeSetup};
-use vlab::experiment::shake::{resolve_rig, run_shake};
+use vlab::experiment::shake::{resolve_rig, run_shake, shake_drive};
 use vlab::scene::{Scene, SceneError};
 
 fn main() -> Result<(), SceneError> {
@@ -17,12 +17,12 @@ fn main() -> Result<(), SceneError> {
         "example scene",
     )?;
     let (freq_hz, gamma) = (40.0, 10.0);
-    let g = scene.simulation.gravity_mps2;
-    let rig = resolve_rig("ideal", None, freq_hz, gamma, g)?;
+    let drive = shake_drive(&scene, freq_hz, gamma)?;
+    let rig = resolve_rig("ideal", None, &drive)?;
     let setup = ShakeSetup {
         rig,
-        freq_hz,
-        gamma,
+        drive,
+        noise_seed: scene.simulation.seed,
         calibration: CalibrationSource::OnTheFly,
     };
     let run = run_shake(&scene, &setup, &mut |_| {})?;

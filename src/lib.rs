@@ -17,6 +17,7 @@
 
 pub mod atomic_write;
 pub mod dem;
+pub mod drive;
 pub mod experiment;
 pub mod export;
 pub mod rig;

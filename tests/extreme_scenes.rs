@@ -61,19 +61,17 @@ fn drive_reporting(
     (cycles, steady): (u32, u32),
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(World, DriveOutcome), SceneError> {
-    let g = scene.simulation.gravity_mps2;
-    let dt = scene.drive_dt_s(freq_hz, gamma);
+    let drive = scene.drive(freq_hz, gamma)?;
+    let dt = scene.drive_dt_s(&drive);
     let mut world = prepare_drive(bed, scene, dt)?;
     let plan = DrivePlan {
-        freq_hz,
-        gamma,
-        gravity_mps2: g,
+        drive,
         length: DriveLength::Fixed {
             cycles,
             steady_cycles: steady,
         },
     };
-    let mut motion = SineMotion::new(freq_hz, gamma, g);
+    let mut motion = SineMotion::new(&drive);
     let out = run_drive(&mut world, &plan, &mut motion, &mut NoObserver, progress)?;
     Ok((world, out))
 }

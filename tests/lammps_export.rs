@@ -672,13 +672,14 @@ fn round_trip_through_lammps_agrees_with_vlab() {
 
     // vlab on the packing, prescribed drive (the deck's), until steady.
     let rig = RigSpec::from_name_or_path("ideal").expect("ideal rig");
+    let drive = scene.drive(freq, gamma).expect("valid drive");
     let setup = ShakeSetup {
         rig: rig.with_shaker(ShakerKind::Prescribed),
-        freq_hz: freq,
-        gamma,
+        drive,
+        noise_seed: scene.simulation.seed,
         calibration: CalibrationSource::OnTheFly,
     };
-    let mut world = prepare_drive(&bed, &scene, scene.drive_dt_s(freq, gamma)).expect("drive");
+    let mut world = prepare_drive(&bed, &scene, scene.drive_dt_s(&drive)).expect("drive");
     let vlab_run = run_measured_shake(&scene, &mut world, &setup, &mut |_| {}).expect("vlab");
     let outcome = &vlab_run.outcome;
     assert!(outcome.steadiness.reached, "{:?}", outcome.steadiness);

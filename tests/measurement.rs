@@ -33,14 +33,15 @@ fn measure(
     let mut scene = scene.clone();
     scene.drive.cycles = CyclesSpec::Count(cycles);
     scene.drive.steady_cycles = steady;
-    let dt = scene.drive_dt_s(freq_hz, gamma);
+    let drive = scene.drive(freq_hz, gamma).expect("valid drive");
+    let dt = scene.drive_dt_s(&drive);
     let mut world = prepare_drive(bed, &scene, dt).expect("ready to drive");
     let setup = ShakeSetup {
         rig: RigSpec::builtin(rig)
             .expect("built-in rig")
             .with_shaker(shaker),
-        freq_hz,
-        gamma,
+        drive,
+        noise_seed: scene.simulation.seed,
         calibration: CalibrationSource::OnTheFly,
     };
     run_measured_shake(&scene, &mut world, &setup, &mut |_| {}).expect("measured run")

@@ -5,6 +5,7 @@
 
 use std::f64::consts::PI;
 
+use vlab::drive::Drive;
 use vlab::rig::{
     ACCEL_CHANNEL, Daq, EnclosureMotion, FORCE_CHANNEL, RigFile, RigSpec, Shaker, ShakerKind,
     transducer_force_n,
@@ -177,8 +178,9 @@ fn thesis_rig_phase_error_leaks_the_enclosure_term_and_calibration_removes_it() 
 /// c mean(v^2) over the recorded span.
 fn electrodynamic_run(c_n_s_per_m: f64, start_s: f64, end_s: f64, seed: u64) -> (Trace, f64) {
     let rig = RigSpec::builtin("thesis-shaker").expect("built in");
-    let mut shaker = Shaker::new(&rig, ShakerKind::Electrodynamic, FREQ, GAMMA, G, M_ENC, 0.0)
-        .expect("within limits");
+    let drive = Drive::new(FREQ, GAMMA, G).expect("valid drive");
+    let mut shaker =
+        Shaker::new(&rig, ShakerKind::Electrodynamic, &drive, M_ENC, 0.0).expect("within limits");
     let mut daq = Daq::new(&rig, DT, start_s, seed).expect("valid DAQ");
     let steps = (end_s / DT).round() as u64;
     let (mut f_p, mut work, mut n_rec) = (0.0, 0.0, 0u64);

@@ -33,7 +33,7 @@ fn three_contact_laws_settle_to_one_packing() {
             "e {e}, mu {mu}: packing {:.3}",
             bed.packing_fraction
         );
-        let dt = scene.drive_dt_s(40.0, 20.0);
+        let dt = scene.drive_dt_s(&scene.drive(40.0, 20.0).expect("valid drive"));
         let mut world = prepare_drive(&bed, &scene, dt).expect("drive ready");
         let steps = (0.02 / dt).round() as u64;
         for _ in 0..steps {

@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
-use vlab::experiment::shake::{check_drive, resolve_rig};
+use vlab::experiment::shake::{resolve_rig, shake_drive};
 use vlab::rig::ShakerKind;
 use vlab::scene::Scene;
 use vlab::study::accuracy::{AccuracyEvent, AccuracyPlan, AccuracyReport, run_accuracy};
@@ -51,9 +51,8 @@ pub fn run(a: AccuracyArgs, quiet: bool) -> Result<()> {
     let flags = args::FlagKeys::new()
         .set(true, "freq_hz", "--freq")
         .set(true, "gamma", "--gamma");
-    check_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
-    let g = scene.simulation.gravity_mps2;
-    let rig = resolve_rig(&a.rig, Some(ShakerKind::Prescribed), a.freq_hz, a.gamma, g)
+    let drive = shake_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
+    let rig = resolve_rig(&a.rig, Some(ShakerKind::Prescribed), &drive)
         .with_context(|| format!("--rig {}", a.rig))?;
     let plan = if a.quick {
         AccuracyPlan::quick(a.freq_hz, a.gamma)

@@ -347,7 +347,9 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
 fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
     println!(
         "thesis scene at dt {:.1e} s and lattice beds of 2 mm spheres; {} cores{}; each row: median and fastest of {} runs",
-        scene.drive_dt_s(40.0, 20.0),
+        scene
+            .drive(40.0, 20.0)
+            .map_or(f64::NAN, |d| scene.drive_dt_s(&d)),
         report.cores,
         report
             .load_average_1min
@@ -521,19 +523,18 @@ fn drive_once(
     cycles: u32,
     progress: &mut ProgressLine,
 ) -> Result<(Run, u64, bool)> {
-    let mut world: World = prepare_drive(bed, scene, scene.drive_dt_s(40.0, 20.0))?;
+    let drive = scene.drive(40.0, 20.0)?;
+    let mut world: World = prepare_drive(bed, scene, scene.drive_dt_s(&drive))?;
     let plan = DrivePlan {
-        freq_hz: 40.0,
-        gamma: 20.0,
-        gravity_mps2: scene.simulation.gravity_mps2,
+        drive,
         length: DriveLength::Fixed {
             cycles: cycles.max(1),
             steady_cycles: 1,
         },
     };
-    let mut drive = SineMotion::new(plan.freq_hz, plan.gamma, plan.gravity_mps2);
+    let mut motion = SineMotion::new(&drive);
     let clock = Clock::start();
-    let out = run_drive(&mut world, &plan, &mut drive, &mut NoObserver, &mut |p| {
+    let out = run_drive(&mut world, &plan, &mut motion, &mut NoObserver, &mut |p| {
         progress.update(p)
     })?;
     Ok((clock.stop(), out.steps, world.splits_across_threads()))

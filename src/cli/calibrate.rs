@@ -10,6 +10,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use serde::Serialize;
 
+use vlab::drive::Drive;
 use vlab::experiment::measurement::calibrate_rig;
 use vlab::experiment::shake::resolve_rig;
 use vlab::rig::{RigSpec, ShakerKind};
@@ -125,8 +126,9 @@ fn resolve_for_all(a: &CalibrateArgs, g: f64) -> Result<RigSpec> {
     let mut resolved = None;
     for &f in &a.freqs_hz {
         for &gamma in &a.gammas {
+            let drive = Drive::new(f, gamma, g)?;
             resolved = Some(
-                resolve_rig(&a.rig, a.shaker, f, gamma, g)
+                resolve_rig(&a.rig, a.shaker, &drive)
                     .with_context(|| format!("--rig {}", a.rig))?,
             );
         }

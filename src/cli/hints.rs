@@ -120,7 +120,8 @@ mod tests {
     fn advice_gets_its_flags_and_other_errors_none() {
         use vlab::rig::RigFile;
         let rig = vlab::rig::RigSpec::builtin("thesis-shaker").expect("built in");
-        let err = vlab::rig::check_limits(&rig, 20.0, 13.0, 9.81).expect_err("stroke");
+        let drive = vlab::drive::Drive::new(20.0, 13.0, 9.81).expect("valid drive");
+        let err = vlab::rig::check_limits(&rig, &drive).expect_err("stroke");
         let err = anyhow::Error::new(SceneError::from(err)).context("--rig thesis-shaker");
         let shown = with_flag_hint(err.to_string(), &err);
         assert!(shown.ends_with(" (--gamma, --rig ideal)"), "{shown}");

@@ -48,7 +48,7 @@ pub fn run(a: SceneArgs) -> Result<()> {
     }
     print_bed(&scene);
     print_contacts(&scene);
-    print_time_step(&scene);
+    print_time_step(&scene)?;
     print_run(&scene);
     Ok(())
 }
@@ -96,7 +96,8 @@ fn print_contacts(scene: &Scene) {
 }
 
 /// The time step at the default drive and its rule, and the yield velocities.
-fn print_time_step(scene: &Scene) {
+fn print_time_step(scene: &Scene) -> Result<()> {
+    let thesis_drive = scene.drive(40.0, 20.0)?;
     let dt_rule = match &scene.simulation.dt_s {
         TimeStepSpec::Seconds(_) => "fixed".to_string(),
         TimeStepSpec::Rule(TimeStepRule::Rayleigh) => format!(
@@ -106,12 +107,12 @@ fn print_time_step(scene: &Scene) {
         TimeStepSpec::Rule(TimeStepRule::Contacts) => format!(
             "{} steps per contact at the fastest expected impact ({:.2} m/s at 40 Hz, Gamma 20)",
             scene.simulation.steps_per_contact,
-            scene.expected_impact_speed_mps(40.0, 20.0)
+            scene.expected_impact_speed_mps(&thesis_drive)
         ),
     };
     println!(
         "  time step        {:.3e} s at 40 Hz, Gamma 20 ({dt_rule}); Rayleigh limit {:.3e} s (eq. 3.31)",
-        scene.drive_dt_s(40.0, 20.0),
+        scene.drive_dt_s(&thesis_drive),
         scene.rayleigh_limit_s()
     );
     if let Some(y) = scene.yield_velocities_mps() {
@@ -120,6 +121,7 @@ fn print_time_step(scene: &Scene) {
             y.particle_particle_mps, y.particle_wall_mps
         );
     }
+    Ok(())
 }
 
 /// How a run goes: settling, then the drive's length.

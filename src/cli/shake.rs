@@ -8,15 +8,17 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
-use vlab::experiment::damper::{Kinematics, NoObserver, StepObserver};
+use vlab::drive::Drive;
+use vlab::experiment::damper::StepObserver;
 use vlab::experiment::measurement::ShakeSetup;
 use vlab::experiment::shake::{
-    ShakeSummary, check_drive, check_record_window, default_out_dir, resolve_rig, run_shake_from,
-    run_shake_on_bed,
+    DemTruth, ShakeSummary, check_record_window, default_out_dir, resolve_rig, run_shake_from,
+    shake_drive,
 };
 use vlab::export::snapshots::PhaseSnapshots;
 use vlab::export::vtk_dump::VtkDump;
 use vlab::rig::ShakerKind;
+use vlab::scene::Scene;
 
 use super::args;
 use super::cache_cmd::NoCacheArg;
@@ -51,6 +53,10 @@ pub struct ShakeArgs {
     /// Output folder [default: signals/<scene>-<freq>Hz-G<gamma>].
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Seed of the rig's DAQ noise [default: the bed's seed, --seed]: the same
+    /// bed measured again with fresh noise.
+    #[arg(long = "noise-seed", value_name = "N")]
+    pub noise_seed: Option<u64>,
     /// Print the summary as JSON on standard output.
     #[arg(long)]
     pub json: bool,
@@ -72,118 +78,46 @@ pub struct ShakeArgs {
     pub cache: NoCacheArg,
 }
 
-/// Two observers of one drive.
-struct Both<'a>(&'a mut dyn StepObserver, &'a mut dyn StepObserver);
-
-impl StepObserver for Both<'_> {
-    fn observe(&mut self, t_s: f64, world: &vlab::dem::World, enclosure: &Kinematics) {
-        self.0.observe(t_s, world, enclosure);
-        self.1.observe(t_s, world, enclosure);
-    }
-}
-
-/// Runs the command.
+/// Runs the command: the scene, drive and rig from the flags, the observers
+/// `--dump` and `--snapshots` ask for, the library's shake, and what it prints.
 pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
-    let flags = a.scene.flags().set(true, "freq_hz", "--freq");
-    let mut scene = a.scene.resolve()?;
-    if let Some(d) = a.duration_s {
-        scene.set_record_length(d, a.freq_hz);
-    }
-    check_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
-    let g = scene.simulation.gravity_mps2;
-    let rig = resolve_rig(&a.rig, a.shaker, a.freq_hz, a.gamma, g)
-        .with_context(|| format!("--rig {}", a.rig))?;
-    check_record_window(&scene, a.freq_hz, rig.daq.sample_rate_hz)
-        .map_err(|e| flags.name_flags(e.into()))?;
-    let calibration = args::calibration_source(a.calibration.as_deref())?;
+    let (scene, setup) = setup(&a)?;
     let out_dir = a
         .out
         .clone()
-        .unwrap_or_else(|| default_out_dir(&scene, a.freq_hz, a.gamma));
+        .unwrap_or_else(|| default_out_dir(&scene, &setup.drive));
     let made = OutputDir::prepare(&out_dir)
         .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
+    let mut dump = vtk_dump(&a, &scene, &setup.drive)?;
+    let mut snaps = a
+        .snapshots
+        .then(|| PhaseSnapshots::new(setup.drive.freq_hz(), 0.0));
     let mut progress = ProgressLine::new("shake", quiet);
-    let setup = ShakeSetup {
-        rig,
-        freq_hz: a.freq_hz,
-        gamma: a.gamma,
-        calibration,
-    };
-    let period = 1.0 / a.freq_hz;
-    let mut dump = match &a.dump {
-        Some(dir) => {
-            std::fs::create_dir_all(dir)
-                .with_context(|| format!("cannot create --dump folder {}", dir.display()))?;
-            Some(VtkDump::new(
-                dir,
-                a.dump_every_s.unwrap_or(period / 8.0),
-                a.dump_from_s.unwrap_or(0.0),
-                0.5 * scene.enclosure.inner_diameter_m,
-                scene.enclosure.inner_length_m,
-            ))
-        }
-        None => None,
-    };
-    let mut snaps = a.snapshots.then(|| PhaseSnapshots::new(a.freq_hz, 0.0));
     let beds = a.cache.source(&mut |n| progress.warn(n));
-    let result = (|| {
-        if dump.is_none() && snaps.is_none() {
-            return run_shake_from(&scene, &setup, &beds, &mut NoObserver, &mut |p| {
-                progress.update(p)
-            });
-        }
-        check_drive(&scene, a.freq_hz, a.gamma)?;
-        let mut bed = beds.settle(&scene, &mut |p| progress.update(p))?;
-        if dump.is_some() {
-            bed.world.track_particle_dissipation(true);
-        }
-        let mut none_a = NoObserver;
-        let mut none_b = NoObserver;
-        let first: &mut dyn StepObserver = match dump.as_mut() {
-            Some(d) => d,
-            None => &mut none_a,
-        };
-        let second: &mut dyn StepObserver = match snaps.as_mut() {
-            Some(s) => s,
-            None => &mut none_b,
-        };
-        run_shake_on_bed(&scene, &bed, &setup, &mut Both(first, second), &mut |p| {
-            progress.update(p)
-        })
-    })()
+    let mut observers: Vec<&mut dyn StepObserver> = Vec::new();
+    if let Some(d) = dump.as_mut() {
+        observers.push(d);
+    }
+    if let Some(s) = snaps.as_mut() {
+        observers.push(s);
+    }
+    let result = run_shake_from(&scene, &setup, &beds, &mut observers, &mut |p| {
+        progress.update(p)
+    })
     .context("running the damper through the rig");
     progress.finish();
     let mut shake = made.keep_if_ok(result)?;
     shake.write(&out_dir, &scene, &setup)?;
-    if let Some(d) = dump {
+    if let (Some(d), Some(dir)) = (dump, &a.dump) {
         let files = d.finish()?;
         progress.note(&format!(
             "wrote {} ParaView files into {} (open particles.pvd and enclosure.pvd)",
             files.len(),
-            a.dump
-                .as_deref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default()
+            dir.display()
         ));
     }
     if let Some(sn) = &snaps {
-        let v = a.gamma * scene.simulation.gravity_mps2 / (2.0 * std::f64::consts::PI * a.freq_hz);
-        for ext in ["svg", "png"] {
-            sn.plot(
-                &out_dir.join(format!("snapshots.{ext}")),
-                &format!(
-                    "{} damper, {} Hz, Gamma {}, {}: one steady cycle",
-                    scene.name,
-                    a.freq_hz,
-                    a.gamma,
-                    scene.enclosure.orientation.as_str()
-                ),
-                scene.enclosure.orientation,
-                0.5 * scene.enclosure.inner_diameter_m,
-                scene.enclosure.inner_length_m,
-                v,
-            )?;
-        }
+        plot_snapshots(sn, &scene, &setup.drive, &out_dir)?;
     }
     for w in &shake.summary.warnings {
         progress.warn(&format!("warning: {w}"));
@@ -196,11 +130,67 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
+/// The scene and the shake's setup from the flags: the drive, checked once
+/// here ([`shake_drive`]), the rig that can drive it, its record window, the
+/// noise seed and the phase calibration; refusals name the flags.
+fn setup(a: &ShakeArgs) -> Result<(Scene, ShakeSetup)> {
+    let flags = a.scene.flags().set(true, "freq_hz", "--freq");
+    let mut scene = a.scene.resolve()?;
+    if let Some(d) = a.duration_s {
+        scene.set_record_length(d, a.freq_hz);
+    }
+    let drive = shake_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
+    let rig = resolve_rig(&a.rig, a.shaker, &drive).with_context(|| format!("--rig {}", a.rig))?;
+    check_record_window(&scene, drive.freq_hz(), rig.daq.sample_rate_hz)
+        .map_err(|e| flags.name_flags(e.into()))?;
+    let setup = ShakeSetup {
+        rig,
+        drive,
+        noise_seed: a.noise_seed.unwrap_or(scene.simulation.seed),
+        calibration: args::calibration_source(a.calibration.as_deref())?,
+    };
+    Ok((scene, setup))
+}
+
+/// The ParaView dump `--dump` asks for (its folder made), if any.
+fn vtk_dump(a: &ShakeArgs, scene: &Scene, drive: &Drive) -> Result<Option<VtkDump>> {
+    let Some(dir) = &a.dump else {
+        return Ok(None);
+    };
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create --dump folder {}", dir.display()))?;
+    Ok(Some(VtkDump::new(
+        dir,
+        a.dump_every_s.unwrap_or(drive.period_s() / 8.0),
+        a.dump_from_s.unwrap_or(0.0),
+        0.5 * scene.enclosure.inner_diameter_m,
+        scene.enclosure.inner_length_m,
+    )))
+}
+
+/// `snapshots.svg` and `snapshots.png` of the last steady cycle into `dir`.
+fn plot_snapshots(sn: &PhaseSnapshots, scene: &Scene, drive: &Drive, dir: &Path) -> Result<()> {
+    for ext in ["svg", "png"] {
+        sn.plot(
+            &dir.join(format!("snapshots.{ext}")),
+            &format!(
+                "{} damper, {} Hz, Gamma {}, {}: one steady cycle",
+                scene.name,
+                drive.freq_hz(),
+                drive.gamma(),
+                scene.enclosure.orientation.as_str()
+            ),
+            scene.enclosure.orientation,
+            0.5 * scene.enclosure.inner_diameter_m,
+            scene.enclosure.inner_length_m,
+            drive.velocity_amplitude_mps(),
+        )?;
+    }
+    Ok(())
+}
+
+/// The summary as a person reads it.
 fn print_summary(s: &ShakeSummary, dir: &Path) {
-    let d = &s.dem;
-    let m = &s.measured;
-    let pc = &d.dissipated_per_cycle_j;
-    let total = pc.total().max(f64::MIN_POSITIVE);
     println!(
         "{} damper, {} Hz, Gamma {}, {}: {} particles ({:.4} kg, fill {:.3}), dt {:.1e} s, seed {}",
         s.scene,
@@ -213,6 +203,29 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         s.dt_s,
         s.seed
     );
+    print_dem(&s.dem);
+    print_measured(s);
+    println!(
+        "  speed {:.2} M particle-steps/s ({} thread{}); wall time: {} {:.1} s, drive {:.1} s, rig and measurement {:.2} s",
+        s.particle_steps_per_s / 1e6,
+        s.threads,
+        if s.threads == 1 { "" } else { "s" },
+        if s.bed_from_cache {
+            "bed read from the cache"
+        } else {
+            "settling"
+        },
+        s.settle_wall_time_s,
+        s.wall_time_s,
+        s.rig_wall_time_s
+    );
+    println!("  wrote {}", dir.display());
+}
+
+/// What the DEM knows.
+fn print_dem(d: &DemTruth) {
+    let pc = &d.dissipated_per_cycle_j;
+    let total = pc.total().max(f64::MIN_POSITIVE);
     let st = &d.steadiness;
     println!(
         "  DEM truth (cycles {}-{} of {}; {}):",
@@ -254,6 +267,12 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         "    energy ledger                 integration error {:+.1e}, residual {:.0e} of the energy that flowed",
         d.integrator_rel, d.ledger_residual_rel
     );
+}
+
+/// What the rig measured, and how it compares with the DEM.
+fn print_measured(s: &ShakeSummary) {
+    let d = &s.dem;
+    let m = &s.measured;
     println!(
         "  measured by rig {} ({} shaker), Yang's method over {} periods:",
         s.rig, s.shaker, m.n_periods
@@ -297,19 +316,4 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         100.0 * m.uncorrected_error_vs_dem_rel,
         100.0 * m.predicted_leak_per_cycle_j / d.energy_per_cycle_j
     );
-    println!(
-        "  speed {:.2} M particle-steps/s ({} thread{}); wall time: {} {:.1} s, drive {:.1} s, rig and measurement {:.2} s",
-        s.particle_steps_per_s / 1e6,
-        s.threads,
-        if s.threads == 1 { "" } else { "s" },
-        if s.bed_from_cache {
-            "bed read from the cache"
-        } else {
-            "settling"
-        },
-        s.settle_wall_time_s,
-        s.wall_time_s,
-        s.rig_wall_time_s
-    );
-    println!("  wrote {}", dir.display());
 }

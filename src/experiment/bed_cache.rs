@@ -685,7 +685,7 @@ mod tests {
         let cached = source.settle(&scene, &mut |_| {}).expect("reads");
         assert!(cached.from_cache);
         assert_eq!(cached.settle_steps, fresh.settle_steps);
-        let dt = scene.drive_dt_s(40.0, 20.0);
+        let dt = scene.drive_dt_s(&scene.drive(40.0, 20.0).expect("valid drive"));
         let mut a = prepare_drive(&fresh, &scene, dt).expect("drive");
         let mut b = prepare_drive(&cached, &scene, dt).expect("drive");
         let (amp, w) = (

@@ -20,12 +20,12 @@
 //! `E(t_final) - E(t_initial)`): the energy dissipated per cycle, averaged over
 //! the steady cycles, divided by `E_max = 4 (Γ g / ω)² M`.
 
-use std::f64::consts::PI;
 use std::time::Instant;
 
 use glam::DVec3;
 
 use crate::dem::{ContactLaw, Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, World};
+use crate::drive::Drive;
 pub use crate::rig::{EnclosureMotion, Kinematics, SineMotion};
 use crate::scene::{DriveLength, Orientation, Scene, SceneError, SteadyCriteria, transient_cycles};
 use crate::stats::{MeanStderr, mean_stderr};
@@ -50,6 +50,27 @@ pub struct Progress {
 pub trait StepObserver {
     /// Called after each step, `t_s` from the start of the drive.
     fn observe(&mut self, t_s: f64, world: &World, enclosure: &Kinematics);
+
+    /// True when the observer reads each particle's dissipated energy
+    /// ([`World::particle_dissipation_j`]): the drive then tracks it.
+    fn wants_particle_dissipation(&self) -> bool {
+        false
+    }
+}
+
+/// Several observers of one drive, each called in turn after every step.
+pub struct Observers<'a, 'b>(pub &'a mut [&'b mut dyn StepObserver]);
+
+impl StepObserver for Observers<'_, '_> {
+    fn observe(&mut self, t_s: f64, world: &World, enclosure: &Kinematics) {
+        for o in self.0.iter_mut() {
+            o.observe(t_s, world, enclosure);
+        }
+    }
+
+    fn wants_particle_dissipation(&self) -> bool {
+        self.0.iter().any(|o| o.wants_particle_dissipation())
+    }
 }
 
 /// An observer that records nothing.
@@ -93,21 +114,12 @@ pub fn gravity_vector(orientation: Orientation, g_mps2: f64) -> DVec3 {
     }
 }
 
-/// How the drive is run.
+/// How the drive is run: the sine (its `E_max`, thesis eq. 6.10, is
+/// [`Drive::e_max_j`]) and for how long.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DrivePlan {
-    pub freq_hz: f64,
-    pub gamma: f64,
-    pub gravity_mps2: f64,
+    pub drive: Drive,
     pub length: DriveLength,
-}
-
-impl DrivePlan {
-    /// Maximum energy dissipated per cycle (J), thesis eq. 6.10: 4 (Γ g / ω)² M.
-    pub fn e_max_j(&self, particle_mass_kg: f64) -> f64 {
-        let v = self.gamma * self.gravity_mps2 / (2.0 * PI * self.freq_hz);
-        4.0 * v * v * particle_mass_kg
-    }
 }
 
 /// Whether, and how well, the steady window is steady.
@@ -204,6 +216,48 @@ fn steadiness(
     }
 }
 
+/// The verdict after `snapshots.len() - 1` whole cycles of a drive of
+/// `length`: the first cycle of the steady window and its steadiness once the
+/// drive is done, `None` while it goes on. `latest` keeps the steadiness of a
+/// drive run until steady as it is checked, for the progress display.
+fn verdict(
+    length: DriveLength,
+    snapshots: &[LedgerSnapshot],
+    e_max_j: f64,
+    latest: &mut Option<Steadiness>,
+) -> Option<(usize, Steadiness)> {
+    let done = (snapshots.len() - 1) as u32;
+    match length {
+        DriveLength::Fixed {
+            cycles,
+            steady_cycles,
+        } => (done >= cycles).then(|| {
+            let first = (cycles - steady_cycles) as usize;
+            let criteria = SteadyCriteria::default();
+            (first, steadiness(snapshots, first, e_max_j, &criteria))
+        }),
+        DriveLength::UntilSteady {
+            min_cycles,
+            max_cycles,
+            criteria,
+        } => {
+            if done < min_cycles {
+                return None;
+            }
+            let first = transient_cycles(done) as usize;
+            let s = steadiness(snapshots, first, e_max_j, &criteria);
+            *latest = Some(s);
+            if s.reached || s.lossless {
+                Some((first, s))
+            } else if done >= max_cycles {
+                Some((first, Steadiness { capped: true, ..s }))
+            } else {
+                None
+            }
+        }
+    }
+}
+
 /// Drives a settled world with `motion` as `plan` says, calling `observer`
 /// after every step.
 pub fn run_drive(
@@ -215,11 +269,11 @@ pub fn run_drive(
 ) -> Result<DriveOutcome, SceneError> {
     let started = Instant::now();
     let dt = world.dt_s();
-    let period = 1.0 / plan.freq_hz;
+    let period = plan.drive.period_s();
     let t0 = world.time_s;
     let n = world.particles.len() as u64;
     let first_step = world.steps;
-    let e_max_j = plan.e_max_j(world.particles.total_mass_kg());
+    let e_max_j = plan.drive.e_max_j(world.particles.total_mass_kg());
     world.impact_speeds = ImpactSpeeds::default();
     world.fewest_steps_per_contact = f64::INFINITY;
     let mut snapshots = vec![world.snapshot()];
@@ -227,9 +281,9 @@ pub fn run_drive(
     let report_every = ((2e-3 / dt).round() as u64).max(1);
     let max_cycles = plan.length.max_cycles();
     let mut k = 0u64;
-    let mut verdict = None;
+    let mut done = None;
     let mut latest: Option<Steadiness> = None;
-    while verdict.is_none() {
+    while done.is_none() {
         k += 1;
         let t = k as f64 * dt;
         let axial = -world.wall_force().dot(world.walls.axis);
@@ -241,81 +295,81 @@ pub fn run_drive(
         if (t / period - next_boundary) * period > -0.5 * dt {
             snapshots.push(world.snapshot());
             largest_speed = largest_speed.max(world.particles.max_speed_mps());
-            let done = (snapshots.len() - 1) as u32;
-            verdict = match plan.length {
-                DriveLength::Fixed {
-                    cycles,
-                    steady_cycles,
-                } => (done >= cycles).then(|| {
-                    let first = (cycles - steady_cycles) as usize;
-                    let criteria = SteadyCriteria::default();
-                    (first, steadiness(&snapshots, first, e_max_j, &criteria))
-                }),
-                DriveLength::UntilSteady {
-                    min_cycles,
-                    max_cycles,
-                    criteria,
-                } => {
-                    if done >= min_cycles {
-                        let first = transient_cycles(done) as usize;
-                        let s = steadiness(&snapshots, first, e_max_j, &criteria);
-                        latest = Some(s);
-                        if s.reached || s.lossless {
-                            Some((first, s))
-                        } else if done >= max_cycles {
-                            Some((first, Steadiness { capped: true, ..s }))
-                        } else {
-                            None
-                        }
-                    } else {
-                        None
-                    }
-                }
-            };
+            done = verdict(plan.length, &snapshots, e_max_j, &mut latest);
         }
         if k % report_every == 0 {
-            let done = (snapshots.len() - 1) as u32;
+            let cycles = (snapshots.len() - 1) as u32;
             progress(Progress {
                 phase: "driving",
-                fraction: f64::from(done) / f64::from(max_cycles),
+                fraction: f64::from(cycles) / f64::from(max_cycles),
                 sim_time_s: world.time_s - t0,
                 particle_steps: k * n,
                 wall_time_s: started.elapsed().as_secs_f64(),
-                cycle: done,
+                cycle: cycles,
                 steadiness: latest,
             });
         }
     }
-    let (steady_first, steadiness) = verdict.unwrap_or_default();
-    let last = snapshots.len() - 1;
-    let whole = LedgerBalance::between(&snapshots[0], &snapshots[last]);
-    let steady = LedgerBalance::between(&snapshots[steady_first], &snapshots[last]);
-    let window_s = snapshots[last].time_s - snapshots[steady_first].time_s;
-    let per_cycle = period / window_s;
-    let energy_per_cycle_j = steady.dissipated_j * per_cycle;
-    let energy_per_cycle = mean_stderr(&cycle_energies(&snapshots, steady_first));
-    Ok(DriveOutcome {
-        cycles: last as u32,
-        steady_first_cycle: steady_first as u32,
-        whole,
-        steady,
-        energy_per_cycle_j,
-        energy_per_cycle,
-        dissipated_per_cycle: steady.dissipated.scaled(per_cycle),
-        work_in_per_cycle_j: steady.work_in_j * per_cycle,
-        steady_window_s: window_s,
+    let (steady_first, steadiness) = done.unwrap_or_default();
+    let tally = DriveTally {
+        period_s: period,
+        t0_s: t0,
         e_max_j,
-        efficiency: energy_per_cycle_j / e_max_j,
-        efficiency_stderr: energy_per_cycle.stderr / e_max_j,
+        steady_first,
         steadiness,
         steps: world.steps - first_step,
         wall_time_s: started.elapsed().as_secs_f64(),
-        steady_start_s: snapshots[steady_first].time_s - t0,
-        cycle_snapshots: snapshots,
         largest_speed_mps: largest_speed,
-        impact_speeds: world.impact_speeds,
-        fewest_steps_per_contact: world.fewest_steps_per_contact,
-    })
+    };
+    Ok(tally.outcome(snapshots, world))
+}
+
+/// What a finished drive knows besides its ledger snapshots.
+struct DriveTally {
+    period_s: f64,
+    t0_s: f64,
+    e_max_j: f64,
+    steady_first: usize,
+    steadiness: Steadiness,
+    steps: u64,
+    wall_time_s: f64,
+    largest_speed_mps: f64,
+}
+
+impl DriveTally {
+    /// The drive's outcome from its cycle `snapshots` and the driven `world`.
+    fn outcome(self, snapshots: Vec<LedgerSnapshot>, world: &World) -> DriveOutcome {
+        let steady_first = self.steady_first;
+        let last = snapshots.len() - 1;
+        let whole = LedgerBalance::between(&snapshots[0], &snapshots[last]);
+        let steady = LedgerBalance::between(&snapshots[steady_first], &snapshots[last]);
+        let window_s = snapshots[last].time_s - snapshots[steady_first].time_s;
+        let per_cycle = self.period_s / window_s;
+        let energy_per_cycle_j = steady.dissipated_j * per_cycle;
+        let energy_per_cycle = mean_stderr(&cycle_energies(&snapshots, steady_first));
+        DriveOutcome {
+            cycles: last as u32,
+            steady_first_cycle: steady_first as u32,
+            whole,
+            steady,
+            energy_per_cycle_j,
+            energy_per_cycle,
+            dissipated_per_cycle: steady.dissipated.scaled(per_cycle),
+            work_in_per_cycle_j: steady.work_in_j * per_cycle,
+            steady_window_s: window_s,
+            e_max_j: self.e_max_j,
+            efficiency: energy_per_cycle_j / self.e_max_j,
+            efficiency_stderr: energy_per_cycle.stderr / self.e_max_j,
+            steadiness: self.steadiness,
+            steps: self.steps,
+            wall_time_s: self.wall_time_s,
+            steady_start_s: snapshots[steady_first].time_s - self.t0_s,
+            cycle_snapshots: snapshots,
+            largest_speed_mps: self.largest_speed_mps,
+            impact_speeds: world.impact_speeds,
+            fewest_steps_per_contact: world.fewest_steps_per_contact,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -357,9 +411,7 @@ mod tests {
     /// from 4 cycles on, at most `max_cycles`.
     fn drive_until_steady(world: &mut World, max_cycles: u32) -> DriveOutcome {
         let plan = DrivePlan {
-            freq_hz: 160.0,
-            gamma: 3.0,
-            gravity_mps2: 9.81,
+            drive: Drive::new(160.0, 3.0, 9.81).expect("valid drive"),
             length: DriveLength::UntilSteady {
                 min_cycles: 4,
                 max_cycles,
@@ -369,7 +421,7 @@ mod tests {
                 },
             },
         };
-        let mut motion = SineMotion::new(plan.freq_hz, plan.gamma, plan.gravity_mps2);
+        let mut motion = SineMotion::new(&plan.drive);
         run_drive(world, &plan, &mut motion, &mut NoObserver, &mut |_| {}).expect("drives")
     }
 

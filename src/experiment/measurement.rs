@@ -24,11 +24,10 @@
 //! polarity"); the blocks of the statistical error use the whole record's
 //! verdict.
 
-use std::f64::consts::PI;
-
 use serde::Serialize;
 
 use crate::dem::World;
+use crate::drive::Drive;
 use crate::experiment::damper::{
     DriveOutcome, DrivePlan, NoObserver, Progress, StepObserver, run_drive,
 };
@@ -38,8 +37,7 @@ use crate::rig::{EnclosureMotion, Kinematics};
 use crate::scene::{Orientation, Scene, SceneError};
 use crate::signals::{
     ForcePolarity, PhaseCalibration, PhaseCorrection, PhaseErrorPoint, PowerOptions, PowerResult,
-    PowerWindow, Trace, TraceMetadata, estimate_phase_error, max_energy_per_cycle_j, yang_power,
-    yang_power_of_trace,
+    PowerWindow, Trace, TraceMetadata, estimate_phase_error, yang_power, yang_power_of_trace,
 };
 use crate::stats::{MeanStderr, mean_stderr};
 use crate::warning::RunWarning;
@@ -80,12 +78,15 @@ pub enum CalibrationSource {
 }
 
 /// How a measured shake is run: the rig (driven by its `shaker.kind`), the
-/// drive and the phase calibration.
+/// drive, the seed of the rig's noise and the phase calibration.
 #[derive(Debug, Clone)]
 pub struct ShakeSetup {
     pub rig: RigSpec,
-    pub freq_hz: f64,
-    pub gamma: f64,
+    pub drive: Drive,
+    /// Seed of the DAQ's noise (the damper run's and the on-the-fly
+    /// calibration's); the bed's seed is the scene's `simulation.seed`.
+    /// `vlab shake` takes the bed's seed unless given `--noise-seed`.
+    pub noise_seed: u64,
     pub calibration: CalibrationSource,
 }
 
@@ -173,30 +174,86 @@ pub fn run_measured_shake_observed(
     observer: &mut dyn StepObserver,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeExperiment, SceneError> {
-    let g = scene.simulation.gravity_mps2;
     let rig = &setup.rig;
+    let drive = &setup.drive;
     let plan = DrivePlan {
-        freq_hz: setup.freq_hz,
-        gamma: setup.gamma,
-        gravity_mps2: g,
+        drive: *drive,
         length: scene.drive_length(),
     };
     let particle_mass = world.particles.total_mass_kg();
     let mut shaker = Shaker::new(
         rig,
         rig.shaker.kind,
-        setup.freq_hz,
-        setup.gamma,
-        g,
+        drive,
         rig.enclosure.mass_kg,
         particle_mass,
     )?;
     // The DAQ records from the earliest cycle the steady window can start at;
     // the record is cut to the window the drive finds steady.
-    let period = 1.0 / setup.freq_hz;
-    let record_start = f64::from(plan.length.min_transient_cycles()) * period;
-    let dt = world.dt_s();
-    let mut daq = Daq::new(rig, dt, record_start, scene.simulation.seed)?;
+    let record_start = f64::from(plan.length.min_transient_cycles()) * drive.period_s();
+    let mut instruments = Instruments {
+        truth: TruthRecorder::new(rig.daq.sample_rate_hz, 0.0),
+        daq: settled_daq(scene, setup, world, &plan, record_start)?,
+        enclosure_mass_kg: rig.enclosure.mass_kg,
+        static_weight_n: static_weight_n(scene, rig),
+        extra: observer,
+    };
+    let outcome = run_drive(world, &plan, &mut shaker, &mut instruments, progress)?;
+    let metadata = trace_metadata(scene, setup, particle_mass);
+    let (record, daq_report) = instruments.daq.finish(metadata)?;
+    // The window's nominal start, a whole number of periods: the DEM's
+    // boundary step lies within half a step of it, and cutting at the step's
+    // time would drop the boundary sample and with it a whole period.
+    let steady_start_s = f64::from(outcome.steady_first_cycle) * drive.period_s();
+    let trace = record.from_time(steady_start_s - record_start);
+    let (calibration, source) = phase_calibration(
+        rig,
+        &setup.calibration,
+        &CalibrationRun {
+            shaker: rig.shaker.kind,
+            drive: *drive,
+            dt_s: world.dt_s(),
+            cycles: outcome.cycles,
+            record_cycles: outcome.cycles - outcome.steady_first_cycle,
+            noise_seed: setup.noise_seed,
+        },
+    )?;
+    let yang = measure_trace(&trace, drive.freq_hz(), &calibration)?;
+    let shaker_report = shaker.report();
+    let measured = compare_with_dem(
+        setup,
+        &outcome,
+        &yang,
+        particle_mass,
+        MeasuredBy {
+            source,
+            achieved_gamma: shaker_report.achieved_gamma,
+            clipping: daq_report.clipping_warnings(),
+        },
+    );
+    Ok(ShakeExperiment {
+        truth: std::mem::take(&mut instruments.truth.samples),
+        outcome,
+        trace,
+        daq: daq_report,
+        shaker: shaker_report,
+        measured,
+        calibration,
+    })
+}
+
+/// The rig's DAQ for a drive of `plan` on the settled `world`, recording from
+/// `record_start_s`, its conditioner settled on the damper at rest.
+fn settled_daq(
+    scene: &Scene,
+    setup: &ShakeSetup,
+    world: &World,
+    plan: &DrivePlan,
+    record_start_s: f64,
+) -> Result<Daq, SceneError> {
+    let rig = &setup.rig;
+    let period = plan.drive.period_s();
+    let mut daq = Daq::new(rig, world.dt_s(), record_start_s, setup.noise_seed)?;
     daq.reserve(f64::from(plan.length.max_cycles().min(64)) * period + 0.01);
     // The conditioner has long settled on the damper at rest (the settled
     // bed's weight on the gauge), not on the first step of the drive, whose
@@ -211,56 +268,42 @@ pub fn run_measured_shake_observed(
             static_weight_n(scene, rig),
         ),
     );
-    let mut instruments = Instruments {
-        truth: TruthRecorder::new(rig.daq.sample_rate_hz, 0.0),
-        daq,
-        enclosure_mass_kg: rig.enclosure.mass_kg,
-        static_weight_n: static_weight_n(scene, rig),
-        extra: observer,
-    };
-    let outcome = run_drive(world, &plan, &mut shaker, &mut instruments, progress)?;
-    let metadata = trace_metadata(scene, setup, particle_mass, g);
-    let (record, daq_report) = instruments.daq.finish(metadata)?;
-    // The window's nominal start, a whole number of periods: the DEM's
-    // boundary step lies within half a step of it, and cutting at the step's
-    // time would drop the boundary sample and with it a whole period.
-    let steady_start_s = f64::from(outcome.steady_first_cycle) * period;
-    let trace = record.from_time(steady_start_s - record_start);
-    let steady_cycles = outcome.cycles - outcome.steady_first_cycle;
+    Ok(daq)
+}
 
-    let (calibration, source) = phase_calibration(
-        rig,
-        &setup.calibration,
-        &CalibrationRun {
-            shaker: rig.shaker.kind,
-            freq_hz: setup.freq_hz,
-            gamma: setup.gamma,
-            gravity_mps2: g,
-            dt_s: dt,
-            cycles: outcome.cycles,
-            record_cycles: steady_cycles,
-            seed: scene.simulation.seed,
-        },
-    )?;
-    let YangMeasurement {
-        corrected,
-        uncorrected: raw,
-        blocks,
-    } = measure_trace(&trace, setup.freq_hz, &calibration)?;
+/// What the measurement says about itself beside Yang's figures.
+struct MeasuredBy {
+    /// Where the phase calibration came from.
+    source: String,
+    achieved_gamma: Option<f64>,
+    clipping: Vec<RunWarning>,
+}
+
+/// Yang's measurement `yang` of a drive held against the DEM's `outcome`.
+fn compare_with_dem(
+    setup: &ShakeSetup,
+    outcome: &DriveOutcome,
+    yang: &YangMeasurement,
+    particle_mass_kg: f64,
+    by: MeasuredBy,
+) -> Measured {
+    let rig = &setup.rig;
+    let drive = &setup.drive;
+    let freq_hz = drive.freq_hz();
+    let (corrected, raw, blocks) = (&yang.corrected, &yang.uncorrected, yang.blocks);
     let truth = outcome.energy_per_cycle_j;
     let work_truth = outcome.work_in_per_cycle_j;
-    let omega = 2.0 * PI * setup.freq_hz;
-    let v = setup.gamma * g / omega;
-    let phi = rig.expected_phase_error_rad(setup.freq_hz);
-    let shaker_report = shaker.report();
-    let e_max = max_energy_per_cycle_j(particle_mass, setup.gamma, setup.freq_hz, g)?;
-    let measured = Measured {
+    let omega = drive.omega_rad_s();
+    let v = drive.velocity_amplitude_mps();
+    let phi = rig.expected_phase_error_rad(freq_hz);
+    let e_max = drive.e_max_j(particle_mass_kg);
+    Measured {
         power_w: corrected.power_w,
         energy_per_cycle_j: corrected.energy_per_cycle_j,
         efficiency: corrected.energy_per_cycle_j / e_max,
         power_stderr_w: blocks.map(|b| b.stderr),
-        energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / setup.freq_hz),
-        efficiency_stderr: blocks.map(|b| b.stderr / setup.freq_hz / e_max),
+        energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / freq_hz),
+        efficiency_stderr: blocks.map(|b| b.stderr / freq_hz / e_max),
         unsteadiness_rel: work_truth / truth - 1.0,
         phase_correction_rad: corrected.phase_correction_rad,
         force_polarity_reversed: corrected.force_polarity.reversed,
@@ -269,24 +312,15 @@ pub fn run_measured_shake_observed(
         uncorrected_energy_per_cycle_j: raw.energy_per_cycle_j,
         uncorrected_error_vs_dem_rel: raw.energy_per_cycle_j / truth - 1.0,
         predicted_leak_per_cycle_j: -0.5 * rig.enclosure.mass_kg * omega * v * v * phi.sin()
-            / setup.freq_hz,
+            / freq_hz,
         rig_phase_error_rad: phi,
-        calibration: source,
+        calibration: by.source,
         n_periods: corrected.n_periods,
         rig: rig.name.clone(),
         shaker: rig.shaker.kind,
-        achieved_gamma: shaker_report.achieved_gamma,
-        clipping: daq_report.clipping_warnings(),
-    };
-    Ok(ShakeExperiment {
-        truth: std::mem::take(&mut instruments.truth.samples),
-        outcome,
-        trace,
-        daq: daq_report,
-        shaker: shaker_report,
-        measured,
-        calibration,
-    })
+        achieved_gamma: by.achieved_gamma,
+        clipping: by.clipping,
+    }
 }
 
 /// How the empty enclosure runs for an on-the-fly calibration: as the run
@@ -294,15 +328,14 @@ pub fn run_measured_shake_observed(
 #[derive(Debug, Clone, Copy)]
 pub struct CalibrationRun {
     pub shaker: ShakerKind,
-    pub freq_hz: f64,
-    pub gamma: f64,
-    pub gravity_mps2: f64,
+    pub drive: Drive,
     /// The rig's step (s): the DEM's in a shake, the push step in a replay.
     pub dt_s: f64,
     /// Cycles run, and the last of them recorded.
     pub cycles: u32,
     pub record_cycles: u32,
-    pub seed: u64,
+    /// Seed of the DAQ's noise.
+    pub noise_seed: u64,
 }
 
 /// The phase-error table a measured run is corrected with, and where it came
@@ -319,27 +352,29 @@ pub fn phase_calibration(
     if let CalibrationSource::Given(table, description) = source {
         return Ok((table.clone(), description.clone()));
     }
-    if rig.needs_no_calibration(run.freq_hz) {
+    let freq_hz = run.drive.freq_hz();
+    let gamma = run.drive.gamma();
+    if rig.needs_no_calibration(freq_hz) {
         return Ok((
-            exact_calibration(rig, run.freq_hz)?,
+            exact_calibration(rig, freq_hz)?,
             format!(
                 "none needed: rig {} reads without phase error or noise",
                 rig.name
             ),
         ));
     }
-    let freqs = calibration_freqs_hz(run.freq_hz, rig.daq.sample_rate_hz);
-    let gammas = [0.5 * run.gamma, run.gamma];
+    let freqs = calibration_freqs_hz(freq_hz, rig.daq.sample_rate_hz);
+    let gammas = [0.5 * gamma, gamma];
     let table = calibrate_rig(
         rig,
         run.shaker,
         &freqs,
         &gammas,
-        run.gravity_mps2,
+        run.drive.gravity_mps2(),
         run.dt_s,
         run.cycles,
         run.record_cycles,
-        run.seed,
+        run.noise_seed,
     )?
     .table;
     let description = format!(
@@ -480,12 +515,8 @@ pub fn analyse_with(
     )?)
 }
 
-fn trace_metadata(
-    scene: &Scene,
-    setup: &ShakeSetup,
-    particle_mass_kg: f64,
-    g: f64,
-) -> TraceMetadata {
+fn trace_metadata(scene: &Scene, setup: &ShakeSetup, particle_mass_kg: f64) -> TraceMetadata {
+    let g = scene.simulation.gravity_mps2;
     let mut extra = std::collections::BTreeMap::new();
     extra.insert(
         "particle_mass_kg".to_string(),
@@ -506,8 +537,8 @@ fn trace_metadata(
             setup.rig.name
         ),
         rig: setup.rig.name.clone(),
-        drive_freq_hz: Some(setup.freq_hz),
-        gamma: Some(setup.gamma),
+        drive_freq_hz: Some(setup.drive.freq_hz()),
+        gamma: Some(setup.drive.gamma()),
         extra,
         ..Default::default()
     }
@@ -540,8 +571,9 @@ pub const MIN_CALIBRATION_PERIODS: u32 = 4;
 
 /// Runs the empty enclosure of `rig` at every frequency and amplitude for
 /// `cycles` cycles, recording the last `record_cycles` (at least
-/// [`MIN_CALIBRATION_PERIODS`]) as a damper run does, and estimates the phase error of each record
-/// (true force/velocity phase exactly 90°).
+/// [`MIN_CALIBRATION_PERIODS`]) as a damper run does, its DAQ noise drawn
+/// from `noise_seed`, and estimates the phase error of each record (true
+/// force/velocity phase exactly 90°).
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate_rig(
     rig: &RigSpec,
@@ -552,7 +584,7 @@ pub fn calibrate_rig(
     dt_s: f64,
     cycles: u32,
     record_cycles: u32,
-    seed: u64,
+    noise_seed: u64,
 ) -> Result<RigCalibration, SceneError> {
     let mut points = Vec::new();
     for &f in freqs_hz {
@@ -563,11 +595,12 @@ pub fn calibrate_rig(
         let record_cycles_f = record_cycles.max(MIN_CALIBRATION_PERIODS);
         let cycles_f = cycles + (record_cycles_f - record_cycles);
         for &gamma in gammas {
-            let mut shaker = Shaker::new(rig, kind, f, gamma, g_mps2, rig.enclosure.mass_kg, 0.0)?;
-            let period = 1.0 / f;
+            let drive = Drive::new(f, gamma, g_mps2)?;
+            let mut shaker = Shaker::new(rig, kind, &drive, rig.enclosure.mass_kg, 0.0)?;
+            let period = drive.period_s();
             let (cycles, record_cycles) = (cycles_f, record_cycles_f);
             let record_start = f64::from(cycles - record_cycles) * period;
-            let mut daq = Daq::new(rig, dt_s, record_start, seed)?;
+            let mut daq = Daq::new(rig, dt_s, record_start, noise_seed)?;
             daq.reserve(f64::from(record_cycles) * period + 0.01);
             let steps = (f64::from(cycles) * period / dt_s).round() as u64;
             // The empty enclosure carries only itself; the rig model sees no

@@ -62,6 +62,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::atomic_write::write_bytes_atomic;
+use crate::drive::Drive;
 use crate::experiment::measurement::{
     CalibrationRun, CalibrationSource, YangMeasurement, measure_trace, phase_calibration,
 };
@@ -515,7 +516,8 @@ pub fn replay_record(
         (None, None) => (achieved_gamma, Source::Estimated),
     };
     positive("gamma", gamma, "")?;
-    check_limits(rig, freq_hz, gamma, g)?;
+    let drive = Drive::new(freq_hz, gamma, g)?;
+    check_limits(rig, &drive)?;
     let (orientation, orientation_source) = orientation_of(options, table)?;
     let (particle_mass_kg, particle_mass_source) = particle_mass_of(options, table, &mut warnings)?;
 
@@ -554,13 +556,11 @@ pub fn replay_record(
         &options.calibration,
         &CalibrationRun {
             shaker: ShakerKind::Prescribed,
-            freq_hz,
-            gamma,
-            gravity_mps2: g,
+            drive,
             dt_s: dt,
             cycles: transient + periods,
             record_cycles: periods,
-            seed: options.seed,
+            noise_seed: options.seed,
         },
     )?;
     let YangMeasurement {
@@ -592,7 +592,7 @@ pub fn replay_record(
     let measured_efficiency = particle_mass_kg
         .map(|m| efficiency(corrected.energy_per_cycle_j, m, gamma, freq_hz, g))
         .transpose()?;
-    let v_amp = gamma * g / omega;
+    let v_amp = drive.velocity_amplitude_mps();
     let phi = rig.expected_phase_error_rad(freq_hz);
     let measured = ReplayMeasured {
         power_w: corrected.power_w,

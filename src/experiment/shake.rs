@@ -6,15 +6,15 @@
 //! ```no_run
 //! use vlab::scene::Scene;
 //! use vlab::experiment::measurement::{CalibrationSource, ShakeSetup};
-//! use vlab::experiment::shake::{resolve_rig, run_shake};
+//! use vlab::experiment::shake::{resolve_rig, run_shake, shake_drive};
 //!
 //! let scene = Scene::thesis();
-//! let g = scene.simulation.gravity_mps2;
-//! let rig = resolve_rig("thesis-shaker", None, 40.0, 20.0, g)?;
+//! let drive = shake_drive(&scene, 40.0, 20.0)?;
+//! let rig = resolve_rig("thesis-shaker", None, &drive)?;
 //! let setup = ShakeSetup {
 //!     rig,
-//!     freq_hz: 40.0,
-//!     gamma: 20.0,
+//!     drive,
+//!     noise_seed: scene.simulation.seed,
 //!     calibration: CalibrationSource::OnTheFly,
 //! };
 //! let mut run = run_shake(&scene, &setup, &mut |_| {})?;
@@ -31,8 +31,9 @@ use serde::Serialize;
 
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
+use crate::drive::Drive;
 use crate::experiment::bed_cache::BedSource;
-use crate::experiment::damper::{DriveOutcome, NoObserver, Progress, Steadiness, StepObserver};
+use crate::experiment::damper::{DriveOutcome, Observers, Progress, Steadiness, StepObserver};
 use crate::experiment::measurement::{
     Measured, ShakeExperiment, ShakeSetup, run_measured_shake_observed,
 };
@@ -41,7 +42,7 @@ use crate::experiment::settle::{SettledBed, prepare_drive};
 use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
 use crate::scene::{Scene, SceneError};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
-use crate::validation::{InvalidParameter, positive, require};
+use crate::validation::{InvalidParameter, require};
 use crate::warning::{FileKey, RunWarning};
 
 /// Sample rate of the truth record (Hz), the thesis DAQ's.
@@ -49,33 +50,32 @@ pub const TRUTH_SAMPLE_RATE_HZ: f64 = 40_000.0;
 
 /// The rig `name_or_path` (a built-in name or a rig file) driven by
 /// `shaker` (`None`: the rig's own `shaker.kind`), refusing what the rig
-/// cannot do at `freq_hz` and `gamma` (thesis: Γ ≤ 12 at 20 Hz, ≤ 40
-/// elsewhere) and an electrodynamic drive on a rig without its parameters.
+/// cannot do with `drive` (thesis: Γ ≤ 12 at 20 Hz, ≤ 40 elsewhere) and an
+/// electrodynamic drive on a rig without its parameters.
 pub fn resolve_rig(
     name_or_path: &str,
     shaker: Option<ShakerKind>,
-    freq_hz: f64,
-    gamma: f64,
-    g_mps2: f64,
+    drive: &Drive,
 ) -> Result<RigSpec, SceneError> {
     let mut rig = RigSpec::from_name_or_path(name_or_path)?;
     if let Some(kind) = shaker {
         rig = rig.with_shaker(kind);
     }
-    check_limits(&rig, freq_hz, gamma, g_mps2)?;
+    check_limits(&rig, drive)?;
     if rig.shaker.kind == ShakerKind::Electrodynamic {
         rig.electrodynamic()?;
     }
     Ok(rig)
 }
 
-/// Checks that a drive at `freq_hz` and `gamma` can be resolved by the
-/// scene's time step (200 steps a cycle at least) and by the 40 kHz truth
-/// record.
-pub fn check_drive(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<(), SceneError> {
-    positive("freq_hz", freq_hz, "Hz")?;
-    positive("gamma", gamma, "")?;
-    let dt = scene.drive_dt_s(freq_hz, gamma);
+/// The drive of a shake of `scene` at `freq_hz` and `gamma` (under the
+/// scene's gravity), checked once, here: a positive frequency and Γ
+/// ([`Drive::new`]) that the scene's time step resolves (200 steps a cycle at
+/// least) and the 40 kHz truth record too (4 samples a cycle). The run
+/// functions below take it as built and do not check it again.
+pub fn shake_drive(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<Drive, SceneError> {
+    let drive = scene.drive(freq_hz, gamma)?;
+    let dt = scene.drive_dt_s(&drive);
     let by_step = 1.0 / (200.0 * dt);
     let by_record = TRUTH_SAMPLE_RATE_HZ / 4.0;
     if freq_hz > by_step.min(by_record) {
@@ -88,7 +88,7 @@ pub fn check_drive(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<(), SceneE
         };
         return Err(InvalidParameter::new("freq_hz", freq_hz, "Hz", why).into());
     }
-    Ok(())
+    Ok(drive)
 }
 
 /// Whole drive periods Yang's method needs in the rig's record.
@@ -141,7 +141,8 @@ pub fn check_record_window(
 }
 
 /// Default output folder of a shake: `signals/<scene>-<freq>Hz-G<gamma>`.
-pub fn default_out_dir(scene: &Scene, freq_hz: f64, gamma: f64) -> PathBuf {
+pub fn default_out_dir(scene: &Scene, drive: &Drive) -> PathBuf {
+    let (freq_hz, gamma) = (drive.freq_hz(), drive.gamma());
     PathBuf::from("signals").join(format!("{}-{freq_hz}Hz-G{gamma}", scene.name))
 }
 
@@ -306,7 +307,10 @@ pub struct ShakeSummary {
     pub n_particles: usize,
     pub particle_mass_kg: f64,
     pub fill_ratio: f64,
+    /// Seed of the bed (`simulation.seed`): the pour, hence the DEM truth.
     pub seed: u64,
+    /// Seed of the rig's DAQ noise (`--noise-seed`; the bed's seed unless given).
+    pub noise_seed: u64,
     pub dt_s: f64,
     pub cycles: u32,
     pub steady_cycles: u32,
@@ -351,18 +355,18 @@ pub fn run_shake(
     setup: &ShakeSetup,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
-    run_shake_observed(scene, setup, &mut NoObserver, progress)
+    run_shake_observed(scene, setup, &mut [], progress)
 }
 
-/// [`run_shake`] with `observer` called after every DEM step of the drive
-/// (a ParaView dump, the motional-phase indicators).
+/// [`run_shake`] with `observers` called in turn after every DEM step of the
+/// drive (a ParaView dump, the snapshots, the motional-phase indicators).
 pub fn run_shake_observed(
     scene: &Scene,
     setup: &ShakeSetup,
-    observer: &mut dyn StepObserver,
+    observers: &mut [&mut dyn StepObserver],
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
-    run_shake_from(scene, setup, &BedSource::Settle, observer, progress)
+    run_shake_from(scene, setup, &BedSource::Settle, observers, progress)
 }
 
 /// [`run_shake_observed`] with the bed taken from `beds` (the bed cache:
@@ -371,72 +375,93 @@ pub fn run_shake_from(
     scene: &Scene,
     setup: &ShakeSetup,
     beds: &BedSource,
-    observer: &mut dyn StepObserver,
+    observers: &mut [&mut dyn StepObserver],
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
-    check_drive(scene, setup.freq_hz, setup.gamma)?;
     let bed = beds.settle(scene, progress)?;
-    run_shake_on_bed(scene, &bed, setup, observer, progress)
+    run_shake_on_bed(scene, &bed, setup, observers, progress)
 }
 
 /// Drives an already settled `bed` of `scene` (the same scene and seed:
 /// [`settle_bed`] is deterministic, so this equals [`run_shake`]) through the
-/// rig of `setup` and measures it; the bed itself is not changed. A sweep
-/// settles each bed once and drives it at every frequency and amplitude this
-/// way.
+/// rig of `setup` and measures it, `observers` called after every step; the
+/// bed itself is not changed. A sweep settles each bed once and drives it at
+/// every frequency and amplitude this way. The drive is the one
+/// [`shake_drive`] built and checked.
 pub fn run_shake_on_bed(
     scene: &Scene,
     bed: &SettledBed,
     setup: &ShakeSetup,
-    observer: &mut dyn StepObserver,
+    observers: &mut [&mut dyn StepObserver],
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
-    check_drive(scene, setup.freq_hz, setup.gamma)?;
     let started = Instant::now();
-    let dt = scene.drive_dt_s(setup.freq_hz, setup.gamma);
+    let dt = scene.drive_dt_s(&setup.drive);
     let mut world = prepare_drive(bed, scene, dt)?;
-    let experiment = run_measured_shake_observed(scene, &mut world, setup, observer, progress)?;
-    let outcome = &experiment.outcome;
-    let n = world.particles.len();
-    let dem = DemTruth::new(outcome, scene);
-    let mut warnings = bed.warnings.clone();
-    warnings.extend(experiment.measured.clipping.iter().cloned());
-    warnings.extend(dem.warnings(setup.freq_hz, scene.simulation.steps_per_contact));
-    let summary = ShakeSummary {
-        vlab_version: env!("CARGO_PKG_VERSION"),
-        scene: scene.name.clone(),
-        freq_hz: setup.freq_hz,
-        gamma: setup.gamma,
-        orientation: scene.enclosure.orientation.as_str(),
-        gravity_mps2: scene.simulation.gravity_mps2,
-        n_particles: n,
-        particle_mass_kg: world.particles.total_mass_kg(),
-        fill_ratio: scene.fill_ratio(),
-        seed: scene.simulation.seed,
-        dt_s: dt,
-        cycles: outcome.cycles,
-        steady_cycles: outcome.cycles - outcome.steady_first_cycle,
-        steps: outcome.steps,
-        settle_time_s: bed.settle_time_s,
-        steady_start_s: outcome.steady_start_s,
-        rig: setup.rig.name.clone(),
-        shaker: experiment.measured.shaker,
-        sample_rate_hz: setup.rig.daq.sample_rate_hz,
-        wall_time_s: outcome.wall_time_s,
-        particle_steps_per_s: (n as u64 * outcome.steps) as f64 / outcome.wall_time_s,
-        settle_wall_time_s: bed.wall_time_s,
-        bed_from_cache: bed.from_cache,
-        rig_wall_time_s: (started.elapsed().as_secs_f64() - outcome.wall_time_s).max(0.0),
-        threads: rayon::current_num_threads(),
-        dem,
-        measured: experiment.measured.clone(),
-        warnings,
-        files: Vec::new(),
-    };
+    let mut observers = Observers(observers);
+    if observers.wants_particle_dissipation() {
+        world.track_particle_dissipation(true);
+    }
+    let experiment =
+        run_measured_shake_observed(scene, &mut world, setup, &mut observers, progress)?;
+    let summary = ShakeSummary::new(scene, bed, setup, &experiment, &world, dt, started);
     Ok(ShakeRun {
         summary,
         experiment,
     })
+}
+
+impl ShakeSummary {
+    /// The summary of `experiment`, a drive of `bed` at step `dt_s` that left
+    /// `world`, begun at `started` (wall clock).
+    fn new(
+        scene: &Scene,
+        bed: &SettledBed,
+        setup: &ShakeSetup,
+        experiment: &ShakeExperiment,
+        world: &crate::dem::World,
+        dt_s: f64,
+        started: Instant,
+    ) -> ShakeSummary {
+        let outcome = &experiment.outcome;
+        let n = world.particles.len();
+        let dem = DemTruth::new(outcome, scene);
+        let mut warnings = bed.warnings.clone();
+        warnings.extend(experiment.measured.clipping.iter().cloned());
+        warnings.extend(dem.warnings(setup.drive.freq_hz(), scene.simulation.steps_per_contact));
+        ShakeSummary {
+            vlab_version: env!("CARGO_PKG_VERSION"),
+            scene: scene.name.clone(),
+            freq_hz: setup.drive.freq_hz(),
+            gamma: setup.drive.gamma(),
+            orientation: scene.enclosure.orientation.as_str(),
+            gravity_mps2: scene.simulation.gravity_mps2,
+            n_particles: n,
+            particle_mass_kg: world.particles.total_mass_kg(),
+            fill_ratio: scene.fill_ratio(),
+            seed: scene.simulation.seed,
+            noise_seed: setup.noise_seed,
+            dt_s,
+            cycles: outcome.cycles,
+            steady_cycles: outcome.cycles - outcome.steady_first_cycle,
+            steps: outcome.steps,
+            settle_time_s: bed.settle_time_s,
+            steady_start_s: outcome.steady_start_s,
+            rig: setup.rig.name.clone(),
+            shaker: experiment.measured.shaker,
+            sample_rate_hz: setup.rig.daq.sample_rate_hz,
+            wall_time_s: outcome.wall_time_s,
+            particle_steps_per_s: (n as u64 * outcome.steps) as f64 / outcome.wall_time_s,
+            settle_wall_time_s: bed.wall_time_s,
+            bed_from_cache: bed.from_cache,
+            rig_wall_time_s: (started.elapsed().as_secs_f64() - outcome.wall_time_s).max(0.0),
+            threads: rayon::current_num_threads(),
+            dem,
+            measured: experiment.measured.clone(),
+            warnings,
+            files: Vec::new(),
+        }
+    }
 }
 
 impl ShakeRun {
@@ -470,9 +495,12 @@ impl ShakeRun {
                 setup.rig.enclosure.mass_kg + scene.particle_mass_kg(),
                 &format!(
                     "{} damper, {} Hz, Gamma {}: rig {} record (cf. thesis Fig. 7.12)",
-                    scene.name, setup.freq_hz, setup.gamma, setup.rig.name
+                    scene.name,
+                    setup.drive.freq_hz(),
+                    setup.drive.gamma(),
+                    setup.rig.name
                 ),
-                setup.freq_hz,
+                setup.drive.freq_hz(),
             )?;
             files.push("trace.svg");
         }

@@ -77,9 +77,10 @@ use crate::atomic_write::write_bytes_atomic;
 use crate::dem::contact::Tangential;
 use crate::dem::material::{effective_shear_pa, effective_youngs_pa};
 use crate::dem::{ContactLaw, Particles, RestitutionMode};
+use crate::drive::Drive;
 use crate::experiment::damper::contact_laws;
 use crate::experiment::settle::SettledBed;
-use crate::experiment::shake::{TRUTH_SAMPLE_RATE_HZ, check_drive};
+use crate::experiment::shake::{TRUTH_SAMPLE_RATE_HZ, shake_drive};
 use crate::scene::{DriveLength, transient_cycles};
 use crate::scene::{Orientation, Scene, SceneError};
 use crate::validation::{InvalidParameter, count_in};
@@ -150,7 +151,7 @@ impl LammpsExport {
     /// took in vlab (`cycles`, `steady_cycles`), to give as `--cycles` and
     /// `--steady-cycles`.
     pub fn for_scene(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<Self, SceneError> {
-        check_drive(scene, freq_hz, gamma)?;
+        shake_drive(scene, freq_hz, gamma)?;
         let (cycles, steady_cycles) = match scene.drive_length() {
             DriveLength::Fixed {
                 cycles,
@@ -423,7 +424,7 @@ pub fn lammps_deck(
     bed: &SettledBed,
     export: &LammpsExport,
 ) -> Result<LammpsDeck, SceneError> {
-    check_drive(scene, export.freq_hz, export.gamma)?;
+    let drive = shake_drive(scene, export.freq_hz, export.gamma)?;
     count_in("cycles", export.cycles, "", MIN_EXPORT_CYCLES, None)?;
     count_in(
         "steady_cycles",
@@ -433,7 +434,7 @@ pub fn lammps_deck(
         Some(export.cycles),
     )?;
     let particles = &bed.world.particles;
-    let plan = DeckPlan::new(scene, bed, export)?;
+    let plan = DeckPlan::new(scene, bed, export, &drive)?;
     let data = packing_data(&plan, particles);
     let input = [
         header_lines(&plan),
@@ -495,9 +496,10 @@ impl<'a> DeckPlan<'a> {
         scene: &'a Scene,
         bed: &SettledBed,
         export: &'a LammpsExport,
+        drive: &Drive,
     ) -> Result<DeckPlan<'a>, SceneError> {
         let particles = &bed.world.particles;
-        let dt = scene.drive_dt_s(export.freq_hz, export.gamma);
+        let dt = scene.drive_dt_s(drive);
         let g = scene.simulation.gravity_mps2;
         let period = 1.0 / export.freq_hz;
         let omega = 2.0 * PI * export.freq_hz;

@@ -570,6 +570,11 @@ impl StepObserver for VtkDump {
             self.error = Some(e);
         }
     }
+
+    /// The frames colour each particle by the energy its contacts dissipated.
+    fn wants_particle_dissipation(&self) -> bool {
+        true
+    }
 }
 
 #[cfg(test)]

@@ -9,11 +9,10 @@
 //! recorded (another DEM code's enclosure), replayed; [`super::Shaker`] is the
 //! rig's drive (prescribed, or the electrodynamic shaker of Section 7.6).
 
-use std::f64::consts::PI;
-
 use serde::Serialize;
 
 use super::error::{InvalidParameter, RigError, positive};
+use crate::drive::Drive;
 
 /// Enclosure kinematics along the drive axis.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
@@ -41,34 +40,36 @@ pub trait EnclosureMotion {
 /// `u' = Γ g / ω cos ωt`, `u'' = -Γ g sin ωt`, whatever the particles do.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SineMotion {
-    freq_hz: f64,
-    gamma: f64,
+    drive: Drive,
     omega: f64,
     amplitude_m: f64,
     t_s: f64,
 }
 
 impl SineMotion {
-    /// A sine of acceleration amplitude `gamma` g (`g_mps2`) at `freq_hz`.
-    pub fn new(freq_hz: f64, gamma: f64, g_mps2: f64) -> Self {
-        let omega = 2.0 * PI * freq_hz;
+    /// The sine of `drive`.
+    pub fn new(drive: &Drive) -> Self {
         SineMotion {
-            freq_hz,
-            gamma,
-            omega,
-            amplitude_m: gamma * g_mps2 / (omega * omega),
+            drive: *drive,
+            omega: drive.omega_rad_s(),
+            amplitude_m: drive.displacement_amplitude_m(),
             t_s: 0.0,
         }
     }
 
+    /// The drive this sine follows.
+    pub fn drive(&self) -> &Drive {
+        &self.drive
+    }
+
     /// Drive frequency, Hz.
     pub fn freq_hz(&self) -> f64 {
-        self.freq_hz
+        self.drive.freq_hz()
     }
 
     /// Acceleration amplitude Γ (peak acceleration / g).
     pub fn gamma(&self) -> f64 {
-        self.gamma
+        self.drive.gamma()
     }
 
     /// Angular frequency ω, rad/s.
@@ -345,11 +346,12 @@ impl EnclosureMotion for RecordedMotion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     #[test]
     fn sine_is_exact_and_ignores_the_particles() {
         let g = 9.81;
-        let mut s = SineMotion::new(40.0, 20.0, g);
+        let mut s = SineMotion::new(&Drive::new(40.0, 20.0, g).expect("valid"));
         let w = 2.0 * PI * 40.0;
         let x = 20.0 * g / (w * w);
         assert_eq!(s.kinematics().velocity_mps, x * w);
@@ -369,7 +371,7 @@ mod tests {
         // A sine sampled at 40 kHz: velocity, displacement and acceleration
         // agree with the analytic motion.
         let (g, h) = (9.81, 25e-6);
-        let sine = SineMotion::new(40.0, 20.0, g);
+        let sine = SineMotion::new(&Drive::new(40.0, 20.0, g).expect("valid"));
         let v: Vec<f64> = (0..4000)
             .map(|i| sine.at(i as f64 * h).velocity_mps)
             .collect();
@@ -421,7 +423,7 @@ mod tests {
     #[test]
     fn recorded_motion_from_displacement_or_acceleration() {
         let (g, h) = (9.81, 1e-5);
-        let sine = SineMotion::new(40.0, 20.0, g);
+        let sine = SineMotion::new(&Drive::new(40.0, 20.0, g).expect("valid"));
         let n = 10_000; // 4 periods
         let x: Vec<f64> = (0..n)
             .map(|i| sine.at(i as f64 * h).displacement_m)

@@ -53,8 +53,6 @@
 //! boundary moves the steady state and `e` by the opposite amount, so the
 //! state is continuous. Per step: one `sin_cos`, a 3x3 product, ~40 flops.
 
-use std::f64::consts::PI;
-
 use glam::{DMat3, DVec3};
 use realfft::num_complex::Complex64;
 
@@ -62,6 +60,7 @@ use super::discretise::zero_order_hold;
 use super::error::{RigError, non_negative, positive};
 use super::motion::{EnclosureMotion, Kinematics, SineMotion};
 use super::spec::{ElectrodynamicSpec, RigSpec, ShakerKind};
+use crate::drive::Drive;
 
 /// How the drive went, for the caller's report.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,17 +84,15 @@ pub struct ShakerReport {
     pub peak_current_a: Option<f64>,
 }
 
-/// Checks the rig's stroke and acceleration limits for a sine of `gamma` at
-/// `freq_hz` (displacement amplitude `Gamma g / w^2`, peak-to-peak twice that;
-/// peak acceleration `Gamma g`).
-pub fn check_limits(spec: &RigSpec, freq_hz: f64, gamma: f64, g_mps2: f64) -> Result<(), RigError> {
-    positive("freq_hz", freq_hz, "Hz")?;
-    non_negative("gamma", gamma, "")?;
-    positive("g_mps2", g_mps2, "m/s^2")?;
-    let w = 2.0 * PI * freq_hz;
+/// Checks the rig's stroke and acceleration limits for the sine of `drive`
+/// (displacement amplitude `Gamma g / w^2`, peak-to-peak twice that; peak
+/// acceleration `Gamma g`).
+pub fn check_limits(spec: &RigSpec, drive: &Drive) -> Result<(), RigError> {
+    let (freq_hz, gamma) = (drive.freq_hz(), drive.gamma());
+    positive("g_mps2", drive.gravity_mps2(), "m/s^2")?;
     let tidy = |x: f64| (x * 1e6).round() / 1e6;
     if let Some(stroke) = spec.shaker.stroke_pp_m {
-        let needed = 2.0 * gamma * g_mps2 / (w * w);
+        let needed = 2.0 * drive.displacement_amplitude_m();
         if needed > stroke * (1.0 + 1e-9) {
             return Err(RigError::StrokeLimit {
                 rig: spec.name.clone(),
@@ -107,7 +104,7 @@ pub fn check_limits(spec: &RigSpec, freq_hz: f64, gamma: f64, g_mps2: f64) -> Re
         }
     }
     if let Some(max) = spec.shaker.max_accel_mps2 {
-        let needed = gamma * g_mps2;
+        let needed = drive.acceleration_amplitude_mps2();
         if needed > max * (1.0 + 1e-9) {
             return Err(RigError::AccelerationLimit {
                 rig: spec.name.clone(),
@@ -385,23 +382,22 @@ pub enum Shaker {
 }
 
 impl Shaker {
-    /// A drive of `kind` on rig `spec` for a sine of `gamma` at `freq_hz`
-    /// (local gravity `g_mps2`), moving an enclosure of `moving_mass_kg` (the
-    /// mass above the force gauge) that holds `particle_mass_kg` of particles.
-    /// Refuses what the rig's limits forbid ([`check_limits`]).
+    /// A shaker of `kind` on rig `spec` for the sine of `drive`, moving an
+    /// enclosure of `moving_mass_kg` (the mass above the force gauge) that
+    /// holds `particle_mass_kg` of particles. Refuses what the rig's limits
+    /// forbid ([`check_limits`]).
     pub fn new(
         spec: &RigSpec,
         kind: ShakerKind,
-        freq_hz: f64,
-        gamma: f64,
-        g_mps2: f64,
+        drive: &Drive,
         moving_mass_kg: f64,
         particle_mass_kg: f64,
     ) -> Result<Shaker, RigError> {
-        check_limits(spec, freq_hz, gamma, g_mps2)?;
+        check_limits(spec, drive)?;
         positive("moving_mass_kg", moving_mass_kg, "kg")?;
         non_negative("particle_mass_kg", particle_mass_kg, "kg")?;
-        let target = SineMotion::new(freq_hz, gamma, g_mps2);
+        let g_mps2 = drive.gravity_mps2();
+        let target = SineMotion::new(drive);
         Ok(match kind {
             ShakerKind::Prescribed => Shaker::Prescribed(target),
             ShakerKind::Electrodynamic => {
@@ -540,8 +536,14 @@ impl EnclosureMotion for Shaker {
 mod tests {
     use super::*;
     use crate::rig::RigFile;
+    use std::f64::consts::PI;
 
     const G: f64 = 9.81;
+
+    /// A drive at `freq_hz` and `gamma` under `G`.
+    fn drive(freq_hz: f64, gamma: f64) -> Drive {
+        Drive::new(freq_hz, gamma, G).expect("valid drive")
+    }
 
     fn thesis() -> RigSpec {
         RigSpec::builtin("thesis-shaker").expect("built in")
@@ -550,7 +552,7 @@ mod tests {
     #[test]
     fn thesis_limits_reproduce_the_thesis() {
         let rig = thesis();
-        let stroke = check_limits(&rig, 20.0, 13.0, G)
+        let stroke = check_limits(&rig, &drive(20.0, 13.0))
             .expect_err("stroke")
             .to_string();
         assert!(
@@ -561,11 +563,11 @@ mod tests {
             stroke.ends_with("lower gamma or use the ideal rig"),
             "{stroke}"
         );
-        let msg = check_limits(&rig, 20.0, 15.0, G)
+        let msg = check_limits(&rig, &drive(20.0, 15.0))
             .expect_err("stroke")
             .to_string();
         assert!(msg.contains("needs 18.6 mm"), "{msg}");
-        let accel = check_limits(&rig, 40.0, 41.0, G)
+        let accel = check_limits(&rig, &drive(40.0, 41.0))
             .expect_err("accel")
             .to_string();
         assert!(
@@ -574,26 +576,42 @@ mod tests {
         );
         assert!(accel.contains("the ideal rig"), "{accel}");
         for (f, gamma) in [(20.0, 12.0), (40.0, 40.0), (160.0, 40.0), (1024.0, 40.0)] {
-            check_limits(&rig, f, gamma, G).unwrap_or_else(|e| panic!("{f} Hz Gamma {gamma}: {e}"));
+            check_limits(&rig, &drive(f, gamma))
+                .unwrap_or_else(|e| panic!("{f} Hz Gamma {gamma}: {e}"));
         }
         let ideal = RigSpec::builtin("ideal").expect("built in");
-        check_limits(&ideal, 20.0, 100.0, G).expect("ideal has no limits");
+        check_limits(&ideal, &drive(20.0, 100.0)).expect("ideal has no limits");
         // Shaker::new refuses the same.
         assert!(matches!(
-            Shaker::new(&rig, ShakerKind::Prescribed, 20.0, 13.0, G, 0.25, 0.0),
+            Shaker::new(&rig, ShakerKind::Prescribed, &drive(20.0, 13.0), 0.25, 0.0),
             Err(RigError::StrokeLimit { .. })
         ));
-        assert!(Shaker::new(&ideal, ShakerKind::Prescribed, 20.0, 100.0, G, 0.25, 0.0).is_ok());
-        let err = Shaker::new(&ideal, ShakerKind::Electrodynamic, 20.0, 10.0, G, 0.25, 0.0)
-            .expect_err("no parameters");
+        assert!(
+            Shaker::new(
+                &ideal,
+                ShakerKind::Prescribed,
+                &drive(20.0, 100.0),
+                0.25,
+                0.0
+            )
+            .is_ok()
+        );
+        let err = Shaker::new(
+            &ideal,
+            ShakerKind::Electrodynamic,
+            &drive(20.0, 10.0),
+            0.25,
+            0.0,
+        )
+        .expect_err("no parameters");
         assert!(err.to_string().contains("[shaker.electrodynamic]"), "{err}");
     }
 
     #[test]
     fn prescribed_kinematics_are_exact() {
         let rig = RigSpec::builtin("ideal").expect("built in");
-        let mut s =
-            Shaker::new(&rig, ShakerKind::Prescribed, 40.0, 20.0, G, 0.25, 0.03).expect("valid");
+        let mut s = Shaker::new(&rig, ShakerKind::Prescribed, &drive(40.0, 20.0), 0.25, 0.03)
+            .expect("valid");
         let w = 2.0 * PI * 40.0;
         let x = 20.0 * G / (w * w);
         for n in [1u32, 17, 25_000, 123_457] {
@@ -621,9 +639,7 @@ mod tests {
         let mut s = Shaker::new(
             rig,
             ShakerKind::Electrodynamic,
-            freq,
-            gamma,
-            G,
+            &drive(freq, gamma),
             0.25,
             particle_mass_kg,
         )
@@ -690,8 +706,14 @@ mod tests {
         let w = 2.0 * PI * freq;
         let mut fundamentals = Vec::new();
         for dt in [1e-6, 5e-6] {
-            let s0 = Shaker::new(&rig, ShakerKind::Electrodynamic, freq, gamma, G, 0.25, 0.0)
-                .expect("valid");
+            let s0 = Shaker::new(
+                &rig,
+                ShakerKind::Electrodynamic,
+                &drive(freq, gamma),
+                0.25,
+                0.0,
+            )
+            .expect("valid");
             // Deviations from the steady state die out: ||Phi^n|| -> 0.
             let n = (0.5 / dt) as u32;
             let norm = s0.step_matrix_norm_after(dt, n).expect("ed");
@@ -739,8 +761,14 @@ mod tests {
             if let Some(ed) = rig.shaker.electrodynamic.as_mut() {
                 ed.closed_loop = closed;
             }
-            let mut s = Shaker::new(&rig, ShakerKind::Electrodynamic, 40.0, 20.0, G, 0.25, extra)
-                .expect("valid");
+            let mut s = Shaker::new(
+                &rig,
+                ShakerKind::Electrodynamic,
+                &drive(40.0, 20.0),
+                0.25,
+                extra,
+            )
+            .expect("valid");
             let dt = 1e-6;
             let mut f = 0.0;
             for n in 1..=(20.0 / 40.0 / dt) as u64 {

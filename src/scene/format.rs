@@ -15,6 +15,7 @@ use crate::dem::material::{
 };
 use crate::dem::timestep::{check_time_step, rayleigh_time_step_s, shortest_contact_s};
 use crate::dem::{RestitutionMode, hertz_theory};
+use crate::drive::Drive;
 use crate::scene::drive_length::{DriveLength, SteadyCriteria};
 use crate::scene::error::SceneError;
 use crate::scene::validity::YieldVelocities;
@@ -543,7 +544,13 @@ impl Scene {
         rayleigh_time_step_s(&self.particle_material(), self.radius_m())
     }
 
-    /// The time step (s) of a drive at `freq_hz` and `gamma`: the scene's own,
+    /// The drive at `freq_hz` and `gamma` under the scene's gravity
+    /// (`simulation.gravity_mps2`), checked as [`Drive::new`] checks it.
+    pub fn drive(&self, freq_hz: f64, gamma: f64) -> Result<Drive, InvalidParameter> {
+        Drive::new(freq_hz, gamma, self.simulation.gravity_mps2)
+    }
+
+    /// The time step (s) of `drive`: the scene's own,
     /// `rayleigh_safety_factor` times the Rayleigh step (eq. 3.31), or, for
     /// `"contacts"` (the default), the step that resolves the shortest contact
     /// the drive can bring with `steps_per_contact` steps: the stiffest pair
@@ -551,7 +558,7 @@ impl Scene {
     /// impact speed to expect, the enclosure's velocity amplitude `Γ g / ω`
     /// plus a free fall across the enclosure `√(2 g max(L, D))`; never above
     /// the safety factor times the Rayleigh step, nor 1/200 of a cycle.
-    pub fn drive_dt_s(&self, freq_hz: f64, gamma: f64) -> f64 {
+    pub fn drive_dt_s(&self, drive: &Drive) -> f64 {
         let sim = &self.simulation;
         let rayleigh = sim.rayleigh_safety_factor * self.rayleigh_limit_s();
         match sim.dt_s {
@@ -559,7 +566,7 @@ impl Scene {
             TimeStepSpec::Rule(TimeStepRule::Rayleigh) => rayleigh,
             TimeStepSpec::Rule(TimeStepRule::Contacts) => {
                 let laws = crate::experiment::damper::contact_laws(self);
-                let speed = self.expected_impact_speed_mps(freq_hz, gamma);
+                let speed = self.expected_impact_speed_mps(drive);
                 let t_c = shortest_contact_s(
                     &laws.particle_particle,
                     &laws.particle_wall,
@@ -569,20 +576,19 @@ impl Scene {
                 );
                 (t_c / sim.steps_per_contact)
                     .min(rayleigh)
-                    .min(1.0 / (200.0 * freq_hz))
+                    .min(1.0 / (200.0 * drive.freq_hz()))
             }
         }
     }
 
-    /// The largest impact speed a drive at `freq_hz` and `gamma` is expected
-    /// to bring (m/s): a particle thrown at the enclosure's peak velocity `V`
+    /// The largest impact speed `drive` is expected to bring (m/s): a particle thrown at the enclosure's peak velocity `V`
     /// meeting a wall that moves at `V` towards it (`2 V`), plus a free fall
     /// across the enclosure. (With `V` alone the thesis bed at 40 Hz, Gamma 20
     /// saw collisions of 22.6 steps against the 25 asked for.)
-    pub fn expected_impact_speed_mps(&self, freq_hz: f64, gamma: f64) -> f64 {
+    pub fn expected_impact_speed_mps(&self, drive: &Drive) -> f64 {
         let g = self.simulation.gravity_mps2;
         let e = &self.enclosure;
-        2.0 * gamma * g / (2.0 * PI * freq_hz)
+        2.0 * drive.velocity_amplitude_mps()
             + (2.0 * g * e.inner_length_m.max(e.inner_diameter_m)).sqrt()
     }
 
@@ -714,8 +720,8 @@ mod tests {
         // The time step resolves a 40 Hz, Gamma 20 drive's fastest expected
         // contact (acrylic pair at 2 x 0.78 + 0.89 m/s, 29.6 us) in 25 steps:
         // t_c scales as v^(-1/5), 33.3 us at 1.666 m/s.
-        let dt = s.drive_dt_s(40.0, 20.0);
-        let v = s.expected_impact_speed_mps(40.0, 20.0);
+        let dt = s.drive_dt_s(&s.drive(40.0, 20.0).expect("valid drive"));
+        let v = s.expected_impact_speed_mps(&s.drive(40.0, 20.0).expect("valid drive"));
         assert!((v - 2.447).abs() < 0.01, "{v}");
         let expected = 1.33e-6 * (1.666f64 / v).powf(0.2);
         assert!((dt - expected).abs() < 0.02e-6, "{dt} vs {expected}");
@@ -800,7 +806,11 @@ mod tests {
             "t",
         )
         .expect("valid");
-        assert!((s.drive_dt_s(40.0, 20.0) - 0.1 * s.rayleigh_limit_s()).abs() < 1e-18);
+        assert!(
+            (s.drive_dt_s(&s.drive(40.0, 20.0).expect("valid drive")) - 0.1 * s.rayleigh_limit_s())
+                .abs()
+                < 1e-18
+        );
     }
 
     /// The contact rule resolves the stiffer pair. In the acrylic thesis
@@ -816,8 +826,8 @@ mod tests {
         let steel_walls = Scene::merge_over_preset("[enclosure]\nmaterial = \"steel\"\n", "t")
             .expect("valid scene");
         let (f, gamma) = (40.0, 20.0);
-        let dt_acrylic = acrylic.drive_dt_s(f, gamma);
-        let dt_steel = steel_walls.drive_dt_s(f, gamma);
+        let dt_acrylic = acrylic.drive_dt_s(&acrylic.drive(f, gamma).expect("valid drive"));
+        let dt_steel = steel_walls.drive_dt_s(&steel_walls.drive(f, gamma).expect("valid drive"));
         assert!(
             dt_steel < 0.95 * dt_acrylic,
             "steel walls {dt_steel:e} s, acrylic walls {dt_acrylic:e} s"
@@ -826,8 +836,12 @@ mod tests {
         let pm = acrylic.particle_material();
         let r = acrylic.radius_m();
         let m = sphere_mass_kg(r, pm.density_kgm3);
-        let v = acrylic.expected_impact_speed_mps(f, gamma);
-        assert_eq!(v, steel_walls.expected_impact_speed_mps(f, gamma));
+        let v = acrylic.expected_impact_speed_mps(&acrylic.drive(f, gamma).expect("valid drive"));
+        assert_eq!(
+            v,
+            steel_walls
+                .expected_impact_speed_mps(&steel_walls.drive(f, gamma).expect("valid drive"))
+        );
         let steps = acrylic.simulation.steps_per_contact;
         let pair_s = hertz_theory::contact_duration_s(
             effective_mass_kg(m, m),

@@ -600,7 +600,7 @@ pub fn run_accuracy(
     progress: &(dyn Fn(AccuracyEvent) + Sync),
 ) -> Result<AccuracyReport, SceneError> {
     plan.validate()?;
-    crate::experiment::shake::check_drive(scene, plan.freq_hz, plan.gamma)?;
+    let checked = crate::experiment::shake::shake_drive(scene, plan.freq_hz, plan.gamma)?;
     let started = Instant::now();
 
     // Impact first: it takes milliseconds and fails fast on a bad scene.
@@ -623,7 +623,7 @@ pub fn run_accuracy(
 
     // Every drive, the longest first.
     let rayleigh = scene.rayleigh_limit_s();
-    let default_dt = scene.drive_dt_s(plan.freq_hz, plan.gamma);
+    let default_dt = scene.drive_dt_s(&checked);
     let jobs = drive_jobs(plan, rayleigh, default_dt);
     let cost = |j: &DriveJob| job_cost(plan, j);
     progress(AccuracyEvent::Stage(&format!(
@@ -785,16 +785,15 @@ fn drive(
     };
     let outcome = (|| {
         let mut world = prepare_drive(bed, scene, job.dt_s)?;
+        let drive = scene.drive(plan.freq_hz, plan.gamma)?;
         let drive_plan = DrivePlan {
-            freq_hz: plan.freq_hz,
-            gamma: plan.gamma,
-            gravity_mps2: scene.simulation.gravity_mps2,
+            drive,
             length: DriveLength::Fixed {
                 cycles,
                 steady_cycles: job.steady_cycles,
             },
         };
-        let mut motion = SineMotion::new(plan.freq_hz, plan.gamma, scene.simulation.gravity_mps2);
+        let mut motion = SineMotion::new(&drive);
         run_drive(&mut world, &drive_plan, &mut motion, &mut clock, &mut |p| {
             progress(AccuracyEvent::Drive {
                 label: &job.label,
@@ -831,16 +830,10 @@ fn dem_study(
 ) -> (Vec<AccuracyRow>, DemAccuracy) {
     let t = plan.transient_cycles as usize;
     let s = plan.seed_steady_cycles as usize;
-    let e_max = DrivePlan {
-        freq_hz: plan.freq_hz,
-        gamma: plan.gamma,
-        gravity_mps2: scene.simulation.gravity_mps2,
-        length: DriveLength::Fixed {
-            cycles: 2,
-            steady_cycles: 1,
-        },
-    }
-    .e_max_j(scene.particle_mass_kg());
+    // run_accuracy refused an invalid drive before any run.
+    let e_max = scene
+        .drive(plan.freq_hz, plan.gamma)
+        .map_or(f64::NAN, |d| d.e_max_j(scene.particle_mass_kg()));
     let mut rows = Vec::new();
 
     // Seeds and the pooled reference.
@@ -1225,7 +1218,7 @@ fn impact_study(
     plan: &AccuracyPlan,
 ) -> Result<(Vec<AccuracyRow>, ImpactAccuracy), SceneError> {
     let pp = scene.contact.particle_wall;
-    let speed = scene.expected_impact_speed_mps(plan.freq_hz, plan.gamma);
+    let speed = scene.expected_impact_speed_mps(&scene.drive(plan.freq_hz, plan.gamma)?);
     let base = ImpactSetup {
         material: scene.particle_material(),
         radius_m: scene.radius_m(),

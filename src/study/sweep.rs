@@ -40,7 +40,7 @@ use crate::atomic_write::write_atomic;
 use crate::experiment::bed_cache::BedSource;
 use crate::experiment::measurement::{CalibrationSource, ShakeSetup};
 use crate::experiment::settle::SettledBed;
-use crate::experiment::shake::{check_drive, check_record_window, resolve_rig, run_shake_on_bed};
+use crate::experiment::shake::{check_record_window, resolve_rig, run_shake_on_bed, shake_drive};
 use crate::rig::{RigFile, RigSpec, ShakerKind};
 use crate::scene::{CyclesSpec, Orientation, Scene, SceneError};
 use crate::study::phases::{
@@ -370,7 +370,7 @@ impl SweepPlan {
                 check_record_window(&self.scene, f, rig.daq.sample_rate_hz)?;
             }
             for &g in &self.gammas {
-                check_drive(&self.scene, f, g)?;
+                shake_drive(&self.scene, f, g)?;
             }
         }
         for c in self.conditions() {
@@ -596,8 +596,10 @@ impl SweepRow {
 
 /// Whether the rig can drive condition `c`; the rig's refusal otherwise.
 fn reachability(plan: &SweepPlan, c: &Condition) -> Result<(), String> {
-    let g = plan.scene.simulation.gravity_mps2;
-    resolve_rig(&plan.rig, plan.shaker, c.freq_hz, c.gamma, g)
+    plan.scene
+        .drive(c.freq_hz, c.gamma)
+        .map_err(SceneError::from)
+        .and_then(|drive| resolve_rig(&plan.rig, plan.shaker, &drive))
         .map(|_| ())
         .map_err(|e| e.to_string())
 }
@@ -621,11 +623,12 @@ fn try_condition(
     let started = Instant::now();
     let scene = plan.scene_for(c)?;
     let g = scene.simulation.gravity_mps2;
-    let rig = resolve_rig(&plan.rig, plan.shaker, c.freq_hz, c.gamma, g)?;
+    let drive = shake_drive(&scene, c.freq_hz, c.gamma)?;
+    let rig = resolve_rig(&plan.rig, plan.shaker, &drive)?;
     let setup = ShakeSetup {
         rig,
-        freq_hz: c.freq_hz,
-        gamma: c.gamma,
+        drive,
+        noise_seed: scene.simulation.seed,
         calibration: CalibrationSource::OnTheFly,
     };
     // Sample the bed from the earliest cycle the steady window can begin at.
@@ -635,9 +638,9 @@ fn try_condition(
         CLOSE_PACKING,
         scene.enclosure.inner_length_m,
     );
-    let dt = scene.drive_dt_s(c.freq_hz, c.gamma);
+    let dt = scene.drive_dt_s(&drive);
     let mut observer = PhaseObserver::new(c.freq_hz, c.gamma, g, dt, sample_from, clearance);
-    let run = run_shake_on_bed(&scene, bed, &setup, &mut observer, &mut |_| {})?;
+    let run = run_shake_on_bed(&scene, bed, &setup, &mut [&mut observer], &mut |_| {})?;
     let s = &run.summary;
     let impacts = collective_impacts(
         &run.experiment.truth,
