@@ -7,7 +7,7 @@ use anyhow::Result;
 use clap::Args;
 
 use vlab::dem::restitution::realised_restitution;
-use vlab::experiment::damper::contact_laws;
+use vlab::scene::contact_laws;
 use vlab::scene::{
     CyclesSpec, Scene, THESIS_DAMPER_TOML, THESIS_SCENE_FILE, TimeStepRule, TimeStepSpec,
 };

@@ -24,10 +24,10 @@ use std::time::Instant;
 
 use glam::DVec3;
 
-use crate::dem::{ContactLaw, Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, World};
+use crate::dem::{Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, World};
 use crate::drive::Drive;
 pub use crate::rig::{EnclosureMotion, Kinematics, SineMotion};
-use crate::scene::{DriveLength, Orientation, Scene, SceneError, SteadyCriteria, transient_cycles};
+use crate::scene::{DriveLength, Orientation, SceneError, SteadyCriteria, transient_cycles};
 use crate::stats::{MeanStderr, mean_stderr};
 
 /// Progress of a long run, for display.
@@ -78,32 +78,6 @@ pub struct NoObserver;
 
 impl StepObserver for NoObserver {
     fn observe(&mut self, _t_s: f64, _world: &World, _enclosure: &Kinematics) {}
-}
-
-/// A scene's two contact laws.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactLaws {
-    pub particle_particle: ContactLaw,
-    pub particle_wall: ContactLaw,
-}
-
-/// The contact laws of a scene.
-pub fn contact_laws(scene: &Scene) -> ContactLaws {
-    let pm = scene.particle_material();
-    let wm = scene.wall_material();
-    let c = &scene.contact;
-    let pp = c.particle_particle;
-    let pw = c.particle_wall;
-    ContactLaws {
-        particle_particle: ContactLaw::new(
-            &pm,
-            &pm,
-            pp.restitution,
-            pp.friction,
-            c.restitution_mode,
-        ),
-        particle_wall: ContactLaw::new(&pm, &wm, pw.restitution, pw.friction, c.restitution_mode),
-    }
 }
 
 /// Gravity vector for an orientation; the enclosure axis is z.
@@ -375,7 +349,7 @@ impl DriveTally {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dem::{Numerics, Particles, RestitutionMode, Walls};
+    use crate::dem::{ContactLaw, Numerics, Particles, RestitutionMode, Walls};
 
     /// Three acrylic spheres of 5 mm on the floor of a small closed cylinder
     /// (20 mm across, 20 mm long), every contact of restitution `e` and

@@ -63,8 +63,9 @@ use crate::dem::timestep::{rayleigh_time_step_s, shortest_contact_s};
 use crate::dem::{
     ContactLaw, ContactParams, DemError, Numerics, Particles, RestitutionMode, Walls, World,
 };
-use crate::experiment::damper::{Progress, contact_laws, gravity_vector};
+use crate::experiment::damper::{Progress, gravity_vector};
 use crate::experiment::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
+use crate::scene::contact_laws;
 use crate::scene::{Orientation, Scene, SceneError};
 use crate::warning::RunWarning;
 

@@ -565,7 +565,7 @@ impl Scene {
             TimeStepSpec::Seconds(dt) => dt,
             TimeStepSpec::Rule(TimeStepRule::Rayleigh) => rayleigh,
             TimeStepSpec::Rule(TimeStepRule::Contacts) => {
-                let laws = crate::experiment::damper::contact_laws(self);
+                let laws = crate::scene::contact_laws(self);
                 let speed = self.expected_impact_speed_mps(drive);
                 let t_c = shortest_contact_s(
                     &laws.particle_particle,

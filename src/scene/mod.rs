@@ -3,12 +3,14 @@
 //! ranges before anything runs. Everything that runs a scene lives above this
 //! module (`experiment`, `study`, `export`); nothing here imports them.
 
+pub mod contact_laws;
 pub mod drive_length;
 pub mod error;
 pub mod format;
 pub mod packing;
 pub mod validity;
 
+pub use contact_laws::{ContactLaws, contact_laws};
 pub use drive_length::{DriveLength, SteadyCriteria, transient_cycles};
 pub use error::{ReplayOption, SceneError};
 pub use format::*;
