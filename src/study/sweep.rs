@@ -1458,8 +1458,9 @@ pub struct ConditionSummary {
     /// Seeds with an ok row.
     pub n: usize,
     pub efficiency: f64,
-    /// Standard error of the mean: over seeds when there are several, else the
-    /// one row's cycle-to-cycle standard error.
+    /// Standard error of the mean over seeds ([`seeds_stderr`]): the seeds'
+    /// spread, never less than their own cycle-to-cycle errors imply; one
+    /// seed's own error when there is one.
     pub efficiency_se: f64,
     pub efficiency_measured: f64,
     /// The most common phase over seeds (none if none ok).
@@ -1467,6 +1468,28 @@ pub struct ConditionSummary {
     pub phase: Option<MotionalPhase>,
     /// `ok`, or the status of the rows when none is ok.
     pub status: RowStatus,
+}
+
+/// Standard error of the mean of `values` (one per seed), each with its own
+/// standard error `own_se`. Independent beds scatter by their own error and
+/// by how they differ, so the seeds' sample variance `s^2` estimates both;
+/// but from a handful of seeds it can come out near zero by chance (three
+/// seeds agreeing to 0.0005 while each is known only to 0.005). The variance
+/// of one seed is therefore taken as `max(s^2, mean(own_se^2))`: at least what
+/// the seeds' own errors say, and the spread where the beds differ by more.
+/// One value: its own error; none: NaN.
+pub fn seeds_stderr(values: &[f64], own_se: &[f64]) -> f64 {
+    let n = values.len();
+    match n {
+        0 => f64::NAN,
+        1 => own_se[0],
+        _ => {
+            let m = values.iter().sum::<f64>() / n as f64;
+            let spread = values.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1) as f64;
+            let own = own_se.iter().map(|e| e * e).sum::<f64>() / n as f64;
+            (spread.max(own) / n as f64).sqrt()
+        }
+    }
 }
 
 /// Summaries over seeds of every (fill, orientation, frequency, Γ) of the header.
@@ -1502,15 +1525,9 @@ pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
                         }
                     };
                     let eff = mean(|r| r.efficiency);
-                    let se = if n > 1 {
-                        let var = ok.iter().map(|r| (r.efficiency - eff).powi(2)).sum::<f64>()
-                            / (n - 1) as f64;
-                        (var / n as f64).sqrt()
-                    } else if n == 1 {
-                        ok[0].efficiency_se
-                    } else {
-                        f64::NAN
-                    };
+                    let efficiencies: Vec<f64> = ok.iter().map(|r| r.efficiency).collect();
+                    let own_se: Vec<f64> = ok.iter().map(|r| r.efficiency_se).collect();
+                    let se = seeds_stderr(&efficiencies, &own_se);
                     // Counted by name, so that a tie goes to the same phase
                     // as ever (the last name in alphabetical order).
                     let mut counts: BTreeMap<&str, (usize, Option<MotionalPhase>)> =
@@ -1546,6 +1563,20 @@ pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Three seeds that agree closely are still known only to their own
+    /// errors (the issue's `0.830 +- 0.000`); seeds that differ by more than
+    /// their errors give their spread.
+    #[test]
+    fn a_summary_over_seeds_is_never_surer_than_its_seeds() {
+        let agreeing = seeds_stderr(&[0.8301, 0.8299, 0.8300], &[0.005, 0.006, 0.007]);
+        let own = ((0.005f64.powi(2) + 0.006f64.powi(2) + 0.007f64.powi(2)) / 3.0 / 3.0).sqrt();
+        assert!((agreeing - own).abs() < 1e-15, "{agreeing} vs {own}");
+        let differing = seeds_stderr(&[0.80, 0.83, 0.86], &[0.001, 0.001, 0.001]);
+        assert!((differing - (0.0009f64 / 3.0).sqrt()).abs() < 1e-12, "{differing}");
+        assert_eq!(seeds_stderr(&[0.5], &[0.01]), 0.01);
+        assert!(seeds_stderr(&[], &[]).is_nan());
+    }
 
     fn plan() -> SweepPlan {
         SweepPlan {
