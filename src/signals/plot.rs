@@ -964,9 +964,8 @@ pub fn plot_panel_strip(path: &Path, strip: &PanelStrip) -> Result<()> {
 struct StripFigure<'a>(&'a PanelStrip);
 
 impl Figure for StripFigure<'_> {
-    /// One piece, panel by panel in drawing order, then the colour bar: the
-    /// chart context is generic in backend and coordinates, and the SVG's
-    /// element order is the statement order here.
+    /// Panel by panel in drawing order, then the colour bar and the footnote
+    /// (the SVG's element order is the order of the calls).
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
@@ -978,35 +977,77 @@ impl Figure for StripFigure<'_> {
         let (body, foot) = titled.split_vertically(h as i32 - 70);
         let (panels_area, bar) = body.split_horizontally(w as i32 - 110);
         let areas = panels_area.split_evenly((1, s.panels.len()));
-        let (lo, hi) = s.value_range;
-        let scale = |v: f64| (v - lo) / (hi - lo).max(f64::MIN_POSITIVE);
         for (area, panel) in areas.iter().zip(&s.panels) {
-            let mut chart = ChartBuilder::on(area)
-                .caption(panel.title.as_str(), ("sans-serif", 14))
-                .margin(6)
-                .build_cartesian_2d(s.x_range.0..s.x_range.1, s.y_range.0..s.y_range.1)?;
-            let [a, b] = panel.outline;
-            chart.draw_series(std::iter::once(Rectangle::new(
-                [a, b],
-                RGBColor(235, 235, 235).filled(),
-            )))?;
-            chart.draw_series(std::iter::once(Rectangle::new(
-                [a, b],
-                BLACK.stroke_width(2),
-            )))?;
-            let (x0, _) = chart.backend_coord(&(s.x_range.0, s.y_range.0));
-            let (x1, _) = chart.backend_coord(&(s.x_range.1, s.y_range.0));
-            let px_per_unit = (x1 - x0) as f64 / (s.x_range.1 - s.x_range.0);
-            chart.draw_series(panel.circles.iter().map(|&(x, y, r, v)| {
-                let px = ((r * px_per_unit).round() as i32).max(1);
-                Circle::new((x, y), px, viridis(scale(v)).filled())
-            }))?;
-            chart.draw_series(panel.circles.iter().map(|&(x, y, r, _)| {
-                let px = ((r * px_per_unit).round() as i32).max(1);
-                Circle::new((x, y), px, RGBColor(40, 40, 40).stroke_width(1))
-            }))?;
+            self.draw_panel(area, panel)?;
         }
-        // Colour bar.
+        self.draw_colour_bar(&bar)?;
+        for (k, line) in s.footnote.lines().enumerate() {
+            foot.draw(&Text::new(
+                line.to_string(),
+                (12, 14 + 18 * k as i32),
+                ("sans-serif", 13)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+        }
+        root.present()?;
+        Ok(())
+    }
+}
+
+impl StripFigure<'_> {
+    /// Where `v` falls on the colour scale (0 at its low end, 1 at its high).
+    fn scale(&self, v: f64) -> f64 {
+        let (lo, hi) = self.0.value_range;
+        (v - lo) / (hi - lo).max(f64::MIN_POSITIVE)
+    }
+
+    /// One panel in `area`: its outline, filled and framed, then its circles,
+    /// coloured by value and outlined.
+    fn draw_panel<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        panel: &CirclePanel,
+    ) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let s = self.0;
+        let mut chart = ChartBuilder::on(area)
+            .caption(panel.title.as_str(), ("sans-serif", 14))
+            .margin(6)
+            .build_cartesian_2d(s.x_range.0..s.x_range.1, s.y_range.0..s.y_range.1)?;
+        let [a, b] = panel.outline;
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [a, b],
+            RGBColor(235, 235, 235).filled(),
+        )))?;
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [a, b],
+            BLACK.stroke_width(2),
+        )))?;
+        let (x0, _) = chart.backend_coord(&(s.x_range.0, s.y_range.0));
+        let (x1, _) = chart.backend_coord(&(s.x_range.1, s.y_range.0));
+        let px_per_unit = (x1 - x0) as f64 / (s.x_range.1 - s.x_range.0);
+        chart.draw_series(panel.circles.iter().map(|&(x, y, r, v)| {
+            let px = ((r * px_per_unit).round() as i32).max(1);
+            Circle::new((x, y), px, viridis(self.scale(v)).filled())
+        }))?;
+        chart.draw_series(panel.circles.iter().map(|&(x, y, r, _)| {
+            let px = ((r * px_per_unit).round() as i32).max(1);
+            Circle::new((x, y), px, RGBColor(40, 40, 40).stroke_width(1))
+        }))?;
+        Ok(())
+    }
+
+    /// The colour bar in `bar`: the scale, its frame, five value ticks and
+    /// the value's name.
+    fn draw_colour_bar<DB: DrawingBackend>(&self, bar: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let (lo, hi) = self.0.value_range;
         let (_, bh) = bar.dim_in_pixel();
         let (top, bottom) = (30i32, bh as i32 - 20);
         let steps = 100;
@@ -1036,24 +1077,13 @@ impl Figure for StripFigure<'_> {
             ))?;
         }
         bar.draw(&Text::new(
-            s.value_label.clone(),
+            self.0.value_label.clone(),
             (5, top - 16),
             ("sans-serif", 13)
                 .into_font()
                 .color(&BLACK)
                 .pos(Pos::new(HPos::Left, VPos::Center)),
         ))?;
-        for (k, line) in s.footnote.lines().enumerate() {
-            foot.draw(&Text::new(
-                line.to_string(),
-                (12, 14 + 18 * k as i32),
-                ("sans-serif", 13)
-                    .into_font()
-                    .color(&BLACK)
-                    .pos(Pos::new(HPos::Left, VPos::Center)),
-            ))?;
-        }
-        root.present()?;
         Ok(())
     }
 }
