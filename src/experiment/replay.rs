@@ -74,8 +74,7 @@ use crate::rig::{
 use crate::scene::{Orientation, Scene, SceneError};
 use crate::signals::column_names::strip_lammps_prefix;
 use crate::signals::{
-    Channel, PhaseCalibration, Table, Trace, TraceMetadata, efficiency, max_energy_per_cycle_j,
-    read_table,
+    Channel, PhaseCalibration, Table, Trace, TraceMetadata, efficiency, read_table,
 };
 use crate::validation::{InvalidParameter, positive};
 use crate::warning::{RunWarning, Warning};
@@ -234,126 +233,208 @@ impl EnclosureRecord {
     /// is the one `table` was read with ([`read_enclosure_record`] reads it
     /// with `names.time`).
     pub fn from_table(table: Table, names: &ColumnMap) -> Result<EnclosureRecord, SceneError> {
-        let refuse = |problem: String| SceneError::Record {
-            path: table.path.clone(),
-            problem,
-        };
-        let available = || {
-            table
-                .columns
-                .iter()
-                .map(|c| c.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let find = |given: &Option<String>,
-                    role: &str,
-                    known: &[&str]|
-         -> Result<Option<&Channel>, SceneError> {
-            if let Some(name) = given {
-                return table.column(name).map(Some).ok_or_else(|| {
-                    refuse(format!(
-                        "no column '{name}' (given as the {role} column); the record has [{}]",
-                        available()
-                    ))
-                });
-            }
-            Ok(table.columns.iter().find(|c| {
-                let bare = strip_lammps_prefix(&c.name).to_ascii_lowercase();
-                known.contains(&bare.as_str())
-            }))
-        };
-        let force =
-            find(&names.force, "force", &FORCE_NAMES)?.ok_or_else(|| SceneError::RecordNeeds {
-                path: table.path.clone(),
-                problem: format!(
-                    "no column of the particles' force on the enclosure among [{}]: name it \
-                     particle_force_axial (N, the particles' force on the enclosure, positive \
-                     along the drive axis), or give its name as {}",
-                    available(),
-                    ReplayOption::ForceColumn
-                ),
-                option: ReplayOption::ForceColumn,
-            })?;
-        let velocity = find(&names.velocity, "velocity", &VELOCITY_NAMES)?;
-        let displacement = find(&names.displacement, "displacement", &DISPLACEMENT_NAMES)?;
-        let acceleration = find(&names.acceleration, "acceleration", &ACCELERATION_NAMES)?;
-        let (motion_column, kind) = match (velocity, displacement, acceleration) {
-            (Some(v), _, _) => (v, "velocity"),
-            (None, Some(x), _) => (x, "displacement"),
-            (None, None, Some(a)) => (a, "acceleration"),
-            (None, None, None) => {
-                return Err(SceneError::RecordNeeds {
-                    path: table.path.clone(),
-                    problem: format!(
-                        "no column of the enclosure's motion among [{}]: name one \
-                         enclosure_velocity (m/s), enclosure_displacement (m) or \
-                         enclosure_acceleration (m/s^2), or give its name as {}",
-                        available(),
-                        ReplayOption::MotionColumn
-                    ),
-                    option: ReplayOption::MotionColumn,
-                });
-            }
-        };
-        for (column, unit) in [
-            (force, "N"),
-            (
-                motion_column,
-                match kind {
-                    "velocity" => "m/s",
-                    "displacement" => "m",
-                    _ => "m/s^2",
-                },
-            ),
-        ] {
-            let given = column.unit.trim();
-            let same = given.is_empty()
-                || given == unit
-                || (unit == "m/s^2" && matches!(given, "m/s2" | "m/s²" | "m s^-2"));
-            if !same {
-                return Err(refuse(format!(
-                    "column '{}' is in {given}; vlab reads SI records: {unit}",
-                    column.name
-                )));
-            }
-        }
+        let force = force_column(&table, names)?;
+        let motion = motion_columns(&table, names)?;
+        check_si_units(&table, force, &motion)?;
         let step_s = table.uniform_step_s()?;
         let start_s = table.time_s[0];
-        let motion = match kind {
-            "velocity" => {
-                // Displacement at the start of the first row's interval.
-                let x0 = displacement.map_or(0.0, |x| {
-                    x.samples[0] - 0.5 * motion_column.samples[0] * step_s
-                });
-                RecordedMotion::from_velocity(start_s, step_s, motion_column.samples.clone(), x0)?
-            }
-            "displacement" => {
-                RecordedMotion::from_displacement(start_s, step_s, &motion_column.samples)?
-            }
-            _ => RecordedMotion::from_acceleration(start_s, step_s, &motion_column.samples)?,
-        };
-        let used = [force.name.as_str(), motion_column.name.as_str()];
-        let columns = UsedColumns {
-            time: table.time_column.clone(),
-            force: force.name.clone(),
-            motion: motion_column.name.clone(),
-            motion_kind: kind,
-            ignored: table
-                .columns
-                .iter()
-                .filter(|c| !used.contains(&c.name.as_str()))
-                .map(|c| c.name.clone())
-                .collect(),
-        };
+        let recorded = recorded_motion(&motion, start_s, step_s)?;
+        let columns = used_columns(&table, force, &motion);
         Ok(EnclosureRecord {
             force_axial_n: force.samples.clone(),
             step_s,
             start_s,
-            motion,
+            motion: recorded,
             columns,
             table,
         })
+    }
+}
+
+/// A refusal of the record `table` was read from.
+fn record_refusal(table: &Table, problem: String) -> SceneError {
+    SceneError::Record {
+        path: table.path.clone(),
+        problem,
+    }
+}
+
+/// The names of the columns of `table`, comma-separated.
+fn available_columns(table: &Table) -> String {
+    table
+        .columns
+        .iter()
+        .map(|c| c.name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The column named `given` (refused when there is none), else the first
+/// whose bare name (LAMMPS prefix stripped, lowercase) is one of `known`.
+fn find_column<'t>(
+    table: &'t Table,
+    given: &Option<String>,
+    role: &str,
+    known: &[&str],
+) -> Result<Option<&'t Channel>, SceneError> {
+    if let Some(name) = given {
+        return table.column(name).map(Some).ok_or_else(|| {
+            record_refusal(
+                table,
+                format!(
+                    "no column '{name}' (given as the {role} column); the record has [{}]",
+                    available_columns(table)
+                ),
+            )
+        });
+    }
+    Ok(table.columns.iter().find(|c| {
+        let bare = strip_lammps_prefix(&c.name).to_ascii_lowercase();
+        known.contains(&bare.as_str())
+    }))
+}
+
+/// The particles' force column (refused, with the option naming it, when
+/// there is none).
+fn force_column<'t>(table: &'t Table, names: &ColumnMap) -> Result<&'t Channel, SceneError> {
+    find_column(table, &names.force, "force", &FORCE_NAMES)?.ok_or_else(|| {
+        SceneError::RecordNeeds {
+            path: table.path.clone(),
+            problem: format!(
+                "no column of the particles' force on the enclosure among [{}]: name it \
+                 particle_force_axial (N, the particles' force on the enclosure, positive \
+                 along the drive axis), or give its name as {}",
+                available_columns(table),
+                ReplayOption::ForceColumn
+            ),
+            option: ReplayOption::ForceColumn,
+        }
+    })
+}
+
+/// The enclosure's motion column of a record, what it holds, and the
+/// displacement column if there is one.
+struct MotionColumns<'t> {
+    column: &'t Channel,
+    /// `velocity`, `displacement` or `acceleration`.
+    kind: &'static str,
+    displacement: Option<&'t Channel>,
+}
+
+impl MotionColumns<'_> {
+    /// The SI unit of the motion column.
+    fn unit(&self) -> &'static str {
+        match self.kind {
+            "velocity" => "m/s",
+            "displacement" => "m",
+            _ => "m/s^2",
+        }
+    }
+}
+
+/// The motion column: velocity, else displacement, else acceleration
+/// (refused, with the option naming it, when there is none).
+fn motion_columns<'t>(
+    table: &'t Table,
+    names: &ColumnMap,
+) -> Result<MotionColumns<'t>, SceneError> {
+    let velocity = find_column(table, &names.velocity, "velocity", &VELOCITY_NAMES)?;
+    let displacement = find_column(
+        table,
+        &names.displacement,
+        "displacement",
+        &DISPLACEMENT_NAMES,
+    )?;
+    let acceleration = find_column(
+        table,
+        &names.acceleration,
+        "acceleration",
+        &ACCELERATION_NAMES,
+    )?;
+    let (column, kind) = match (velocity, displacement, acceleration) {
+        (Some(v), _, _) => (v, "velocity"),
+        (None, Some(x), _) => (x, "displacement"),
+        (None, None, Some(a)) => (a, "acceleration"),
+        (None, None, None) => {
+            return Err(SceneError::RecordNeeds {
+                path: table.path.clone(),
+                problem: format!(
+                    "no column of the enclosure's motion among [{}]: name one \
+                     enclosure_velocity (m/s), enclosure_displacement (m) or \
+                     enclosure_acceleration (m/s^2), or give its name as {}",
+                    available_columns(table),
+                    ReplayOption::MotionColumn
+                ),
+                option: ReplayOption::MotionColumn,
+            });
+        }
+    };
+    Ok(MotionColumns {
+        column,
+        kind,
+        displacement,
+    })
+}
+
+/// Refuses a force or motion column whose declared unit is not SI.
+fn check_si_units(
+    table: &Table,
+    force: &Channel,
+    motion: &MotionColumns<'_>,
+) -> Result<(), SceneError> {
+    for (column, unit) in [(force, "N"), (motion.column, motion.unit())] {
+        let given = column.unit.trim();
+        let same = given.is_empty()
+            || given == unit
+            || (unit == "m/s^2" && matches!(given, "m/s2" | "m/s²" | "m s^-2"));
+        if !same {
+            return Err(record_refusal(
+                table,
+                format!(
+                    "column '{}' is in {given}; vlab reads SI records: {unit}",
+                    column.name
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The enclosure's motion from its column, rows from `start_s` every
+/// `step_s` (s).
+fn recorded_motion(
+    motion: &MotionColumns<'_>,
+    start_s: f64,
+    step_s: f64,
+) -> Result<RecordedMotion, SceneError> {
+    let samples = &motion.column.samples;
+    Ok(match motion.kind {
+        "velocity" => {
+            // Displacement at the start of the first row's interval.
+            let x0 = motion
+                .displacement
+                .map_or(0.0, |x| x.samples[0] - 0.5 * samples[0] * step_s);
+            RecordedMotion::from_velocity(start_s, step_s, samples.clone(), x0)?
+        }
+        "displacement" => RecordedMotion::from_displacement(start_s, step_s, samples)?,
+        _ => RecordedMotion::from_acceleration(start_s, step_s, samples)?,
+    })
+}
+
+/// Which columns of `table` were used, and which not.
+fn used_columns(table: &Table, force: &Channel, motion: &MotionColumns<'_>) -> UsedColumns {
+    let used = [force.name.as_str(), motion.column.name.as_str()];
+    UsedColumns {
+        time: table.time_column.clone(),
+        force: force.name.clone(),
+        motion: motion.column.name.clone(),
+        motion_kind: motion.kind,
+        ignored: table
+            .columns
+            .iter()
+            .filter(|c| !used.contains(&c.name.as_str()))
+            .map(|c| c.name.clone())
+            .collect(),
     }
 }
 
@@ -482,83 +563,167 @@ pub fn estimate_freq_hz(t0_s: f64, step_s: f64, velocity: &[f64]) -> Option<f64>
 }
 
 /// Replays `record` through the rig of `options` (see the module docs).
-///
-/// Longer than 80 lines: one pass from the record to the summary. The
-/// resolving of its inputs and the feeding of the DAQ are helpers; what
-/// remains names the drive (freq_hz, gamma, gravity) on most lines and is
-/// left whole for the change that gives the drive a type of its own.
 pub fn replay_record(
     record: &EnclosureRecord,
     options: &ReplayOptions,
 ) -> Result<ReplayRun, SceneError> {
-    let table = &record.table;
     let mut warnings = Vec::new();
-    let h = record.step_s;
+    let inputs = resolve_inputs(record, options, &mut warnings)?;
+    let pushed = push_through_rig(record, options, &inputs)?;
+    let truth = record_truth(record, &inputs);
+    let (measured, calibration) = measure_replay(record, options, &inputs, &pushed, &truth)?;
+    closing_warnings(&record.table, &truth, &measured, &mut warnings);
+    let summary = replay_summary(
+        record,
+        &options.rig,
+        &inputs,
+        pushed.dt_s,
+        truth,
+        measured,
+        warnings,
+    );
+    Ok(ReplayRun {
+        summary,
+        trace: pushed.trace,
+        daq: pushed.daq,
+        calibration,
+    })
+}
+
+/// What a replay resolved from its options and the record: the drive, the
+/// window, the bed, and where each came from.
+struct ReplayInputs {
+    drive: Drive,
+    freq_source: Source,
+    gamma_source: Source,
+    /// Fundamental of the recorded acceleration over the window / g.
+    achieved_gamma: f64,
+    window: ReplayWindow,
+    orientation: Orientation,
+    orientation_source: Source,
+    particle_mass_kg: Option<f64>,
+    particle_mass_source: Option<Source>,
+}
+
+/// Resolves the drive (frequency, window, Γ, gravity), checked against the
+/// rig's limits, and the bed (orientation, particle mass) of a replay.
+fn resolve_inputs(
+    record: &EnclosureRecord,
+    options: &ReplayOptions,
+    warnings: &mut Vec<ReplayWarning>,
+) -> Result<ReplayInputs, SceneError> {
+    let table = &record.table;
     let rig = &options.rig;
-
-    let (freq_hz, freq_source) = drive_freq_hz(record, options, &mut warnings)?;
-    check_record_step(record, freq_hz, rig, &mut warnings)?;
-    let period = 1.0 / freq_hz;
-    let sample_rate_hz = rig.daq.sample_rate_hz;
-
-    let window = replay_window(record, options.steady_cycles, freq_hz, &mut warnings)?;
-    let (window_start, window_end) = (window.start_s, window.end_s);
-    let (periods, transient) = (window.periods, window.transient);
+    let (freq_hz, freq_source) = drive_freq_hz(record, options, warnings)?;
+    check_record_step(record, freq_hz, rig, warnings)?;
+    let window = replay_window(record, options.steady_cycles, freq_hz, warnings)?;
 
     // Drive level: as given or declared, else the recorded fundamental.
     let g = gravity_of(options, table)?;
     let omega = 2.0 * PI * freq_hz;
     let achieved_gamma =
-        fundamental_velocity_mps(record, freq_hz, window_start, window_end) * omega / g;
+        fundamental_velocity_mps(record, freq_hz, window.start_s, window.end_s) * omega / g;
     let (gamma, gamma_source) = match (options.gamma, table.declared_f64("gamma")?) {
         (Some(x), _) => (x, Source::Given),
         (None, Some(x)) => (x, Source::Record),
         (None, None) => (achieved_gamma, Source::Estimated),
     };
-    positive("gamma", gamma, "")?;
     let drive = Drive::new(freq_hz, gamma, g)?;
     check_limits(rig, &drive)?;
     let (orientation, orientation_source) = orientation_of(options, table)?;
-    let (particle_mass_kg, particle_mass_source) = particle_mass_of(options, table, &mut warnings)?;
+    let (particle_mass_kg, particle_mass_source) = particle_mass_of(options, table, warnings)?;
+    Ok(ReplayInputs {
+        drive,
+        freq_source,
+        gamma_source,
+        achieved_gamma,
+        window,
+        orientation,
+        orientation_source,
+        particle_mass_kg,
+        particle_mass_source,
+    })
+}
 
-    // Drive the rig with the record, stepped at h / n. DAQ time is record
-    // time shifted by whole periods so that the window starts at t >= 0.
+/// The rig's record of a replay.
+struct PushedRecord {
+    trace: Trace,
+    daq: DaqReport,
+    /// Step at which the rig was driven (s).
+    dt_s: f64,
+}
+
+/// Drives the rig with the record, stepped at `h / n`. DAQ time is record
+/// time shifted by whole periods so that the window starts at `t >= 0`.
+fn push_through_rig(
+    record: &EnclosureRecord,
+    options: &ReplayOptions,
+    inputs: &ReplayInputs,
+) -> Result<PushedRecord, SceneError> {
+    let rig = &options.rig;
+    let window = &inputs.window;
+    let period = inputs.drive.period_s();
+    let h = record.step_s;
     let n_sub = ((h / PUSH_STEP_S) - 1e-9).ceil().max(1.0);
     let dt = h / n_sub;
-    let shift = if window_start < 0.0 {
-        (-window_start / period).ceil() * period
+    let shift = if window.start_s < 0.0 {
+        (-window.start_s / period).ceil() * period
     } else {
         0.0
     };
-    let m_enc = rig.enclosure.mass_kg;
-    let weight = match orientation {
-        Orientation::Vertical => m_enc * g,
+    let weight = match inputs.orientation {
+        Orientation::Vertical => rig.enclosure.mass_kg * inputs.drive.gravity_mps2(),
         Orientation::Horizontal => 0.0,
     };
-    let mut daq = Daq::new(rig, dt, window_start + shift, options.seed)?;
-    feed_daq(&mut daq, record, &window, rig, dt, shift, weight);
-    let truth_power = record.input_power_w(window_start, window_end);
-    let metadata = replay_metadata(
-        record,
-        freq_hz,
-        gamma,
-        particle_mass_kg,
-        g,
-        orientation,
-        rig,
-    );
+    let mut daq = Daq::new(rig, dt, window.start_s + shift, options.seed)?;
+    feed_daq(&mut daq, record, window, rig, dt, shift, weight);
+    let metadata = replay_metadata(record, inputs, rig);
     let (trace, daq_report) = daq.finish(metadata)?;
+    Ok(PushedRecord {
+        trace,
+        daq: daq_report,
+        dt_s: dt,
+    })
+}
 
-    // Calibrated as a shake calibrates (the recorded motion is a prescribed
-    // drive): the same helper, frequencies, amplitudes and window.
+/// The record's own truth over the window: its mean input power, the energy
+/// per cycle (eq. 6.9) and, when the particle mass is known, `E_max`
+/// (eq. 6.10) and the efficiency (eq. 6.8).
+fn record_truth(record: &EnclosureRecord, inputs: &ReplayInputs) -> RecordTruth {
+    let drive = &inputs.drive;
+    let power_w = record.input_power_w(inputs.window.start_s, inputs.window.end_s);
+    let energy_per_cycle_j = power_w / drive.freq_hz();
+    let e_max_j = inputs.particle_mass_kg.map(|m| drive.e_max_j(m));
+    RecordTruth {
+        power_w,
+        energy_per_cycle_j,
+        e_max_j,
+        efficiency: e_max_j.map(|e| energy_per_cycle_j / e),
+    }
+}
+
+/// Calibrates the rig as a shake calibrates it (the recorded motion is a
+/// prescribed drive: the same helper, frequencies, amplitudes and window) and
+/// measures the pushed record with Yang's method, against the record's truth.
+fn measure_replay(
+    record: &EnclosureRecord,
+    options: &ReplayOptions,
+    inputs: &ReplayInputs,
+    pushed: &PushedRecord,
+    truth: &RecordTruth,
+) -> Result<(ReplayMeasured, PhaseCalibration), SceneError> {
+    let rig = &options.rig;
+    let drive = &inputs.drive;
+    let freq_hz = drive.freq_hz();
+    let periods = inputs.window.periods;
     let (calibration, calibration_source) = phase_calibration(
         rig,
         &options.calibration,
         &CalibrationRun {
             shaker: ShakerKind::Prescribed,
-            drive,
-            dt_s: dt,
-            cycles: transient + periods,
+            drive: *drive,
+            dt_s: pushed.dt_s,
+            cycles: inputs.window.transient + periods,
             record_cycles: periods,
             noise_seed: options.seed,
         },
@@ -567,52 +732,75 @@ pub fn replay_record(
         corrected,
         uncorrected: raw,
         blocks,
-    } = measure_trace(&trace, freq_hz, &calibration)?;
+    } = measure_trace(&pushed.trace, freq_hz, &calibration)?;
     if corrected.n_periods != periods as usize {
         return Err(SceneError::Record {
-            path: table.path.clone(),
+            path: record.table.path.clone(),
             problem: format!(
                 "the rig's record holds {} whole periods where {periods} were replayed (the \
                  record ends {:.4e} s before the window's last sample)",
                 corrected.n_periods,
-                window_end - record.end_s()
+                inputs.window.end_s - record.end_s()
             ),
         });
     }
-    let truth_energy = truth_power / freq_hz;
-    if truth_power <= 0.0 {
-        warnings.push(ReplayWarning::from(format!(
-            "the record's input power is {truth_power:.4e} W, not positive: is the force the \
-             enclosure's on the particles rather than the particles' on the enclosure (the sign)?"
-        )));
-    }
-    let e_max_j = particle_mass_kg
-        .map(|m| max_energy_per_cycle_j(m, gamma, freq_hz, g))
+    let measured_efficiency = inputs
+        .particle_mass_kg
+        .map(|m| {
+            efficiency(
+                corrected.energy_per_cycle_j,
+                m,
+                drive.gamma(),
+                freq_hz,
+                drive.gravity_mps2(),
+            )
+        })
         .transpose()?;
-    let measured_efficiency = particle_mass_kg
-        .map(|m| efficiency(corrected.energy_per_cycle_j, m, gamma, freq_hz, g))
-        .transpose()?;
+    let truth_energy = truth.energy_per_cycle_j;
     let v_amp = drive.velocity_amplitude_mps();
     let phi = rig.expected_phase_error_rad(freq_hz);
+    let m_enc = rig.enclosure.mass_kg;
     let measured = ReplayMeasured {
         power_w: corrected.power_w,
         energy_per_cycle_j: corrected.energy_per_cycle_j,
         efficiency: measured_efficiency,
         power_stderr_w: blocks.map(|b| b.stderr),
         energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / freq_hz),
-        efficiency_stderr: blocks.zip(e_max_j).map(|(b, e)| b.stderr / freq_hz / e),
+        efficiency_stderr: blocks
+            .zip(truth.e_max_j)
+            .map(|(b, e)| b.stderr / freq_hz / e),
         phase_correction_rad: corrected.phase_correction_rad,
         force_polarity_reversed: corrected.force_polarity.reversed,
         error_vs_record_rel: corrected.energy_per_cycle_j / truth_energy - 1.0,
         uncorrected_energy_per_cycle_j: raw.energy_per_cycle_j,
         uncorrected_error_vs_record_rel: raw.energy_per_cycle_j / truth_energy - 1.0,
-        predicted_leak_per_cycle_j: -0.5 * m_enc * omega * v_amp * v_amp * phi.sin() / freq_hz,
+        predicted_leak_per_cycle_j: -0.5 * m_enc * drive.omega_rad_s() * v_amp * v_amp * phi.sin()
+            / freq_hz,
         rig_phase_error_rad: phi,
         calibration: calibration_source,
         n_periods: corrected.n_periods,
         rig: rig.name.clone(),
-        clipping: daq_report.clipping_warnings(),
+        clipping: pushed.daq.clipping_warnings(),
     };
+    Ok((measured, calibration))
+}
+
+/// The warnings only the finished replay can give: a truth that is not
+/// positive (the force's sign), the rig's clipping, an undeclared LAMMPS unit
+/// system.
+fn closing_warnings(
+    table: &Table,
+    truth: &RecordTruth,
+    measured: &ReplayMeasured,
+    warnings: &mut Vec<ReplayWarning>,
+) {
+    let truth_power = truth.power_w;
+    if truth_power <= 0.0 {
+        warnings.push(ReplayWarning::from(format!(
+            "the record's input power is {truth_power:.4e} W, not positive: is the force the \
+             enclosure's on the particles rather than the particles' on the enclosure (the sign)?"
+        )));
+    }
     // A rig key is not a replay option: the clipping warnings come without advice.
     warnings.extend(
         measured
@@ -630,52 +818,53 @@ pub fn replay_record(
                 .to_string(),
         ));
     }
-    let summary = ReplaySummary {
+}
+
+/// The summary of a replay (its `files` filled in when it is written).
+fn replay_summary(
+    record: &EnclosureRecord,
+    rig: &RigSpec,
+    inputs: &ReplayInputs,
+    push_step_s: f64,
+    truth: RecordTruth,
+    measured: ReplayMeasured,
+    warnings: Vec<ReplayWarning>,
+) -> ReplaySummary {
+    let table = &record.table;
+    let drive = &inputs.drive;
+    ReplaySummary {
         vlab_version: env!("CARGO_PKG_VERSION"),
         record: table.path.display().to_string(),
         format: table.format.as_str(),
         columns: record.columns.clone(),
         record_rows: table.len(),
-        record_step_s: h,
+        record_step_s: record.step_s,
         record_start_s: record.start_s,
         record_end_s: record.end_s(),
-        freq_hz,
-        freq_source,
-        gamma,
-        gamma_source,
-        achieved_gamma,
-        particle_mass_kg,
-        particle_mass_source,
-        orientation: orientation.as_str(),
-        orientation_source,
-        gravity_mps2: g,
-        window_start_s: window_start,
-        window_end_s: window_end,
-        periods,
+        freq_hz: drive.freq_hz(),
+        freq_source: inputs.freq_source,
+        gamma: drive.gamma(),
+        gamma_source: inputs.gamma_source,
+        achieved_gamma: inputs.achieved_gamma,
+        particle_mass_kg: inputs.particle_mass_kg,
+        particle_mass_source: inputs.particle_mass_source,
+        orientation: inputs.orientation.as_str(),
+        orientation_source: inputs.orientation_source,
+        gravity_mps2: drive.gravity_mps2(),
+        window_start_s: inputs.window.start_s,
+        window_end_s: inputs.window.end_s,
+        periods: inputs.window.periods,
         rig: rig.name.clone(),
         shaker: "recorded",
-        sample_rate_hz,
-        push_step_s: dt,
-        truth: RecordTruth {
-            power_w: truth_power,
-            energy_per_cycle_j: truth_energy,
-            e_max_j,
-            efficiency: e_max_j.map(|e| truth_energy / e),
-        },
+        sample_rate_hz: rig.daq.sample_rate_hz,
+        push_step_s,
+        truth,
         measured,
         warnings,
         files: Vec::new(),
-    };
-    Ok(ReplayRun {
-        summary,
-        trace,
-        daq: daq_report,
-        calibration,
-    })
+    }
 }
 
-/// Amplitude of the velocity's fundamental at `freq_hz` over `[from_s, to_s]`
-/// (whole periods), from the record's samples in it (m/s).
 /// The drive frequency (Hz) and where it came from: given, declared by the
 /// record, or estimated from its velocity (with a warning).
 fn drive_freq_hz(
@@ -938,6 +1127,8 @@ fn feed_daq(
     }
 }
 
+/// Amplitude of the velocity's fundamental at `freq_hz` over `[from_s, to_s]`
+/// (whole periods), from the record's samples in it (m/s).
 fn fundamental_velocity_mps(record: &EnclosureRecord, freq_hz: f64, from_s: f64, to_s: f64) -> f64 {
     let omega = 2.0 * PI * freq_hz;
     let v = record.motion.velocity_samples_mps();
@@ -957,23 +1148,23 @@ fn fundamental_velocity_mps(record: &EnclosureRecord, freq_hz: f64, from_s: f64,
     2.0 * (re * re + im * im).sqrt() / n as f64
 }
 
+/// The metadata of the rig's trace: the drive, the bed and the record.
 fn replay_metadata(
     record: &EnclosureRecord,
-    freq_hz: f64,
-    gamma: f64,
-    particle_mass_kg: Option<f64>,
-    g: f64,
-    orientation: Orientation,
+    inputs: &ReplayInputs,
     rig: &RigSpec,
 ) -> TraceMetadata {
     let mut extra = std::collections::BTreeMap::new();
-    if let Some(m) = particle_mass_kg {
+    if let Some(m) = inputs.particle_mass_kg {
         extra.insert("particle_mass_kg".to_string(), serde_json::json!(m));
     }
-    extra.insert("gravity_mps2".to_string(), serde_json::json!(g));
+    extra.insert(
+        "gravity_mps2".to_string(),
+        serde_json::json!(inputs.drive.gravity_mps2()),
+    );
     extra.insert(
         "orientation".to_string(),
-        serde_json::json!(orientation.as_str()),
+        serde_json::json!(inputs.orientation.as_str()),
     );
     extra.insert(
         "replayed_record".to_string(),
@@ -988,8 +1179,8 @@ fn replay_metadata(
             rig.name
         ),
         rig: rig.name.clone(),
-        drive_freq_hz: Some(freq_hz),
-        gamma: Some(gamma),
+        drive_freq_hz: Some(inputs.drive.freq_hz()),
+        gamma: Some(inputs.drive.gamma()),
         extra,
         ..Default::default()
     }

@@ -16,6 +16,8 @@
 use std::path::Path;
 
 use plotters::coord::Shift;
+use plotters::coord::combinators::LogCoord;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -412,11 +414,15 @@ const LEGEND_SAMPLE_PX: i32 = 30;
 /// Height of a legend line (px).
 const LEGEND_LINE_PX: i32 = 19;
 
+/// The chart of a [`LogXPlot`]: logarithmic x, linear y.
+type LogXChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, RangedCoordf64>>;
+
+/// A legend of a [`LogXPlot`]: each entry's name and sample, in drawing order.
+type LogXLegend = Vec<(String, LegendSample)>;
+
 impl Figure for LogXFigure<'_> {
-    /// One piece, in the order the figure is drawn (mesh, series, markers,
-    /// reference level, legend panel): plotters' chart context is generic in
-    /// its backend and coordinates, so helpers would carry those types for no
-    /// gain, and the SVG's element order is the statement order here.
+    /// In the order the figure is drawn (the SVG's element order is the order
+    /// of the calls): mesh, series, markers, reference level, legend panel.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
@@ -437,41 +443,32 @@ impl Figure for LogXFigure<'_> {
             .y_desc(p.y_label.as_str())
             .x_label_formatter(&|x| format!("{x}"))
             .draw()?;
-        let (y0, y1) = (self.y_range.start, self.y_range.end);
-        let mut legend: Vec<(String, LegendSample)> = Vec::new();
+        let mut legend = LogXLegend::new();
         for s in &p.series {
-            let color = Palette99::pick(s.color).to_rgba();
-            let ok: Vec<(f64, f64, f64)> = s
-                .points
-                .iter()
-                .copied()
-                .filter(|q| q.0 > 0.0 && q.0.is_finite() && q.1.is_finite())
-                .collect();
-            if ok.is_empty() {
-                continue;
-            }
-            if s.line {
-                chart.draw_series(LineSeries::new(
-                    ok.iter().map(|q| (q.0, q.1)),
-                    color.stroke_width(2),
-                ))?;
-                chart.draw_series(
-                    ok.iter()
-                        .map(|q| Circle::new((q.0, q.1), 3, color.filled())),
-                )?;
-                legend.push((s.name.clone(), LegendSample::LineWithPoints(color)));
-            } else {
-                chart.draw_series(
-                    ok.iter()
-                        .map(|q| TriangleMarker::new((q.0, q.1), 5, color.filled())),
-                )?;
-                legend.push((s.name.clone(), LegendSample::Triangle(color)));
-            }
-            chart.draw_series(ok.iter().filter(|q| q.2.is_finite() && q.2 > 0.0).map(|q| {
-                ErrorBar::new_vertical(q.0, q.1 - q.2, q.1, q.1 + q.2, color.stroke_width(1), 8)
-            }))?;
+            draw_error_series(&mut chart, s, &mut legend)?;
         }
-        for m in &p.markers {
+        self.draw_markers(&mut chart, &mut legend)?;
+        self.draw_reference(&mut chart, &mut legend)?;
+        if !legend.is_empty() {
+            draw_legend_panel(&side, &legend)?;
+        }
+        root.present()?;
+        Ok(())
+    }
+}
+
+impl LogXFigure<'_> {
+    /// The marker lines, dashed across the y range.
+    fn draw_markers<DB: DrawingBackend>(
+        &self,
+        chart: &mut LogXChart<'_, DB>,
+        legend: &mut LogXLegend,
+    ) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let (y0, y1) = (self.y_range.start, self.y_range.end);
+        for m in &self.plot.markers {
             let color = Palette99::pick(m.color).to_rgba();
             let (on, off) = m.dash.pattern();
             chart.draw_series(DashedLineSeries::new(
@@ -482,7 +479,19 @@ impl Figure for LogXFigure<'_> {
             ))?;
             legend.push((m.name.clone(), LegendSample::Dashed(color, m.dash, 2)));
         }
-        if let Some(r) = p.reference_y {
+        Ok(())
+    }
+
+    /// The reference level, if any, across the x range.
+    fn draw_reference<DB: DrawingBackend>(
+        &self,
+        chart: &mut LogXChart<'_, DB>,
+        legend: &mut LogXLegend,
+    ) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        if let Some(r) = self.plot.reference_y {
             // Darker than the grid, so the level reads as a line of its own.
             let grey = RGBColor(90, 90, 90).to_rgba();
             chart.draw_series(LineSeries::new(
@@ -491,31 +500,83 @@ impl Figure for LogXFigure<'_> {
             ))?;
             legend.push((format!("efficiency {r}"), LegendSample::Thin(grey)));
         }
-        // The legend, in its own panel right of the data area.
-        if !legend.is_empty() {
-            let (x0, top) = (8, 14);
-            let bottom = top + LEGEND_LINE_PX * legend.len() as i32 + 6;
-            side.draw(&Rectangle::new(
-                [(2, top - 10), (LOG_X_LEGEND_WIDTH_PX as i32 - 6, bottom)],
-                BLACK.stroke_width(1),
-            ))?;
-            let font = ("sans-serif", 13)
-                .into_font()
-                .color(&BLACK)
-                .pos(Pos::new(HPos::Left, VPos::Center));
-            for (k, (name, sample)) in legend.iter().enumerate() {
-                let y = top + LEGEND_LINE_PX * k as i32;
-                draw_legend_sample(&side, *sample, x0, y)?;
-                side.draw(&Text::new(
-                    name.clone(),
-                    (x0 + LEGEND_SAMPLE_PX + 6, y),
-                    font.clone(),
-                ))?;
-            }
-        }
-        root.present()?;
         Ok(())
     }
+}
+
+/// One series of a [`LogXPlot`] (its points with positive finite x and finite
+/// y; none drawn when there are none): a line with points or triangles, then
+/// its error bars.
+fn draw_error_series<DB: DrawingBackend>(
+    chart: &mut LogXChart<'_, DB>,
+    s: &ErrorSeries,
+    legend: &mut LogXLegend,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let color = Palette99::pick(s.color).to_rgba();
+    let ok: Vec<(f64, f64, f64)> = s
+        .points
+        .iter()
+        .copied()
+        .filter(|q| q.0 > 0.0 && q.0.is_finite() && q.1.is_finite())
+        .collect();
+    if ok.is_empty() {
+        return Ok(());
+    }
+    if s.line {
+        chart.draw_series(LineSeries::new(
+            ok.iter().map(|q| (q.0, q.1)),
+            color.stroke_width(2),
+        ))?;
+        chart.draw_series(
+            ok.iter()
+                .map(|q| Circle::new((q.0, q.1), 3, color.filled())),
+        )?;
+        legend.push((s.name.clone(), LegendSample::LineWithPoints(color)));
+    } else {
+        chart.draw_series(
+            ok.iter()
+                .map(|q| TriangleMarker::new((q.0, q.1), 5, color.filled())),
+        )?;
+        legend.push((s.name.clone(), LegendSample::Triangle(color)));
+    }
+    chart.draw_series(ok.iter().filter(|q| q.2.is_finite() && q.2 > 0.0).map(|q| {
+        ErrorBar::new_vertical(q.0, q.1 - q.2, q.1, q.1 + q.2, color.stroke_width(1), 8)
+    }))?;
+    Ok(())
+}
+
+/// The legend of a [`LogXPlot`], framed, in its own panel `side` right of
+/// the data area.
+fn draw_legend_panel<DB: DrawingBackend>(
+    side: &DrawingArea<DB, Shift>,
+    legend: &LogXLegend,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let (x0, top) = (8, 14);
+    let bottom = top + LEGEND_LINE_PX * legend.len() as i32 + 6;
+    side.draw(&Rectangle::new(
+        [(2, top - 10), (LOG_X_LEGEND_WIDTH_PX as i32 - 6, bottom)],
+        BLACK.stroke_width(1),
+    ))?;
+    let font = ("sans-serif", 13)
+        .into_font()
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    for (k, (name, sample)) in legend.iter().enumerate() {
+        let y = top + LEGEND_LINE_PX * k as i32;
+        draw_legend_sample(side, *sample, x0, y)?;
+        side.draw(&Text::new(
+            name.clone(),
+            (x0 + LEGEND_SAMPLE_PX + 6, y),
+            font.clone(),
+        ))?;
+    }
+    Ok(())
 }
 
 /// One cell of a [`HeatMap`].
@@ -609,11 +670,13 @@ fn viridis(t: f64) -> RGBColor {
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
+/// The chart of a heat map: cell coordinates on both axes.
+type HeatChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
 impl Figure for HeatFigure<'_> {
-    /// One piece, in the order the figure is drawn (cells, hatching, overlays,
-    /// cell texts, overlay legend, tick names, footnote, colour bar): the
-    /// chart context is generic in backend and coordinates, and the SVG's
-    /// element order is the statement order here.
+    /// In the order the figure is drawn (the SVG's element order is the order
+    /// of the calls): cells, hatching, overlays, cell texts, overlay legend,
+    /// tick names, footnote, colour bar.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
@@ -638,17 +701,48 @@ impl Figure for HeatFigure<'_> {
             .x_desc(m.x_label.as_str())
             .y_desc(m.y_label.as_str())
             .draw()?;
-        let (lo, hi) = m.value_range;
-        let scale = |v: f64| (v - lo) / (hi - lo).max(f64::MIN_POSITIVE);
+        self.draw_cells(&mut chart)?;
+        self.draw_overlays(&mut chart)?;
+        self.draw_cell_texts(&mut chart)?;
+        self.draw_overlay_legend(root, h as i32 - HEAT_MAP_LEGEND_FROM_BOTTOM_PX)?;
+        self.draw_tick_names(root, &chart)?;
+        if !m.footnote.is_empty() {
+            root.draw(&Text::new(
+                m.footnote.clone(),
+                (12, h as i32 - 20),
+                ("sans-serif", 13)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+        }
+        self.draw_colour_bar(&bar)?;
+        root.present()?;
+        Ok(())
+    }
+}
+
+impl HeatFigure<'_> {
+    /// Where `v` falls on the colour scale (0 at its low end, 1 at its high).
+    fn scale(&self, v: f64) -> f64 {
+        let (lo, hi) = self.0.value_range;
+        (v - lo) / (hi - lo).max(f64::MIN_POSITIVE)
+    }
+
+    /// The cells, coloured by value, then the cells without one hatched.
+    fn draw_cells<DB: DrawingBackend>(&self, chart: &mut HeatChart<'_, DB>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let m = self.0;
         chart.draw_series(m.cells.iter().map(|c| {
             let (x, y) = (c.col as f64, c.row as f64);
             let fill = match c.value {
-                Some(v) if v.is_finite() => viridis(scale(v)).filled(),
+                Some(v) if v.is_finite() => viridis(self.scale(v)).filled(),
                 _ => RGBColor(215, 215, 215).filled(),
             };
             Rectangle::new([(x, y), (x + 1.0, y + 1.0)], fill)
         }))?;
-        // Hatch the cells without a value.
         for c in m
             .cells
             .iter()
@@ -667,8 +761,15 @@ impl Figure for HeatFigure<'_> {
                 ))?;
             }
         }
-        // The overlays under the cell texts, so a line never hides a label.
-        for o in &m.overlays {
+        Ok(())
+    }
+
+    /// The overlays, drawn before the cell texts so a line never hides a label.
+    fn draw_overlays<DB: DrawingBackend>(&self, chart: &mut HeatChart<'_, DB>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        for o in &self.0.overlays {
             let color = RGBColor(o.color.0, o.color.1, o.color.2);
             let (on, off) = o.dash.pattern();
             for seg in &o.segments {
@@ -680,8 +781,18 @@ impl Figure for HeatFigure<'_> {
                 ))?;
             }
         }
-        for c in &m.cells {
-            let dark = c.value.is_some_and(|v| v.is_finite() && scale(v) < 0.6);
+        Ok(())
+    }
+
+    /// Each cell's text, centred, white on dark cells.
+    fn draw_cell_texts<DB: DrawingBackend>(&self, chart: &mut HeatChart<'_, DB>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        for c in &self.0.cells {
+            let dark = c
+                .value
+                .is_some_and(|v| v.is_finite() && self.scale(v) < 0.6);
             let color = if dark { WHITE } else { BLACK };
             let lines: Vec<&str> = c.text.lines().collect();
             let n = lines.len() as f64;
@@ -698,14 +809,25 @@ impl Figure for HeatFigure<'_> {
                 )))?;
             }
         }
-        // The overlays' legend, one line under the map, above the footnote.
-        let legend_y = h as i32 - HEAT_MAP_LEGEND_FROM_BOTTOM_PX;
+        Ok(())
+    }
+
+    /// The overlays' legend, one line at height `legend_y` (px) under the
+    /// map, above the footnote.
+    fn draw_overlay_legend<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        legend_y: i32,
+    ) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
         let mut x = 12;
         let font = ("sans-serif", 13)
             .into_font()
             .color(&BLACK)
             .pos(Pos::new(HPos::Left, VPos::Center));
-        for o in m.overlays.iter().filter(|o| !o.segments.is_empty()) {
+        for o in self.0.overlays.iter().filter(|o| !o.segments.is_empty()) {
             let color = RGBColor(o.color.0, o.color.1, o.color.2).to_rgba();
             draw_legend_sample(root, LegendSample::Dashed(color, o.dash, 3), x, legend_y)?;
             x += LEGEND_SAMPLE_PX + 6;
@@ -713,7 +835,19 @@ impl Figure for HeatFigure<'_> {
             let (tw, _) = root.estimate_text_size(&o.name, &font)?;
             x += tw as i32 + 24;
         }
-        // Column and row names at the cell centres.
+        Ok(())
+    }
+
+    /// Column and row names at the cell centres.
+    fn draw_tick_names<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        chart: &HeatChart<'_, DB>,
+    ) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let m = self.0;
         let tick = ("sans-serif", 14).into_font();
         for (i, name) in m.columns.iter().enumerate() {
             let (px, py) = chart.backend_coord(&(i as f64 + 0.5, 0.0));
@@ -735,17 +869,16 @@ impl Figure for HeatFigure<'_> {
                     .pos(Pos::new(HPos::Right, VPos::Center)),
             ))?;
         }
-        if !m.footnote.is_empty() {
-            root.draw(&Text::new(
-                m.footnote.clone(),
-                (12, h as i32 - 20),
-                ("sans-serif", 13)
-                    .into_font()
-                    .color(&BLACK)
-                    .pos(Pos::new(HPos::Left, VPos::Center)),
-            ))?;
-        }
-        // Colour bar.
+        Ok(())
+    }
+
+    /// The colour bar in `bar`: the scale, its frame, five value ticks and
+    /// the value's name.
+    fn draw_colour_bar<DB: DrawingBackend>(&self, bar: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let (lo, hi) = self.0.value_range;
         let (_, bh) = bar.dim_in_pixel();
         let (top, bottom) = (60i32, bh as i32 - 100);
         let steps = 100;
@@ -775,14 +908,13 @@ impl Figure for HeatFigure<'_> {
             ))?;
         }
         bar.draw(&Text::new(
-            m.value_label.clone(),
+            self.0.value_label.clone(),
             (10, top - 24),
             ("sans-serif", 14)
                 .into_font()
                 .color(&BLACK)
                 .pos(Pos::new(HPos::Left, VPos::Center)),
         ))?;
-        root.present()?;
         Ok(())
     }
 }
@@ -832,9 +964,8 @@ pub fn plot_panel_strip(path: &Path, strip: &PanelStrip) -> Result<()> {
 struct StripFigure<'a>(&'a PanelStrip);
 
 impl Figure for StripFigure<'_> {
-    /// One piece, panel by panel in drawing order, then the colour bar: the
-    /// chart context is generic in backend and coordinates, and the SVG's
-    /// element order is the statement order here.
+    /// Panel by panel in drawing order, then the colour bar and the footnote
+    /// (the SVG's element order is the order of the calls).
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
@@ -846,35 +977,77 @@ impl Figure for StripFigure<'_> {
         let (body, foot) = titled.split_vertically(h as i32 - 70);
         let (panels_area, bar) = body.split_horizontally(w as i32 - 110);
         let areas = panels_area.split_evenly((1, s.panels.len()));
-        let (lo, hi) = s.value_range;
-        let scale = |v: f64| (v - lo) / (hi - lo).max(f64::MIN_POSITIVE);
         for (area, panel) in areas.iter().zip(&s.panels) {
-            let mut chart = ChartBuilder::on(area)
-                .caption(panel.title.as_str(), ("sans-serif", 14))
-                .margin(6)
-                .build_cartesian_2d(s.x_range.0..s.x_range.1, s.y_range.0..s.y_range.1)?;
-            let [a, b] = panel.outline;
-            chart.draw_series(std::iter::once(Rectangle::new(
-                [a, b],
-                RGBColor(235, 235, 235).filled(),
-            )))?;
-            chart.draw_series(std::iter::once(Rectangle::new(
-                [a, b],
-                BLACK.stroke_width(2),
-            )))?;
-            let (x0, _) = chart.backend_coord(&(s.x_range.0, s.y_range.0));
-            let (x1, _) = chart.backend_coord(&(s.x_range.1, s.y_range.0));
-            let px_per_unit = (x1 - x0) as f64 / (s.x_range.1 - s.x_range.0);
-            chart.draw_series(panel.circles.iter().map(|&(x, y, r, v)| {
-                let px = ((r * px_per_unit).round() as i32).max(1);
-                Circle::new((x, y), px, viridis(scale(v)).filled())
-            }))?;
-            chart.draw_series(panel.circles.iter().map(|&(x, y, r, _)| {
-                let px = ((r * px_per_unit).round() as i32).max(1);
-                Circle::new((x, y), px, RGBColor(40, 40, 40).stroke_width(1))
-            }))?;
+            self.draw_panel(area, panel)?;
         }
-        // Colour bar.
+        self.draw_colour_bar(&bar)?;
+        for (k, line) in s.footnote.lines().enumerate() {
+            foot.draw(&Text::new(
+                line.to_string(),
+                (12, 14 + 18 * k as i32),
+                ("sans-serif", 13)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+        }
+        root.present()?;
+        Ok(())
+    }
+}
+
+impl StripFigure<'_> {
+    /// Where `v` falls on the colour scale (0 at its low end, 1 at its high).
+    fn scale(&self, v: f64) -> f64 {
+        let (lo, hi) = self.0.value_range;
+        (v - lo) / (hi - lo).max(f64::MIN_POSITIVE)
+    }
+
+    /// One panel in `area`: its outline, filled and framed, then its circles,
+    /// coloured by value and outlined.
+    fn draw_panel<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        panel: &CirclePanel,
+    ) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let s = self.0;
+        let mut chart = ChartBuilder::on(area)
+            .caption(panel.title.as_str(), ("sans-serif", 14))
+            .margin(6)
+            .build_cartesian_2d(s.x_range.0..s.x_range.1, s.y_range.0..s.y_range.1)?;
+        let [a, b] = panel.outline;
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [a, b],
+            RGBColor(235, 235, 235).filled(),
+        )))?;
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [a, b],
+            BLACK.stroke_width(2),
+        )))?;
+        let (x0, _) = chart.backend_coord(&(s.x_range.0, s.y_range.0));
+        let (x1, _) = chart.backend_coord(&(s.x_range.1, s.y_range.0));
+        let px_per_unit = (x1 - x0) as f64 / (s.x_range.1 - s.x_range.0);
+        chart.draw_series(panel.circles.iter().map(|&(x, y, r, v)| {
+            let px = ((r * px_per_unit).round() as i32).max(1);
+            Circle::new((x, y), px, viridis(self.scale(v)).filled())
+        }))?;
+        chart.draw_series(panel.circles.iter().map(|&(x, y, r, _)| {
+            let px = ((r * px_per_unit).round() as i32).max(1);
+            Circle::new((x, y), px, RGBColor(40, 40, 40).stroke_width(1))
+        }))?;
+        Ok(())
+    }
+
+    /// The colour bar in `bar`: the scale, its frame, five value ticks and
+    /// the value's name.
+    fn draw_colour_bar<DB: DrawingBackend>(&self, bar: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let (lo, hi) = self.0.value_range;
         let (_, bh) = bar.dim_in_pixel();
         let (top, bottom) = (30i32, bh as i32 - 20);
         let steps = 100;
@@ -904,24 +1077,13 @@ impl Figure for StripFigure<'_> {
             ))?;
         }
         bar.draw(&Text::new(
-            s.value_label.clone(),
+            self.0.value_label.clone(),
             (5, top - 16),
             ("sans-serif", 13)
                 .into_font()
                 .color(&BLACK)
                 .pos(Pos::new(HPos::Left, VPos::Center)),
         ))?;
-        for (k, line) in s.footnote.lines().enumerate() {
-            foot.draw(&Text::new(
-                line.to_string(),
-                (12, 14 + 18 * k as i32),
-                ("sans-serif", 13)
-                    .into_font()
-                    .color(&BLACK)
-                    .pos(Pos::new(HPos::Left, VPos::Center)),
-            ))?;
-        }
-        root.present()?;
         Ok(())
     }
 }

@@ -1484,31 +1484,9 @@ fn yang_study(
     settle_wall_s: f64,
     dem: &DemAccuracy,
 ) -> Result<(Vec<AccuracyRow>, YangAccuracy), SceneError> {
-    let f = plan.freq_hz;
-    let period = 1.0 / f;
     let t = plan.transient_cycles as usize;
     let empty = TruthSamples::default();
-    let weight = match scene.enclosure.orientation {
-        Orientation::Vertical => rig.enclosure.mass_kg * scene.simulation.gravity_mps2,
-        Orientation::Horizontal => 0.0,
-    };
-    let record_start = t as f64 * period;
-    // The prescribed sine starts at full velocity into the resting bed: the
-    // first sample of the drive carries a slam (about -180 N on the thesis
-    // rig's 60-sphere test bed) that an AC-coupled chain turns into a slowly
-    // decaying offset across the record. A lab's chain runs long before the
-    // record; feed it from the end of the first cycle.
-    let bench = YangBench {
-        truth: run.truth.as_ref().unwrap_or(&empty),
-        freq_hz: f,
-        omega: 2.0 * PI * f,
-        feed_start_s: period.min(record_start),
-        record_start_s: record_start,
-        static_weight_n: weight,
-        seed: scene.simulation.seed,
-        // The calibration's noise: another seed, so its noise is its own.
-        calibration_seed: scene.simulation.seed ^ 0x5eed_ca1b,
-    };
+    let bench = yang_bench(scene, rig, plan, run.truth.as_ref().unwrap_or(&empty));
     let baseline = plan.baseline_record_periods() as usize;
     let dem_wall =
         |n: usize| settle_wall_s + run.cycle_wall_s.get(t + n).copied().unwrap_or(run.wall_s);
@@ -1531,15 +1509,88 @@ fn yang_study(
     rows.extend(chain_setting_rows(
         &bench, rig, plan, baseline, dissipated, base_wall,
     )?);
+    let (phase_rows, error_per_mrad) = residual_phase_rows(
+        &bench,
+        &full,
+        plan,
+        baseline,
+        baseline_phi,
+        dissipated,
+        base_wall + chain_s,
+    )?;
+    rows.extend(phase_rows);
+    Ok((
+        rows,
+        YangAccuracy {
+            rig: rig.name.clone(),
+            baseline_record_periods: baseline as u32,
+            baseline_error_rel: baseline_err.0,
+            baseline_error_vs_work_rel: baseline_err.1,
+            rig_phase_error_rad: rig.expected_phase_error_rad(plan.freq_hz),
+            calibrated_phase_error_rad: baseline_phi,
+            error_per_mrad,
+        },
+    ))
+}
+
+/// Study (c)'s bench: the DEM's `truth` record of a drive of `plan` put
+/// through the chain of `rig` from the end of its first cycle, recorded
+/// after the transient cycles.
+fn yang_bench<'a>(
+    scene: &Scene,
+    rig: &RigSpec,
+    plan: &AccuracyPlan,
+    truth: &'a TruthSamples,
+) -> YangBench<'a> {
+    let f = plan.freq_hz;
+    let period = 1.0 / f;
+    let weight = match scene.enclosure.orientation {
+        Orientation::Vertical => rig.enclosure.mass_kg * scene.simulation.gravity_mps2,
+        Orientation::Horizontal => 0.0,
+    };
+    let record_start = f64::from(plan.transient_cycles) * period;
+    // The prescribed sine starts at full velocity into the resting bed: the
+    // first sample of the drive carries a slam (about -180 N on the thesis
+    // rig's 60-sphere test bed) that an AC-coupled chain turns into a slowly
+    // decaying offset across the record. A lab's chain runs long before the
+    // record; feed it from the end of the first cycle.
+    YangBench {
+        truth,
+        freq_hz: f,
+        omega: 2.0 * PI * f,
+        feed_start_s: period.min(record_start),
+        record_start_s: record_start,
+        static_weight_n: weight,
+        seed: scene.simulation.seed,
+        // The calibration's noise: another seed, so its noise is its own.
+        calibration_seed: scene.simulation.seed ^ 0x5eed_ca1b,
+    }
+}
+
+/// Study (c)'s rows of residual phase errors: Yang on the `record` over
+/// `baseline` periods, corrected by the calibrated `baseline_phi` (rad) plus
+/// each residual of `plan`, against the DEM's `dissipated` energy per cycle
+/// (J); `wall` is the wall time to there (s). Also the error's slope per
+/// mrad (from zero to the largest residual), when both were run.
+fn residual_phase_rows(
+    bench: &YangBench,
+    record: &Chained,
+    plan: &AccuracyPlan,
+    baseline: usize,
+    baseline_phi: f64,
+    dissipated: f64,
+    wall: f64,
+) -> Result<(Vec<AccuracyRow>, Option<f64>), SceneError> {
+    let mut rows = Vec::new();
     let mut phase_pts = Vec::new();
     for &mrad in &plan.residual_phase_mrad {
         let t1 = Instant::now();
-        let e = bench.estimate(&full, baseline, baseline_phi + 1e-3 * mrad)?;
+        let e = bench.estimate(record, baseline, baseline_phi + 1e-3 * mrad)?;
         let row = residual_phase_row(
             mrad,
             e,
             dissipated,
-            base_wall + chain_s + t1.elapsed().as_secs_f64(),
+            wall + t1.elapsed().as_secs_f64(),
             baseline,
             baseline_phi,
         );
@@ -1554,18 +1605,7 @@ fn yang_study(
             .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
         zero.zip(far).map(|(z, (m, e))| (e - z) / m)
     };
-    Ok((
-        rows,
-        YangAccuracy {
-            rig: rig.name.clone(),
-            baseline_record_periods: baseline as u32,
-            baseline_error_rel: baseline_err.0,
-            baseline_error_vs_work_rel: baseline_err.1,
-            rig_phase_error_rad: rig.expected_phase_error_rad(f),
-            calibrated_phase_error_rad: baseline_phi,
-            error_per_mrad,
-        },
-    ))
+    Ok((rows, error_per_mrad))
 }
 
 /// Study (c)'s row of a residual phase error of `mrad` left after the
@@ -1614,7 +1654,7 @@ fn record_period_rows(
     bench: &YangBench,
     plan: &AccuracyPlan,
     run: &DriveRun,
-    (record, calibration): (&Chained, &Chained),
+    chained: (&Chained, &Chained),
     wall: &dyn Fn(usize) -> f64,
     pooled: f64,
 ) -> Result<RecordPeriods, SceneError> {
@@ -1627,76 +1667,76 @@ fn record_period_rows(
     for &n in &plan.record_periods {
         let n = n as usize;
         let t1 = Instant::now();
-        let phi = bench.calibrate(calibration, n)?;
-        let e = bench.estimate(record, n, phi)?;
-        let wall = wall(n) + t1.elapsed().as_secs_f64();
-        let (dissipated, work) = truth_window(run, t, n);
-        let note = format!("calibrated phase error {:.4} mrad", 1e3 * phi);
-        let mut row = AccuracyRow::new(
-            "yang",
-            "record_periods",
-            n as f64,
-            "energy_per_cycle_j",
-            e,
-            dissipated,
-            f64::NAN,
-            wall,
-        );
-        row.note = format!("against the DEM dissipation over the same cycles; {note}");
+        let (length_rows, phi) = record_length_rows(
+            bench,
+            chained,
+            n,
+            &|| wall(n) + t1.elapsed().as_secs_f64(),
+            truth_window(run, t, n),
+            (&cycle_energies, pooled),
+        )?;
         if n == baseline {
-            baseline_err.0 = row.error_rel;
+            baseline_err = (length_rows[0].error_rel, length_rows[1].error_rel);
             baseline_phi = phi;
         }
-        rows.push(row);
-        let mut row = AccuracyRow::new(
-            "yang",
-            "record_periods",
-            n as f64,
-            "energy_per_cycle_vs_work_j",
-            e,
-            work,
-            f64::NAN,
-            wall,
-        );
-        row.note = "against the enclosure's work over the same cycles: the chain alone".into();
-        if n == baseline {
-            baseline_err.1 = row.error_rel;
-        }
-        rows.push(row);
-        // The chain's false energy: Yang on the calibration record itself.
-        let false_e = bench.estimate(calibration, n, phi)?;
-        let mut row = AccuracyRow::new(
-            "yang",
-            "record_periods",
-            n as f64,
-            "empty_enclosure_energy_per_cycle_j",
-            false_e,
-            work,
-            f64::NAN,
-            wall,
-        );
-        row.error_rel = false_e / work;
-        row.note = "Yang on the calibration record (no particles), relative to the work in: the chain's own false energy".into();
-        rows.push(row);
-        let se = mean_stderr(&cycle_energies[..n.min(cycle_energies.len())]).stderr;
-        let mut row = AccuracyRow::new(
-            "yang",
-            "record_periods",
-            n as f64,
-            "energy_per_cycle_vs_bed_mean_j",
-            e,
-            pooled,
-            se / pooled,
-            wall,
-        );
-        row.note = "against the bed's long-run mean (all seeds): chain and statistics".into();
-        rows.push(row);
+        rows.extend(length_rows);
     }
     Ok(RecordPeriods {
         rows,
         baseline_err,
         baseline_phi,
     })
+}
+
+/// Study (c)'s four rows of a record of `n` periods, and the phase error
+/// calibrated on it (rad): Yang on the `record` against the DEM's
+/// `(dissipated, work)` per cycle over the same cycles (J), against the
+/// `pooled` mean with the standard error of the first `n` of the bed's
+/// `cycle_energies` (J), and Yang on the `calibration` record itself (the
+/// chain's false energy); `wall()` is the wall time to there (s), taken once
+/// both are calibrated and estimated.
+fn record_length_rows(
+    bench: &YangBench,
+    (record, calibration): (&Chained, &Chained),
+    n: usize,
+    wall: &dyn Fn() -> f64,
+    (dissipated, work): (f64, f64),
+    (cycle_energies, pooled): (&[f64], f64),
+) -> Result<(Vec<AccuracyRow>, f64), SceneError> {
+    let phi = bench.calibrate(calibration, n)?;
+    let e = bench.estimate(record, n, phi)?;
+    let wall = wall();
+    let row = |quantity: &'static str, value: f64, reference: f64, stderr_rel: f64| {
+        AccuracyRow::new(
+            "yang",
+            "record_periods",
+            n as f64,
+            quantity,
+            value,
+            reference,
+            stderr_rel,
+            wall,
+        )
+    };
+    let note = format!("calibrated phase error {:.4} mrad", 1e3 * phi);
+    let mut vs_dissipated = row("energy_per_cycle_j", e, dissipated, f64::NAN);
+    vs_dissipated.note = format!("against the DEM dissipation over the same cycles; {note}");
+    let mut vs_work = row("energy_per_cycle_vs_work_j", e, work, f64::NAN);
+    vs_work.note = "against the enclosure's work over the same cycles: the chain alone".into();
+    // The chain's false energy: Yang on the calibration record itself.
+    let false_e = bench.estimate(calibration, n, phi)?;
+    let mut empty = row(
+        "empty_enclosure_energy_per_cycle_j",
+        false_e,
+        work,
+        f64::NAN,
+    );
+    empty.error_rel = false_e / work;
+    empty.note = "Yang on the calibration record (no particles), relative to the work in: the chain's own false energy".into();
+    let se = mean_stderr(&cycle_energies[..n.min(cycle_energies.len())]).stderr;
+    let mut vs_mean = row("energy_per_cycle_vs_bed_mean_j", e, pooled, se / pooled);
+    vs_mean.note = "against the bed's long-run mean (all seeds): chain and statistics".into();
+    Ok((vec![vs_dissipated, vs_work, empty, vs_mean], phi))
 }
 
 /// Study (c)'s rows of chain settings: the noise factors and ADC bits of
