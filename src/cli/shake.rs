@@ -264,8 +264,8 @@ fn print_dem(d: &DemTruth) {
         100.0 * pc.pw_tangential / total
     );
     println!(
-        "    energy ledger                 integration error {:+.1e}, residual {:.0e} of the energy that flowed",
-        d.integrator_rel, d.ledger_residual_rel
+        "    energy check                  integration error {:+.1e} of the energy that flowed (velocity Verlet's; falls as dt^2)",
+        d.integrator_rel
     );
 }
 
@@ -279,10 +279,10 @@ fn print_measured(s: &ShakeSummary) {
     );
     let versus = if m.error_vs_dem_rel.is_finite() {
         format!(
-            "{:+.2} % vs DEM: {:+.2} % the chain, {:+.2} % the bed's unsteadiness",
-            100.0 * m.error_vs_dem_rel,
+            "the chain {:+.2} % vs the work in, the bed's unsteadiness {:+.2} %: {:+.2} % vs DEM",
             100.0 * m.error_vs_dem_work_rel,
-            100.0 * m.unsteadiness_rel
+            100.0 * m.unsteadiness_rel,
+            100.0 * m.error_vs_dem_rel
         )
     } else {
         format!(
@@ -303,7 +303,7 @@ fn print_measured(s: &ShakeSummary) {
             .map_or(String::new(), |x| format!(" +- {x:.3}"))
     );
     println!(
-        "    (+- : standard error from the cycle-to-cycle spread, the statistical part; % vs DEM: the measurement chain's error plus the bed's unsteadiness over the record)"
+        "    (+- : standard error from the cycle-to-cycle spread, the statistical part; the chain: the measurement against the work the enclosure put in, what a lab's post-processing controls; the bed's unsteadiness: work in vs dissipated over the record; their sum is the error vs the DEM's dissipation)"
     );
     println!(
         "    phase correction              {:.3} mrad ({})",

@@ -175,8 +175,10 @@ impl LedgerBalance {
         self.dissipated_j.max(self.work_in_j.abs())
     }
 
-    /// |residual| / [`Self::energy_flowed_j`], the figure of merit of the
-    /// books (infinite when no energy flowed).
+    /// |residual| / [`Self::energy_flowed_j`] (infinite when no energy
+    /// flowed). Rounding by construction, since the integration term is the
+    /// books' remainder: a check of the bookkeeping code, not of the physics;
+    /// [`Self::integrator_relative`] is the energy check.
     pub fn residual_relative(&self) -> f64 {
         self.relative(self.residual_j.abs())
     }

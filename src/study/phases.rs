@@ -39,6 +39,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::dem::World;
+use crate::drive::Drive;
 use crate::experiment::damper::{Kinematics, StepObserver};
 use crate::experiment::record::TruthSamples;
 
@@ -241,11 +242,10 @@ pub struct ImpactStats {
 pub fn collective_impacts(
     rec: &TruthSamples,
     start_s: f64,
-    freq_hz: f64,
-    gamma: f64,
+    drive: &Drive,
     particle_mass_kg: f64,
-    g_mps2: f64,
 ) -> ImpactStats {
+    let (freq_hz, gamma, g_mps2) = (drive.freq_hz(), drive.gamma(), drive.gravity_mps2());
     let period = 1.0 / freq_hz;
     let omega = 2.0 * PI * freq_hz;
     let threshold = IMPACT_FORCE_FACTOR * particle_mass_kg * g_mps2 * (gamma + 1.0);
@@ -378,23 +378,16 @@ pub struct PhaseObserver {
 impl PhaseObserver {
     /// Samples from `sample_from_s` (from the drive start; the earliest the
     /// steady window can begin) on, `SAMPLES_PER_CYCLE` times a cycle of
-    /// `freq_hz`, for a drive of amplitude `gamma` with time step `dt_s`;
-    /// `clearance_m` scales the centre-of-mass indicators.
-    pub fn new(
-        freq_hz: f64,
-        gamma: f64,
-        g_mps2: f64,
-        dt_s: f64,
-        sample_from_s: f64,
-        clearance_m: f64,
-    ) -> Self {
-        let period = 1.0 / freq_hz;
+    /// `drive`, stepped at `dt_s`; `clearance_m` scales the centre-of-mass
+    /// indicators and the drive's velocity amplitude the speeds.
+    pub fn new(drive: &Drive, dt_s: f64, sample_from_s: f64, clearance_m: f64) -> Self {
+        let period = drive.period_s();
         PhaseObserver {
             sample_from_s,
             period_s: period,
             sample_every: ((period / dt_s / SAMPLES_PER_CYCLE as f64).round() as u64).max(1),
             clearance_m,
-            speed_scale_mps: gamma * g_mps2 / (2.0 * PI * freq_hz),
+            speed_scale_mps: drive.velocity_amplitude_mps(),
             steps: 0,
             rest_com_m: None,
             counts: Vec::new(),
@@ -598,7 +591,8 @@ mod tests {
             };
             rec.force_axial_n.push(force);
         }
-        let s = collective_impacts(&rec, 0.0, f, gamma, m, g);
+        let drive = Drive::new(f, gamma, g).expect("a valid drive");
+        let s = collective_impacts(&rec, 0.0, &drive, m);
         assert!((s.cycles - 4.0).abs() < 1e-6, "{}", s.cycles);
         assert_eq!((s.bottom, s.lid), (4, 4));
         assert!((s.phase_deg - 5.0).abs() < 1.0, "{}", s.phase_deg);

@@ -622,7 +622,6 @@ fn try_condition(
 ) -> Result<SweepRow, SceneError> {
     let started = Instant::now();
     let scene = plan.scene_for(c)?;
-    let g = scene.simulation.gravity_mps2;
     let drive = shake_drive(&scene, c.freq_hz, c.gamma)?;
     let rig = resolve_rig(&plan.rig, plan.shaker, &drive)?;
     let setup = ShakeSetup {
@@ -639,16 +638,14 @@ fn try_condition(
         scene.enclosure.inner_length_m,
     );
     let dt = scene.drive_dt_s(&drive);
-    let mut observer = PhaseObserver::new(c.freq_hz, c.gamma, g, dt, sample_from, clearance);
+    let mut observer = PhaseObserver::new(&drive, dt, sample_from, clearance);
     let run = run_shake_on_bed(&scene, bed, &setup, &mut [&mut observer], &mut |_| {})?;
     let s = &run.summary;
     let impacts = collective_impacts(
         &run.experiment.truth,
         s.steady_start_s,
-        c.freq_hz,
-        c.gamma,
+        &drive,
         s.particle_mass_kg,
-        g,
     );
     let ind = observer.indicators(&impacts, s.steady_start_s);
     let st = &s.dem.steadiness;
@@ -1573,7 +1570,10 @@ mod tests {
         let own = ((0.005f64.powi(2) + 0.006f64.powi(2) + 0.007f64.powi(2)) / 3.0 / 3.0).sqrt();
         assert!((agreeing - own).abs() < 1e-15, "{agreeing} vs {own}");
         let differing = seeds_stderr(&[0.80, 0.83, 0.86], &[0.001, 0.001, 0.001]);
-        assert!((differing - (0.0009f64 / 3.0).sqrt()).abs() < 1e-12, "{differing}");
+        assert!(
+            (differing - (0.0009f64 / 3.0).sqrt()).abs() < 1e-12,
+            "{differing}"
+        );
         assert_eq!(seeds_stderr(&[0.5], &[0.01]), 0.01);
         assert!(seeds_stderr(&[], &[]).is_nan());
     }
