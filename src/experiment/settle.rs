@@ -550,21 +550,13 @@ fn run_until_rest(
     let min_steps = (min_s / dt).round() as u64;
     let check_every = ((1e-3 / dt).round() as u64).max(1);
     let displacement = world.walls.displacement_m;
-    let n = world.particles.len() as u64;
-    if n == 0 {
+    if world.particles.is_empty() {
         return Ok(());
     }
     for k in 1..=max_steps {
         world.step(displacement)?;
         if k % check_every == 0 {
-            progress(Progress {
-                phase,
-                fraction: k as f64 / max_steps as f64,
-                sim_time_s: world.time_s,
-                particle_steps: world.steps * n,
-                wall_time_s: started.elapsed().as_secs_f64(),
-                ..Progress::default()
-            });
+            progress(settling_progress(world, phase, k, max_steps, started));
             if k >= min_steps && at_rest(world) {
                 return Ok(());
             }
@@ -608,22 +600,32 @@ fn run_steps(
     let dt = world.dt_s();
     let steps = (duration_s / dt).round() as u64;
     let displacement = world.walls.displacement_m;
-    let n = world.particles.len() as u64;
     let report_every = ((1e-3 / dt).round() as u64).max(1);
     for k in 1..=steps {
         world.step(displacement)?;
         if k % report_every == 0 {
-            progress(Progress {
-                phase,
-                fraction: k as f64 / steps as f64,
-                sim_time_s: world.time_s,
-                particle_steps: world.steps * n,
-                wall_time_s: started.elapsed().as_secs_f64(),
-                ..Progress::default()
-            });
+            progress(settling_progress(world, phase, k, steps, started));
         }
     }
     Ok(())
+}
+
+/// Where a settling `phase` stands after step `k` of `steps`.
+fn settling_progress(
+    world: &World,
+    phase: &'static str,
+    k: u64,
+    steps: u64,
+    started: Instant,
+) -> Progress {
+    Progress {
+        phase,
+        fraction: k as f64 / steps as f64,
+        sim_time_s: world.time_s,
+        particle_steps: world.steps * world.particles.len() as u64,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        ..Progress::default()
+    }
 }
 
 /// Makes a settled bed ready to drive: the scene's contact laws (every

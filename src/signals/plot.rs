@@ -722,11 +722,16 @@ impl Figure for HeatFigure<'_> {
     }
 }
 
+/// Where `v` falls on a colour scale spanning `range` (0 at its low end, 1 at
+/// its high).
+fn colour_position((lo, hi): (f64, f64), v: f64) -> f64 {
+    (v - lo) / (hi - lo).max(f64::MIN_POSITIVE)
+}
+
 impl HeatFigure<'_> {
     /// Where `v` falls on the colour scale (0 at its low end, 1 at its high).
     fn scale(&self, v: f64) -> f64 {
-        let (lo, hi) = self.0.value_range;
-        (v - lo) / (hi - lo).max(f64::MIN_POSITIVE)
+        colour_position(self.0.value_range, v)
     }
 
     /// The cells, coloured by value, then the cells without one hatched.
@@ -999,8 +1004,7 @@ impl Figure for StripFigure<'_> {
 impl StripFigure<'_> {
     /// Where `v` falls on the colour scale (0 at its low end, 1 at its high).
     fn scale(&self, v: f64) -> f64 {
-        let (lo, hi) = self.0.value_range;
-        (v - lo) / (hi - lo).max(f64::MIN_POSITIVE)
+        colour_position(self.0.value_range, v)
     }
 
     /// One panel in `area`: its outline, filled and framed, then its circles,
