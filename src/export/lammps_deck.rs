@@ -67,7 +67,6 @@
 //! A scene key with no translation is an error, not a silent omission: the
 //! deck's header lists every key of the scene with what the deck did with it.
 
-use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -500,10 +499,9 @@ impl<'a> DeckPlan<'a> {
     ) -> Result<DeckPlan<'a>, SceneError> {
         let particles = &bed.world.particles;
         let dt = scene.drive_dt_s(drive);
-        let g = scene.simulation.gravity_mps2;
-        let period = 1.0 / export.freq_hz;
-        let omega = 2.0 * PI * export.freq_hz;
-        let amplitude = export.gamma * g / (omega * omega);
+        let g = drive.gravity_mps2();
+        let period = drive.period_s();
+        let amplitude = drive.displacement_amplitude_m();
         let every = ((1.0 / TRUTH_SAMPLE_RATE_HZ / dt).round() as u64).max(1);
         // Whole record rows, the last ending at or past the last cycle's end: the
         // step need not divide the period (it is vlab's, from the scene's rule),

@@ -33,8 +33,6 @@
 //! gradually (the thesis says so), so a condition near a boundary can take
 //! either name; other beds may need other thresholds.
 
-use std::f64::consts::PI;
-
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -245,9 +243,9 @@ pub fn collective_impacts(
     drive: &Drive,
     particle_mass_kg: f64,
 ) -> ImpactStats {
-    let (freq_hz, gamma, g_mps2) = (drive.freq_hz(), drive.gamma(), drive.gravity_mps2());
-    let period = 1.0 / freq_hz;
-    let omega = 2.0 * PI * freq_hz;
+    let (gamma, g_mps2) = (drive.gamma(), drive.gravity_mps2());
+    let period = drive.period_s();
+    let omega = drive.omega_rad_s();
     let threshold = IMPACT_FORCE_FACTOR * particle_mass_kg * g_mps2 * (gamma + 1.0);
     let v_scale = particle_mass_kg * gamma * g_mps2 / omega;
     let first = rec.time_s.partition_point(|&t| t < start_s - 1e-12);
@@ -495,6 +493,7 @@ impl StepObserver for PhaseObserver {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     fn base() -> PhaseIndicators {
         PhaseIndicators {
