@@ -447,6 +447,40 @@ fn join_hz(freqs: &[f64]) -> String {
     list.join(", ")
 }
 
+/// Yang's power of each whole drive period of `trace` (W), corrected with
+/// `calibration` and `polarity`: the measured series whose spread says how
+/// far to trust the record's mean.
+pub fn period_powers(
+    trace: &Trace,
+    freq_hz: f64,
+    calibration: &PhaseCalibration,
+    polarity: ForcePolarity,
+) -> Result<Vec<f64>, SceneError> {
+    // Periods start on whole periods, rounded to a sample: at drive
+    // frequencies that are not a divisor of the sample rate (1024 Hz: 39.06
+    // samples a period) a period is one to within half a sample.
+    let period_samples = trace.sample_rate_hz / freq_hz;
+    let n_periods = (trace.len() as f64 / period_samples + 1e-9).floor() as usize;
+    let force = &trace.channel(crate::rig::FORCE_CHANNEL)?.samples;
+    let accel = &trace.channel(crate::rig::ACCEL_CHANNEL)?.samples;
+    let mut powers = Vec::with_capacity(n_periods);
+    for p in 0..n_periods {
+        let start = (p as f64 * period_samples).round() as usize;
+        let end = (((p + 1) as f64 * period_samples).round() as usize).min(trace.len());
+        let options = PowerOptions {
+            phase_correction: PhaseCorrection::Table(calibration),
+            force_polarity: polarity,
+            window: PowerWindow::Explicit {
+                start,
+                len: end - start,
+            },
+            ..PowerOptions::default()
+        };
+        powers.push(yang_power(force, accel, trace.sample_rate_hz, freq_hz, &options)?.power_w);
+    }
+    Ok(powers)
+}
+
 /// Yang's power of successive blocks of two periods of `trace`, corrected with
 /// `calibration` and `polarity`, as a mean with its standard error; `None`
 /// below two blocks.

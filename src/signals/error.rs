@@ -76,7 +76,7 @@ pub enum SignalsError {
     /// The power window holds fewer than two drive periods.
     #[error(
         "the analysis window holds {periods:.3} periods of the {drive_freq_hz} Hz drive \
-         ({n_samples} samples at {sample_rate_hz} Hz); at least 2 whole periods are needed"
+         ({n_samples} samples at {sample_rate_hz} Hz); at least 2 whole periods are needed (1 in a window given explicitly)"
     )]
     TooFewPeriods {
         /// Drive periods that fit.

@@ -22,7 +22,9 @@
 //!    ([`plan_window`]): by default the largest number that fits from the
 //!    window start, `N = round(n_periods fs / f)` samples; the residual
 //!    `N f / fs - n_periods` (in periods) is reported so the caller can judge
-//!    leakage. Fewer than two periods is an error. Nothing is detrended; the
+//!    leakage. Fewer than two periods is an error (an explicit window may
+//!    hold one: a record's per-period series is Yang's power of each period
+//!    on its own). Nothing is detrended; the
 //!    DC bin is simply excluded.
 //! 2. One-sided amplitude spectra `F_k`, `A_k` (see [`super::spectrum`]);
 //!    `V_k = A_k / (j w_k)` for `k >= 1` (eq. 7.11), `w_k = 2 pi k fs / N`:
@@ -336,8 +338,10 @@ pub fn plan_window(
                     available: n_total,
                 });
             }
+            // One period is enough for a window the caller chose: the
+            // per-period series a record's standard error comes from.
             let n_periods = periods_in(len).round();
-            if n_periods < 2.0 {
+            if n_periods < 1.0 {
                 return Err(too_few(len));
             }
             (start, len, n_periods as usize)
