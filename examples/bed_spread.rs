@@ -76,7 +76,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         let means: Vec<f64> = series.iter().map(|e| mean_std(&e[a..b]).mean).collect();
         let own: Vec<f64> = series
             .iter()
-            .map(|e| mean_stderr(&e[a..b]).stderr)
+            .map(|e| mean_stderr(&e[a..b]).stderr_or_nan())
             .collect();
         let m = mean_std(&means);
         println!(

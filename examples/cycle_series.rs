@@ -7,7 +7,8 @@
 //! ```sh
 //! cargo run --release --example cycle_series -- 1 16 40 20 100 series.csv
 //! ```
-//! (first and last seed, frequency in Hz, Gamma, cycles, output CSV). The
+//! (first and last seed, frequency in Hz, Gamma, cycles, output CSV, and
+//! optionally a rig name instead of `thesis-shaker`). The
 //! rows are what `docs/accuracy.md` studies the estimators and the steady
 //! rule on.
 
@@ -23,7 +24,7 @@ use vlab::signals::ForcePolarity;
 fn arg<T: std::str::FromStr>(args: &[String], i: usize, name: &str) -> Result<T, String> {
     args.get(i)
         .ok_or(format!(
-            "usage: cycle_series FIRST LAST FREQ_HZ GAMMA CYCLES OUT.csv (missing {name})"
+            "usage: cycle_series FIRST LAST FREQ_HZ GAMMA CYCLES OUT.csv [RIG] (missing {name})"
         ))?
         .parse()
         .map_err(|_| format!("{name} = {:?} is not valid", args[i]))
@@ -36,6 +37,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let drive = Drive::new(arg(&args, 3, "FREQ_HZ")?, arg(&args, 4, "GAMMA")?, 9.81)?;
     let cycles: u32 = arg(&args, 5, "CYCLES")?;
     let out: String = arg(&args, 6, "OUT")?;
+    let rig_name = args.get(7).map_or("thesis-shaker", String::as_str);
     if cycles < 4 {
         return Err("need at least 4 cycles".into());
     }
@@ -46,7 +48,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         scene.simulation.seed = seed;
         scene.drive.cycles = CyclesSpec::Count(cycles);
         scene.drive.steady_cycles = cycles - unrecorded;
-        let rig = resolve_rig("thesis-shaker", None, &drive)?;
+        let rig = resolve_rig(rig_name, None, &drive)?;
         let setup = ShakeSetup {
             rig,
             drive,
@@ -70,7 +72,11 @@ fn main() -> Result<(), Box<dyn Error>> {
                 .map_or(String::new(), |p| format!("{:e}", p / drive.freq_hz()));
             rows.push_str(&format!("{seed},{},{dem:e},{work:e},{m}\n", c + 1));
         }
-        eprintln!("seed {seed}: {} cycles, {} periods measured", exp.outcome.cycles, measured.len());
+        eprintln!(
+            "seed {seed}: {} cycles, {} periods measured",
+            exp.outcome.cycles,
+            measured.len()
+        );
         std::fs::File::create(&out)?.write_all(rows.as_bytes())?;
     }
     Ok(())

@@ -290,7 +290,7 @@ fn one_millimetre_spheres() {
         "1 mm: drive {} steps; efficiency {:.3} +- {:.3}; ledger residual {:.1e}, integration error {:.1e}, fewest steps per collision {:.1}",
         out.steps,
         out.efficiency,
-        out.efficiency_stderr,
+        out.efficiency_stderr.unwrap_or(f64::NAN),
         out.whole.residual_relative(),
         out.whole.integrator_relative(),
         out.fewest_steps_per_contact

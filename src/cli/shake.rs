@@ -12,13 +12,14 @@ use vlab::drive::Drive;
 use vlab::experiment::damper::StepObserver;
 use vlab::experiment::measurement::ShakeSetup;
 use vlab::experiment::shake::{
-    DemTruth, ShakeSummary, check_record_window, default_out_dir, resolve_rig, run_shake_from,
-    shake_drive,
+    DemTruth, ShakeSummary, check_record_window, default_out_dir, percent_or_unknown, resolve_rig,
+    run_shake_from, shake_drive,
 };
 use vlab::export::snapshots::PhaseSnapshots;
 use vlab::export::vtk_dump::VtkDump;
 use vlab::rig::ShakerKind;
 use vlab::scene::Scene;
+use vlab::stats::MIN_SERIES_VALUES;
 
 use super::args;
 use super::cache_cmd::NoCacheArg;
@@ -222,6 +223,14 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
     println!("  wrote {}", dir.display());
 }
 
+/// ` +- x` with `x` formatted by `f`, or why there is no figure.
+fn plus_minus(x: Option<f64>, f: impl Fn(f64) -> String) -> String {
+    x.map_or(
+        format!(" (+- not known: fewer than {MIN_SERIES_VALUES} steady cycles)"),
+        |x| format!(" +- {}", f(x)),
+    )
+}
+
 /// What the DEM knows.
 fn print_dem(d: &DemTruth) {
     let pc = &d.dissipated_per_cycle_j;
@@ -243,18 +252,24 @@ fn print_dem(d: &DemTruth) {
         }
     );
     println!(
-        "    energy dissipated per cycle   {:.4e} +- {:.1e} J",
-        d.energy_per_cycle_j, d.energy_per_cycle_stderr_j
+        "    energy dissipated per cycle   {:.4e}{} J",
+        d.energy_per_cycle_j,
+        plus_minus(d.energy_per_cycle_stderr_j, |x| format!("{x:.1e}"))
     );
     println!("    E_max = 4 (Gamma g / w)^2 M   {:.4e} J", d.e_max_j);
     println!(
-        "    damping efficiency            {:.3} +- {:.3}",
-        d.efficiency, d.efficiency_stderr
+        "    damping efficiency            {:.3}{}",
+        d.efficiency,
+        plus_minus(d.efficiency_stderr, |x| format!("{x:.3}"))
     );
+    let drift = match (st.drift_rel, st.drift_stderr_rel) {
+        (Some(r), Some(e)) => format!("{:+.2} % +- {:.2} %", 100.0 * r, 100.0 * e),
+        _ => "not known".to_string(),
+    };
     println!(
-        "    steadiness                    work in vs dissipated {:+.2} %, standard error {:.2} % of the mean",
+        "    steadiness                    work in vs dissipated {:+.2} %, window's error {} of the mean, drift across the window {drift}",
         100.0 * st.balance_rel,
-        100.0 * st.stderr_rel
+        percent_or_unknown(st.stderr_rel)
     );
     println!(
         "    by source: particle-particle normal {:.1} %, tangential {:.1} %; particle-wall normal {:.1} %, tangential {:.1} %",
@@ -293,17 +308,15 @@ fn print_measured(s: &ShakeSummary) {
     println!(
         "    energy per cycle              {:.4e}{} J  ({versus})",
         m.energy_per_cycle_j,
-        m.energy_per_cycle_stderr_j
-            .map_or(String::new(), |x| format!(" +- {x:.1e}")),
+        plus_minus(m.energy_per_cycle_stderr_j, |x| format!("{x:.1e}")),
     );
     println!(
         "    damping efficiency            {:.3}{}",
         m.efficiency,
-        m.efficiency_stderr
-            .map_or(String::new(), |x| format!(" +- {x:.3}"))
+        plus_minus(m.efficiency_stderr, |x| format!("{x:.3}"))
     );
     println!(
-        "    (+- : standard error from the cycle-to-cycle spread, the statistical part; the chain: the measurement against the work the enclosure put in, what a lab's post-processing controls; the bed's unsteadiness: work in vs dissipated over the record; their sum is the error vs the DEM's dissipation)"
+        "    (+- : one sigma, the statistical part: the spread from cycle to cycle (period to period for the measurement) and the bed-to-bed part, see docs/accuracy.md; the chain: the measurement against the work the enclosure put in, what a lab's post-processing controls; the bed's unsteadiness: work in vs dissipated over the record; their sum is the error vs the DEM's dissipation)"
     );
     println!(
         "    phase correction              {:.3} mrad ({})",

@@ -28,7 +28,16 @@ use crate::dem::{Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, World
 use crate::drive::Drive;
 pub use crate::rig::{EnclosureMotion, Kinematics, SineMotion};
 use crate::scene::{DriveLength, Orientation, SceneError, SteadyCriteria, transient_cycles};
-use crate::stats::{MeanStderr, mean_stderr};
+use crate::stats::{MIN_SERIES_VALUES, MeanStderr, mean_std, mean_stderr, trend};
+
+/// The bed-to-bed part of a window's error, as a multiple of the window's
+/// cycle-to-cycle standard deviation of the energy per cycle. Independent
+/// beds of one damper wander apart over tens of cycles, slower than a window
+/// of a few tens of cycles can see (its own error, [`mean_stderr`], misses
+/// it); over 16 beds per condition the means of the steady rule's windows
+/// spread by this much beyond their window errors (`docs/accuracy.md`,
+/// measured with `examples/cycle_series.rs`).
+pub const BED_TO_BED_PER_CYCLE_SPREAD: f64 = 0.7;
 
 /// Progress of a long run, for display.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -102,9 +111,17 @@ pub struct Steadiness {
     /// (work in − dissipated) / dissipated over the window (the denominator is
     /// at least 1 % of `E_max` per cycle).
     pub balance_rel: f64,
-    /// Standard error of the energy per cycle / its mean.
-    pub stderr_rel: f64,
-    /// Both within the criteria (always false for a fixed count that is not).
+    /// One-sigma error of the window's mean energy per cycle / its mean (of
+    /// 1 % of `E_max` for a bed that dissipates next to nothing); `None` for a
+    /// window too short to tell ([`crate::stats::MIN_SERIES_VALUES`] cycles).
+    pub stderr_rel: Option<f64>,
+    /// Drift of the energy per cycle across the window (the fitted slope
+    /// times the window's cycles, of the same denominator), and its one-sigma
+    /// error; `None` for a window too short to tell.
+    pub drift_rel: Option<f64>,
+    pub drift_stderr_rel: Option<f64>,
+    /// Every criterion met: balance, error, no drift told from noise
+    /// (always false for a fixed count that is not).
     pub reached: bool,
     /// The drive stopped at its most cycles without being steady.
     pub capped: bool,
@@ -112,6 +129,13 @@ pub struct Steadiness {
     /// enclosure's work only heats it, it has no steady state, and a drive
     /// run until steady stops at its fewest cycles.
     pub lossless: bool,
+}
+
+impl Steadiness {
+    /// The window's drift is more than two of its errors from zero.
+    pub fn drifts(&self) -> bool {
+        matches!((self.drift_rel, self.drift_stderr_rel), (Some(d), Some(e)) if d.abs() > 2.0 * e)
+    }
 }
 
 /// DEM truth of a drive.
@@ -129,8 +153,14 @@ pub struct DriveOutcome {
     pub steady: LedgerBalance,
     /// Dissipated energy per cycle in the steady window (J), thesis eq. 6.9.
     pub energy_per_cycle_j: f64,
-    /// The same as the mean of the window's cycles, with its standard error.
+    /// The same as the mean of the window's cycles, with its one-sigma
+    /// error: the window's own ([`mean_stderr`]) and `bed_to_bed_j` in
+    /// quadrature.
     pub energy_per_cycle: MeanStderr,
+    /// The bed-to-bed part of the error (J): how far the window's mean of
+    /// one bed wanders from the damper's beyond what the window can see
+    /// (see the module docs).
+    pub bed_to_bed_j: f64,
     /// Per-cycle dissipation by source in the steady window (J).
     pub dissipated_per_cycle: Dissipation,
     /// Work the walls did per cycle in the steady window (J): what a
@@ -141,8 +171,9 @@ pub struct DriveOutcome {
     pub steady_window_s: f64,
     pub e_max_j: f64,
     pub efficiency: f64,
-    /// Standard error of the efficiency (from the cycle-to-cycle spread).
-    pub efficiency_stderr: f64,
+    /// One-sigma error of the efficiency (as `energy_per_cycle`'s); `None`
+    /// when not known.
+    pub efficiency_stderr: Option<f64>,
     pub steadiness: Steadiness,
     pub steps: u64,
     pub wall_time_s: f64,
@@ -175,19 +206,59 @@ fn steadiness(
     let cycles = (last - first) as f64;
     let scale = b.dissipated_j.max(0.01 * e_max_j * cycles);
     let balance_rel = (b.work_in_j - b.dissipated_j) / scale;
-    let e = mean_stderr(&cycle_energies(snapshots, first));
-    let stderr_rel = if e.mean.abs() > 0.01 * e_max_j {
-        e.relative()
-    } else {
-        e.stderr / (0.01 * e_max_j)
-    };
-    Steadiness {
+    let energies = cycle_energies(snapshots, first);
+    let e = mean_stderr(&energies);
+    // Per-cycle figures relative to the mean, or to 1 % of E_max for a bed
+    // that dissipates next to nothing.
+    let per_cycle_scale = e.mean.abs().max(0.01 * e_max_j);
+    let stderr_rel = e.stderr.map(|se| se / per_cycle_scale);
+    let drift = trend(&energies);
+    let span = (energies.len().max(1) - 1) as f64;
+    let drift_rel = drift.map(|t| t.slope * span / per_cycle_scale);
+    let drift_stderr_rel = drift.map(|t| t.slope_stderr * span / per_cycle_scale);
+    let mut s = Steadiness {
         balance_rel,
         stderr_rel,
-        reached: balance_rel.abs() <= criteria.balance_rel && stderr_rel <= criteria.stderr_rel,
+        drift_rel,
+        drift_stderr_rel,
+        reached: false,
         capped: false,
         lossless: b.dissipated_j == 0.0,
+    };
+    s.reached = balance_rel.abs() <= criteria.balance_rel
+        && stderr_rel.is_some_and(|r| r <= criteria.stderr_rel)
+        && drift.is_some()
+        && !s.drifts();
+    s
+}
+
+/// The cycle counts at which a drive run until steady is tested, from
+/// `min_cycles` on: the first whose window holds
+/// [`crate::stats::MIN_SERIES_VALUES`] cycles, then each about 1.25 times
+/// the one before. Testing every cycle and stopping at the first pass would
+/// pick windows that happen to look steady (optional stopping); geometric
+/// spacing keeps the looks few (14 up to 400 cycles, against 374) and each
+/// window mostly new (see `docs/accuracy.md` for what it does to the +-).
+pub fn steady_checkpoint(done: u32, min_cycles: u32, max_cycles: u32) -> bool {
+    if done >= max_cycles {
+        return true;
     }
+    let mut c = first_checkpoint(min_cycles);
+    while c < done {
+        c = (c + 1).max((f64::from(c) * 1.25).ceil() as u32);
+    }
+    c == done
+}
+
+/// The first cycle count at or after `min_cycles` whose steady window (all
+/// but the transient, [`transient_cycles`]) holds
+/// [`crate::stats::MIN_SERIES_VALUES`] cycles.
+fn first_checkpoint(min_cycles: u32) -> u32 {
+    let mut c = min_cycles.max(1);
+    while ((c - transient_cycles(c)) as usize) < MIN_SERIES_VALUES {
+        c += 1;
+    }
+    c
 }
 
 /// The verdict after `snapshots.len() - 1` whole cycles of a drive of
@@ -219,6 +290,14 @@ fn verdict(
                 return None;
             }
             let first = transient_cycles(done) as usize;
+            // A lossless bed is told at its fewest cycles; every other
+            // verdict waits for a checkpoint.
+            let lossless = LedgerBalance::between(&snapshots[first], &snapshots[done as usize])
+                .dissipated_j
+                == 0.0;
+            if !lossless && !steady_checkpoint(done, min_cycles, max_cycles) {
+                return None;
+            }
             let s = steadiness(snapshots, first, e_max_j, &criteria);
             *latest = Some(s);
             if s.reached || s.lossless {
@@ -320,7 +399,9 @@ impl DriveTally {
         let window_s = snapshots[last].time_s - snapshots[steady_first].time_s;
         let per_cycle = self.period_s / window_s;
         let energy_per_cycle_j = steady.dissipated_j * per_cycle;
-        let energy_per_cycle = mean_stderr(&cycle_energies(&snapshots, steady_first));
+        let energies = cycle_energies(&snapshots, steady_first);
+        let bed_to_bed_j = BED_TO_BED_PER_CYCLE_SPREAD * mean_std(&energies).std;
+        let energy_per_cycle = mean_stderr(&energies).with_independent_part(bed_to_bed_j);
         DriveOutcome {
             cycles: last as u32,
             steady_first_cycle: steady_first as u32,
@@ -328,12 +409,13 @@ impl DriveTally {
             steady,
             energy_per_cycle_j,
             energy_per_cycle,
+            bed_to_bed_j,
             dissipated_per_cycle: steady.dissipated.scaled(per_cycle),
             work_in_per_cycle_j: steady.work_in_j * per_cycle,
             steady_window_s: window_s,
             e_max_j: self.e_max_j,
             efficiency: energy_per_cycle_j / self.e_max_j,
-            efficiency_stderr: energy_per_cycle.stderr / self.e_max_j,
+            efficiency_stderr: energy_per_cycle.stderr.map(|e| e / self.e_max_j),
             steadiness: self.steadiness,
             steps: self.steps,
             wall_time_s: self.wall_time_s,

@@ -96,10 +96,11 @@ pub struct Measured {
     pub power_w: f64,
     pub energy_per_cycle_j: f64,
     pub efficiency: f64,
-    /// Standard error of `power_w` (W), from Yang's method on successive
-    /// blocks of two periods of the record: the statistical part of the
-    /// uncertainty, the bed's cycle-to-cycle spread as the record shows it.
-    /// `None` with fewer than two blocks.
+    /// One-sigma error of `power_w` (W): Yang's method on each period of the
+    /// record ([`period_powers`], the bed's cycle-to-cycle spread as the
+    /// record shows it, [`crate::stats::mean_stderr`]) and the bed-to-bed
+    /// part of the DEM's error ([`crate::experiment::damper`]). `None` for a
+    /// record too short to tell.
     pub power_stderr_w: Option<f64>,
     pub energy_per_cycle_stderr_j: Option<f64>,
     pub efficiency_stderr: Option<f64>,
@@ -290,7 +291,12 @@ fn compare_with_dem(
     let rig = &setup.rig;
     let drive = &setup.drive;
     let freq_hz = drive.freq_hz();
-    let (corrected, raw, blocks) = (&yang.corrected, &yang.uncorrected, yang.blocks);
+    let (corrected, raw) = (&yang.corrected, &yang.uncorrected);
+    // The record's statistical part and the bed-to-bed part the DEM's own
+    // error carries (the same bed, measured).
+    let power = yang
+        .periods
+        .with_independent_part(outcome.bed_to_bed_j * freq_hz);
     let truth = outcome.energy_per_cycle_j;
     let work_truth = outcome.work_in_per_cycle_j;
     let omega = drive.omega_rad_s();
@@ -301,9 +307,9 @@ fn compare_with_dem(
         power_w: corrected.power_w,
         energy_per_cycle_j: corrected.energy_per_cycle_j,
         efficiency: corrected.energy_per_cycle_j / e_max,
-        power_stderr_w: blocks.map(|b| b.stderr),
-        energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / freq_hz),
-        efficiency_stderr: blocks.map(|b| b.stderr / freq_hz / e_max),
+        power_stderr_w: power.stderr,
+        energy_per_cycle_stderr_j: power.stderr.map(|e| e / freq_hz),
+        efficiency_stderr: power.stderr.map(|e| e / freq_hz / e_max),
         unsteadiness_rel: work_truth / truth - 1.0,
         phase_correction_rad: corrected.phase_correction_rad,
         force_polarity_reversed: corrected.force_polarity.reversed,
@@ -400,14 +406,15 @@ pub struct YangMeasurement {
     pub corrected: PowerResult,
     /// Without the phase correction, with the polarity `corrected` found.
     pub uncorrected: PowerResult,
-    /// Mean and standard error over blocks of two periods, with the same
-    /// correction and polarity ([`block_power`]); `None` below two blocks.
-    pub blocks: Option<MeanStderr>,
+    /// Mean and one-sigma error of Yang's power of each whole period, with
+    /// the same correction and polarity ([`period_powers`],
+    /// [`crate::stats::mean_stderr`]): the record's statistical part.
+    pub periods: MeanStderr,
 }
 
 /// Yang's power of `trace` over all its whole periods, corrected with
-/// `calibration`; the uncorrected power and the blocks use the whole
-/// record's polarity verdict.
+/// `calibration`; the uncorrected power and the per-period series use the
+/// whole record's polarity verdict.
 pub fn measure_trace(
     trace: &Trace,
     freq_hz: f64,
@@ -420,11 +427,11 @@ pub fn measure_trace(
         ForcePolarity::AsRecorded
     };
     let uncorrected = analyse_with(trace, freq_hz, PhaseCorrection::None, polarity)?;
-    let blocks = block_power(trace, freq_hz, calibration, polarity)?;
+    let periods = mean_stderr(&period_powers(trace, freq_hz, calibration, polarity)?);
     Ok(YangMeasurement {
         corrected,
         uncorrected,
-        blocks,
+        periods,
     })
 }
 
@@ -479,43 +486,6 @@ pub fn period_powers(
         powers.push(yang_power(force, accel, trace.sample_rate_hz, freq_hz, &options)?.power_w);
     }
     Ok(powers)
-}
-
-/// Yang's power of successive blocks of two periods of `trace`, corrected with
-/// `calibration` and `polarity`, as a mean with its standard error; `None`
-/// below two blocks.
-pub fn block_power(
-    trace: &Trace,
-    freq_hz: f64,
-    calibration: &PhaseCalibration,
-    polarity: ForcePolarity,
-) -> Result<Option<MeanStderr>, SceneError> {
-    // Blocks start on whole periods, rounded to a sample: at drive
-    // frequencies that are not a divisor of the sample rate (1024 Hz: 39.06
-    // samples a period) a block is two periods to within half a sample.
-    let block_samples = 2.0 * trace.sample_rate_hz / freq_hz;
-    let n_blocks = (trace.len() as f64 / block_samples + 1e-9).floor() as usize;
-    if n_blocks < 2 {
-        return Ok(None);
-    }
-    let force = &trace.channel(crate::rig::FORCE_CHANNEL)?.samples;
-    let accel = &trace.channel(crate::rig::ACCEL_CHANNEL)?.samples;
-    let mut powers = Vec::with_capacity(n_blocks);
-    for b in 0..n_blocks {
-        let start = (b as f64 * block_samples).round() as usize;
-        let end = (((b + 1) as f64 * block_samples).round() as usize).min(trace.len());
-        let options = PowerOptions {
-            phase_correction: PhaseCorrection::Table(calibration),
-            force_polarity: polarity,
-            window: PowerWindow::Explicit {
-                start,
-                len: end - start,
-            },
-            ..PowerOptions::default()
-        };
-        powers.push(yang_power(force, accel, trace.sample_rate_hz, freq_hz, &options)?.power_w);
-    }
-    Ok(Some(mean_stderr(&powers)))
 }
 
 /// Yang's power of a rig trace over all its whole drive periods, its force

@@ -22,7 +22,7 @@
 //! shake uses ([`phase_calibration`], [`measure_trace`]): the empty enclosure
 //! at the drive and its 4th and 16th harmonics, the fitted high-pass + skew
 //! model at the harmonics, no calibration on a rig that reads exactly, and
-//! the uncorrected power and the blocks with the polarity the corrected
+//! the uncorrected power and the per-period series with the polarity the corrected
 //! power found.
 //!
 //! **Resampling without aliasing.** Each record value stands for its sample
@@ -471,8 +471,10 @@ pub struct ReplayMeasured {
     pub power_w: f64,
     pub energy_per_cycle_j: f64,
     pub efficiency: Option<f64>,
-    /// Standard errors from the spread of Yang's power over blocks of two
-    /// periods (as a shake reports them); `None` below two blocks.
+    /// One-sigma errors from the spread of Yang's power over the record's
+    /// periods ([`crate::stats::mean_stderr`]; a shake adds the bed-to-bed
+    /// part, a replayed record is one run and has none); `None` for a record
+    /// too short to tell.
     pub power_stderr_w: Option<f64>,
     pub energy_per_cycle_stderr_j: Option<f64>,
     pub efficiency_stderr: Option<f64>,
@@ -731,7 +733,7 @@ fn measure_replay(
     let YangMeasurement {
         corrected,
         uncorrected: raw,
-        blocks,
+        periods: per_period,
     } = measure_trace(&pushed.trace, freq_hz, &calibration)?;
     if corrected.n_periods != periods as usize {
         return Err(SceneError::Record {
@@ -764,11 +766,12 @@ fn measure_replay(
         power_w: corrected.power_w,
         energy_per_cycle_j: corrected.energy_per_cycle_j,
         efficiency: measured_efficiency,
-        power_stderr_w: blocks.map(|b| b.stderr),
-        energy_per_cycle_stderr_j: blocks.map(|b| b.stderr / freq_hz),
-        efficiency_stderr: blocks
+        power_stderr_w: per_period.stderr,
+        energy_per_cycle_stderr_j: per_period.stderr.map(|e| e / freq_hz),
+        efficiency_stderr: per_period
+            .stderr
             .zip(truth.e_max_j)
-            .map(|(b, e)| b.stderr / freq_hz / e),
+            .map(|(se, e)| se / freq_hz / e),
         phase_correction_rad: corrected.phase_correction_rad,
         force_polarity_reversed: corrected.force_polarity.reversed,
         error_vs_record_rel: corrected.energy_per_cycle_j / truth_energy - 1.0,

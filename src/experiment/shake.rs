@@ -148,6 +148,13 @@ pub fn default_out_dir(scene: &Scene, drive: &Drive) -> PathBuf {
 
 pub use crate::scene::validity::YieldVelocities;
 
+/// `r` as a percentage, or "not known" (a window too short to tell).
+pub fn percent_or_unknown(r: Option<f64>) -> String {
+    r.map_or("not known (too few cycles)".to_string(), |r| {
+        format!("{:.2} %", 100.0 * r)
+    })
+}
+
 /// Fraction of the scene's steps per contact below which a run warns.
 pub const STEPS_PER_CONTACT_SLACK: f64 = 0.8;
 
@@ -156,14 +163,17 @@ pub const STEPS_PER_CONTACT_SLACK: f64 = 0.8;
 pub struct DemTruth {
     /// Dissipated energy per cycle, averaged over the steady cycles (J), eq. 6.9.
     pub energy_per_cycle_j: f64,
-    /// Its standard error from the cycle-to-cycle spread (J).
-    pub energy_per_cycle_stderr_j: f64,
+    /// Its one-sigma error (J): the window's cycle-to-cycle spread
+    /// ([`crate::stats::mean_stderr`]) and the bed-to-bed part
+    /// ([`crate::experiment::damper`]); `None` when the window is too short
+    /// to tell.
+    pub energy_per_cycle_stderr_j: Option<f64>,
     /// Maximum dissipated energy per cycle 4 (Γ g / ω)² M (J), eq. 6.10.
     pub e_max_j: f64,
     /// `energy_per_cycle_j / e_max_j`, eq. 6.8.
     pub efficiency: f64,
-    /// Its standard error from the cycle-to-cycle spread.
-    pub efficiency_stderr: f64,
+    /// Its one-sigma error, as `energy_per_cycle_stderr_j`'s.
+    pub efficiency_stderr: Option<f64>,
     /// How steady the window is, and whether the drive reached steady state
     /// or stopped at its cap.
     pub steadiness: Steadiness,
@@ -269,11 +279,15 @@ impl DemTruth {
             )));
         } else if s.capped {
             w.push(RunWarning::advising(format!(
-                "the drive stopped at its cap of {} cycles without reaching a steady state: over the last {} cycles the enclosure's work and the dissipation differ by {:+.2} % and the energy per cycle has a standard error of {:.2} % (both should be within drive.balance_rel and drive.stderr_rel); the figures are those of an unsteady bed",
+                "the drive stopped at its cap of {} cycles without reaching a steady state: over the last {} cycles the enclosure's work and the dissipation differ by {:+.2} %, the energy per cycle has an error of {} and drifts by {} (the first two should be within drive.balance_rel and drive.stderr_rel, the drift within two of its errors); the figures are those of an unsteady bed",
                 self.cycles,
                 self.cycles - self.steady_first_cycle,
                 100.0 * s.balance_rel,
-                100.0 * s.stderr_rel
+                percent_or_unknown(s.stderr_rel),
+                match (s.drift_rel, s.drift_stderr_rel) {
+                    (Some(d), Some(e)) => format!("{:+.2} % +- {:.2} %", 100.0 * d, 100.0 * e),
+                    _ => "an unknown amount".to_string(),
+                }
             ), FileKey("drive.max_cycles")));
         } else if !s.reached && self.steadiness_rel.abs() > 0.01 {
             w.push(RunWarning::advising(format!(
@@ -645,13 +659,15 @@ mod tests {
     fn healthy() -> DemTruth {
         DemTruth {
             energy_per_cycle_j: 0.056,
-            energy_per_cycle_stderr_j: 5e-4,
+            energy_per_cycle_stderr_j: Some(5e-4),
             e_max_j: 0.068,
             efficiency: 0.83,
-            efficiency_stderr: 0.008,
+            efficiency_stderr: Some(0.008),
             steadiness: Steadiness {
                 balance_rel: 0.0015,
-                stderr_rel: 0.009,
+                stderr_rel: Some(0.009),
+                drift_rel: Some(0.002),
+                drift_stderr_rel: Some(0.004),
                 reached: true,
                 capped: false,
                 lossless: false,
@@ -710,7 +726,9 @@ mod tests {
         let mut t = healthy();
         t.steadiness = Steadiness {
             balance_rel: 0.034,
-            stderr_rel: 0.021,
+            stderr_rel: Some(0.021),
+            drift_rel: Some(0.05),
+            drift_stderr_rel: Some(0.01),
             reached: false,
             capped: true,
             lossless: false,
@@ -725,6 +743,7 @@ mod tests {
             "last 250 cycles",
             "+3.40 %",
             "2.10 %",
+            "+5.00 % +- 1.00 %",
             "unsteady bed",
         ] {
             assert!(w[0].text.contains(part), "'{}' lacks '{part}'", w[0]);
@@ -736,7 +755,9 @@ mod tests {
         let mut t = healthy();
         t.steadiness = Steadiness {
             balance_rel: 100.0,
-            stderr_rel: 0.0,
+            stderr_rel: Some(0.0),
+            drift_rel: Some(0.0),
+            drift_stderr_rel: Some(0.0),
             reached: false,
             capped: false,
             lossless: true,

@@ -841,8 +841,12 @@ fn dem_study(
     let seed_stats: Vec<MeanStderr> = series.iter().map(|x| mean_stderr(x)).collect();
     let means: Vec<f64> = seed_stats.iter().map(|m| m.mean).collect();
     let pooled = means.iter().sum::<f64>() / means.len() as f64;
-    let pooled_stderr =
-        (seed_stats.iter().map(|m| m.stderr.powi(2)).sum::<f64>()).sqrt() / seed_stats.len() as f64;
+    let pooled_stderr = (seed_stats
+        .iter()
+        .map(|m| m.stderr_or_nan().powi(2))
+        .sum::<f64>())
+    .sqrt()
+        / seed_stats.len() as f64;
     let run_wall = |i: usize, cycles: usize| -> f64 {
         let r = seed_runs[i];
         settle_wall_s[r.job.seed_index] + r.cycle_wall_s.get(cycles).copied().unwrap_or(r.wall_s)
@@ -854,7 +858,7 @@ fn dem_study(
     let seed_spread_rel = sample_sd(&means) / pooled;
     let seed_stderr_rms_rel = (seed_stats
         .iter()
-        .map(|m| (m.stderr / pooled).powi(2))
+        .map(|m| (m.stderr_or_nan() / pooled).powi(2))
         .sum::<f64>()
         / seed_stats.len() as f64)
         .sqrt();
@@ -873,7 +877,7 @@ fn dem_study(
         plan,
         &step,
         default_x,
-        seed_stats[0].relative(),
+        seed_stats[0].relative().unwrap_or(f64::NAN),
         seed_spread_rel,
     );
     let dem = DemAccuracy {
@@ -912,7 +916,7 @@ fn seed_rows(seed: f64, m: &MeanStderr, pooled: f64, e_max: f64, wall: f64) -> V
                 quantity,
                 m.mean * scale,
                 pooled * scale,
-                m.stderr / pooled,
+                m.stderr_or_nan() / pooled,
                 wall,
             )
         })
@@ -938,13 +942,13 @@ fn cycle_rows(
         let n = n as usize;
         let (estimate, stderr, wall) = if n <= s {
             let m = mean_stderr(&series[0][..n]);
-            (m.mean, m.stderr, run_wall(0, t + n))
+            (m.mean, m.stderr_or_nan(), run_wall(0, t + n))
         } else {
             let k = n / s;
             let m = seed_stats[..k].iter().map(|m| m.mean).sum::<f64>() / k as f64;
             let se = seed_stats[..k]
                 .iter()
-                .map(|m| m.stderr.powi(2))
+                .map(|m| m.stderr_or_nan().powi(2))
                 .sum::<f64>()
                 .sqrt()
                 / k as f64;
@@ -1092,7 +1096,8 @@ fn time_step_study(
         .map(|p| {
             (
                 p.mean.mean / ref_mean.mean - 1.0,
-                (p.mean.stderr.powi(2) + ref_mean.stderr.powi(2)).sqrt() / ref_mean.mean,
+                (p.mean.stderr_or_nan().powi(2) + ref_mean.stderr_or_nan().powi(2)).sqrt()
+                    / ref_mean.mean,
                 p.integrator_rel,
             )
         })
@@ -1123,7 +1128,7 @@ fn dt_rows(p: &DtPoint, ref_mean: MeanStderr, e_max: f64, note: String) -> Vec<A
     let se = if p.error.is_some() {
         f64::NAN
     } else {
-        (p.mean.stderr.powi(2) + ref_mean.stderr.powi(2)).sqrt() / ref_mean.mean
+        (p.mean.stderr_or_nan().powi(2) + ref_mean.stderr_or_nan().powi(2)).sqrt() / ref_mean.mean
     };
     let note = match &p.error {
         Some(e) => format!("stopped: {e}"),
@@ -1733,7 +1738,7 @@ fn record_length_rows(
     );
     empty.error_rel = false_e / work;
     empty.note = "Yang on the calibration record (no particles), relative to the work in: the chain's own false energy".into();
-    let se = mean_stderr(&cycle_energies[..n.min(cycle_energies.len())]).stderr;
+    let se = mean_stderr(&cycle_energies[..n.min(cycle_energies.len())]).stderr_or_nan();
     let mut vs_mean = row("energy_per_cycle_vs_bed_mean_j", e, pooled, se / pooled);
     vs_mean.note = "against the bed's long-run mean (all seeds): chain and statistics".into();
     Ok((vec![vs_dissipated, vs_work, empty, vs_mean], phi))

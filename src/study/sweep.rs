@@ -656,11 +656,11 @@ fn try_condition(
         status: RowStatus::Ok,
         note: String::new(),
         efficiency: s.dem.efficiency,
-        efficiency_se: s.dem.efficiency_stderr,
+        efficiency_se: s.dem.efficiency_stderr.unwrap_or(f64::NAN),
         efficiency_measured: s.measured.efficiency,
         efficiency_measured_se: s.measured.efficiency_stderr.unwrap_or(f64::NAN),
         energy_per_cycle_j: s.dem.energy_per_cycle_j,
-        energy_per_cycle_se_j: s.dem.energy_per_cycle_stderr_j,
+        energy_per_cycle_se_j: s.dem.energy_per_cycle_stderr_j.unwrap_or(f64::NAN),
         e_max_j: s.dem.e_max_j,
         steadiness_rel: s.dem.steadiness_rel,
         steady: Some(if st.capped {
