@@ -1,6 +1,8 @@
 //! Does the +- a shake prints cover the spread of independent beds? The
 //! default job (the thesis damper through the thesis rig, run until steady)
-//! on 16 beds (seeds 1-16) at each of three conditions; for the DEM's energy
+//! on 16 beds at each of three conditions, seeds 17-32: not the beds the
+//! bed-to-bed part was measured on (seeds 1-16,
+//! `vlab::experiment::bed_spread`), so the test is out of sample; for the DEM's energy
 //! per cycle and for the measured one (Yang's method), each bed's
 //! z-score `(x_i − mean) / (+-)_i · √(n / (n − 1))` against the mean of all
 //! beds (the factor undoes the shrinkage of a deviation from a mean that
@@ -25,6 +27,9 @@ use vlab::stats::mean_std;
 
 /// Beds per condition.
 const BEDS: u64 = 16;
+
+/// The first seed: beds 17-32.
+const FIRST_SEED: u64 = 17;
 
 /// One bed's figures: DEM and measured energy per cycle with their +-, and
 /// the cycles it took.
@@ -75,7 +80,7 @@ fn z_spread(values: &[(f64, f64)]) -> f64 {
 }
 
 fn check(freq_hz: f64, gamma: f64) -> (f64, f64) {
-    let beds: Vec<Bed> = (1..=BEDS)
+    let beds: Vec<Bed> = (FIRST_SEED..FIRST_SEED + BEDS)
         .into_par_iter()
         .map(|seed| run_bed(seed, freq_hz, gamma))
         .collect();

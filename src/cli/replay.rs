@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use vlab::stats::MIN_SERIES_VALUES;
 
 use vlab::atomic_write::OutputDir;
 use vlab::experiment::replay::{
@@ -227,7 +228,12 @@ fn print_measured(s: &ReplaySummary) {
     );
     if m.power_stderr_w.is_some() {
         println!(
-            "    (+- : standard error from the spread over blocks of two periods, the statistical part)"
+            "    (+- : one sigma from the spread of Yang's power over the record's periods, the statistical part; a replayed record is one run of one bed, so no bed-to-bed part is in it)"
+        );
+    } else {
+        println!(
+            "    (+- not known: the record holds {} periods, the error needs {MIN_SERIES_VALUES})",
+            m.n_periods
         );
     }
     println!(

@@ -316,7 +316,8 @@ fn print_measured(s: &ShakeSummary) {
         plus_minus(m.efficiency_stderr, |x| format!("{x:.3}"))
     );
     println!(
-        "    (+- : one sigma, the statistical part: the spread from cycle to cycle (period to period for the measurement) and the bed-to-bed part, see docs/accuracy.md; the chain: the measurement against the work the enclosure put in, what a lab's post-processing controls; the bed's unsteadiness: work in vs dissipated over the record; their sum is the error vs the DEM's dissipation)"
+        "    (+- : one sigma, the statistical part: the window's spread from cycle to cycle (period to period for the measurement) and the {}, see docs/accuracy.md; the chain: the measurement against the work the enclosure put in, what a lab's post-processing controls; the bed's unsteadiness: work in vs dissipated over the record; their sum is the error vs the DEM's dissipation)",
+        d.bed_to_bed.describe(s.freq_hz, s.gamma)
     );
     println!(
         "    phase correction              {:.3} mrad ({})",

@@ -6,15 +6,20 @@
 //! ledger is read at every cycle boundary.
 //!
 //! **How long.** The thesis drove 8 cycles and kept the last 5 as steady
-//! state. That is steady at 40 Hz, Γ 20, but not at low Γ or high frequency,
-//! where the bed gives back start-up energy for tens of cycles (160 Hz, Γ 3:
-//! ~80). The default drive therefore runs until steady
-//! ([`DriveLength::UntilSteady`]): after each cycle from the 8th, the last
-//! 5/8 of the cycles are the window, and the drive stops when over that window
-//! the enclosure's work and the bed's dissipation agree within 1 % and the
-//! energy per cycle has a standard error below 1 % ([`SteadyCriteria`]), or at
-//! a cap (400 cycles), which it then says. A fixed count is
-//! [`DriveLength::Fixed`].
+//! state. That is not steady: at 40 Hz, Γ 20 the energy per cycle of 16 beds
+//! still rises by 2.5 % from cycles 4-10 to cycles 41-120, and at low Γ or
+//! high frequency the bed gives back start-up energy for tens of cycles
+//! (160 Hz, Γ 3: ~80). The default drive therefore runs until steady
+//! ([`DriveLength::UntilSteady`]): the last 5/8 of the cycles are the window,
+//! and the drive stops when over that window the enclosure's work and the
+//! bed's dissipation agree within 1 %, the energy per cycle has a one-sigma
+//! error below 1 % ([`crate::stats::mean_stderr`]) and no trend told from
+//! its noise ([`crate::stats::trend`]: the slope within two of its errors),
+//! or at a cap (400 cycles), which it then says. The window holds at least
+//! [`crate::stats::MIN_SERIES_VALUES`] cycles (the first test is at 25
+//! cycles), and the rule is tested at cycle counts about 1.25 apart
+//! ([`steady_checkpoint`]), not every cycle, so that few looks pick few
+//! windows that merely look steady. A fixed count is [`DriveLength::Fixed`].
 //!
 //! Efficiency (thesis eq. 6.8–6.10, erratum for 6.9: the numerator is
 //! `E(t_final) - E(t_initial)`): the energy dissipated per cycle, averaged over
@@ -28,16 +33,7 @@ use crate::dem::{Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, World
 use crate::drive::Drive;
 pub use crate::rig::{EnclosureMotion, Kinematics, SineMotion};
 use crate::scene::{DriveLength, Orientation, SceneError, SteadyCriteria, transient_cycles};
-use crate::stats::{MIN_SERIES_VALUES, MeanStderr, mean_std, mean_stderr, trend};
-
-/// The bed-to-bed part of a window's error, as a multiple of the window's
-/// cycle-to-cycle standard deviation of the energy per cycle. Independent
-/// beds of one damper wander apart over tens of cycles, slower than a window
-/// of a few tens of cycles can see (its own error, [`mean_stderr`], misses
-/// it); over 16 beds per condition the means of the steady rule's windows
-/// spread by this much beyond their window errors (`docs/accuracy.md`,
-/// measured with `examples/cycle_series.rs`).
-pub const BED_TO_BED_PER_CYCLE_SPREAD: f64 = 0.7;
+use crate::stats::{MIN_SERIES_VALUES, MeanStderr, mean_stderr, trend};
 
 /// Progress of a long run, for display.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -153,14 +149,10 @@ pub struct DriveOutcome {
     pub steady: LedgerBalance,
     /// Dissipated energy per cycle in the steady window (J), thesis eq. 6.9.
     pub energy_per_cycle_j: f64,
-    /// The same as the mean of the window's cycles, with its one-sigma
-    /// error: the window's own ([`mean_stderr`]) and `bed_to_bed_j` in
-    /// quadrature.
+    /// The same as the mean of the window's cycles, with the window's own
+    /// one-sigma error ([`mean_stderr`]; the bed-to-bed part is added where
+    /// it is known, [`crate::experiment::bed_spread`]).
     pub energy_per_cycle: MeanStderr,
-    /// The bed-to-bed part of the error (J): how far the window's mean of
-    /// one bed wanders from the damper's beyond what the window can see
-    /// (see the module docs).
-    pub bed_to_bed_j: f64,
     /// Per-cycle dissipation by source in the steady window (J).
     pub dissipated_per_cycle: Dissipation,
     /// Work the walls did per cycle in the steady window (J): what a
@@ -171,8 +163,8 @@ pub struct DriveOutcome {
     pub steady_window_s: f64,
     pub e_max_j: f64,
     pub efficiency: f64,
-    /// One-sigma error of the efficiency (as `energy_per_cycle`'s); `None`
-    /// when not known.
+    /// One-sigma error of the efficiency (the window's, as
+    /// `energy_per_cycle`'s); `None` when not known.
     pub efficiency_stderr: Option<f64>,
     pub steadiness: Steadiness,
     pub steps: u64,
@@ -399,9 +391,7 @@ impl DriveTally {
         let window_s = snapshots[last].time_s - snapshots[steady_first].time_s;
         let per_cycle = self.period_s / window_s;
         let energy_per_cycle_j = steady.dissipated_j * per_cycle;
-        let energies = cycle_energies(&snapshots, steady_first);
-        let bed_to_bed_j = BED_TO_BED_PER_CYCLE_SPREAD * mean_std(&energies).std;
-        let energy_per_cycle = mean_stderr(&energies).with_independent_part(bed_to_bed_j);
+        let energy_per_cycle = mean_stderr(&cycle_energies(&snapshots, steady_first));
         DriveOutcome {
             cycles: last as u32,
             steady_first_cycle: steady_first as u32,
@@ -409,7 +399,6 @@ impl DriveTally {
             steady,
             energy_per_cycle_j,
             energy_per_cycle,
-            bed_to_bed_j,
             dissipated_per_cycle: steady.dissipated.scaled(per_cycle),
             work_in_per_cycle_j: steady.work_in_j * per_cycle,
             steady_window_s: window_s,

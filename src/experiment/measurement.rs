@@ -28,6 +28,7 @@ use serde::Serialize;
 
 use crate::dem::World;
 use crate::drive::Drive;
+use crate::experiment::bed_spread::bed_to_bed;
 use crate::experiment::damper::{
     DriveOutcome, DrivePlan, NoObserver, Progress, StepObserver, run_drive,
 };
@@ -225,6 +226,7 @@ pub fn run_measured_shake_observed(
         setup,
         &outcome,
         &yang,
+        bed_to_bed(scene, drive).rel(),
         particle_mass,
         MeasuredBy {
             source,
@@ -285,6 +287,7 @@ fn compare_with_dem(
     setup: &ShakeSetup,
     outcome: &DriveOutcome,
     yang: &YangMeasurement,
+    bed_to_bed_rel: f64,
     particle_mass_kg: f64,
     by: MeasuredBy,
 ) -> Measured {
@@ -296,7 +299,7 @@ fn compare_with_dem(
     // error carries (the same bed, measured).
     let power = yang
         .periods
-        .with_independent_part(outcome.bed_to_bed_j * freq_hz);
+        .with_independent_part(bed_to_bed_rel * yang.periods.mean.abs());
     let truth = outcome.energy_per_cycle_j;
     let work_truth = outcome.work_in_per_cycle_j;
     let omega = drive.omega_rad_s();

@@ -1,12 +1,14 @@
 //! Experiments: a scene composed into something that runs. The damper drive and
 //! its observers (`damper`), filling and settling a bed (`fill`, `settle`,
-//! `bed_cache`), the DEM truth recorder (`record`), the shake through the rig and
+//! `bed_cache`), the bed-to-bed part of a shake's error (`bed_spread`), the DEM
+//! truth recorder (`record`), the shake through the rig and
 //! its measurement by Yang's method (`shake`, `measurement`), the drop test
 //! (`drop`), the single collision (`impact`) and the replay of another code's
 //! record (`replay`). Each builds only what it needs: a single collision has no
 //! enclosure; a drop test has one sphere, a plate and the drop rig.
 
 pub mod bed_cache;
+pub mod bed_spread;
 pub mod damper;
 pub mod drop;
 pub mod fill;

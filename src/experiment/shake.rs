@@ -33,6 +33,7 @@ use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::drive::Drive;
 use crate::experiment::bed_cache::BedSource;
+use crate::experiment::bed_spread::{BedToBed, bed_to_bed};
 use crate::experiment::damper::{DriveOutcome, Observers, Progress, Steadiness, StepObserver};
 use crate::experiment::measurement::{
     Measured, ShakeExperiment, ShakeSetup, run_measured_shake_observed,
@@ -163,11 +164,15 @@ pub const STEPS_PER_CONTACT_SLACK: f64 = 0.8;
 pub struct DemTruth {
     /// Dissipated energy per cycle, averaged over the steady cycles (J), eq. 6.9.
     pub energy_per_cycle_j: f64,
-    /// Its one-sigma error (J): the window's cycle-to-cycle spread
-    /// ([`crate::stats::mean_stderr`]) and the bed-to-bed part
-    /// ([`crate::experiment::damper`]); `None` when the window is too short
-    /// to tell.
+    /// Its one-sigma error (J): the window's part and the bed-to-bed part in
+    /// quadrature; `None` when the window is too short to tell.
     pub energy_per_cycle_stderr_j: Option<f64>,
+    /// The window's part alone (J): its cycle-to-cycle spread
+    /// ([`crate::stats::mean_stderr`]).
+    pub energy_per_cycle_window_stderr_j: Option<f64>,
+    /// The bed-to-bed part, and how it is known
+    /// ([`crate::experiment::bed_spread`]).
+    pub bed_to_bed: BedToBed,
     /// Maximum dissipated energy per cycle 4 (Γ g / ω)² M (J), eq. 6.10.
     pub e_max_j: f64,
     /// `energy_per_cycle_j / e_max_j`, eq. 6.8.
@@ -214,8 +219,8 @@ pub struct DemTruth {
 }
 
 impl DemTruth {
-    /// The truth of a drive of `scene`.
-    pub fn new(out: &DriveOutcome, scene: &Scene) -> Self {
+    /// The truth of a drive of `scene` by `drive`.
+    pub fn new(out: &DriveOutcome, scene: &Scene, drive: &Drive) -> Self {
         // An identity of the books (the integration term is their remainder):
         // only an accounting bug breaks it.
         debug_assert!(
@@ -223,12 +228,18 @@ impl DemTruth {
             "energy books do not close: residual {} J",
             out.whole.residual_j
         );
+        let bed = bed_to_bed(scene, drive);
+        let energy = out
+            .energy_per_cycle
+            .with_independent_part(bed.rel() * out.energy_per_cycle_j.abs());
         DemTruth {
             energy_per_cycle_j: out.energy_per_cycle_j,
-            energy_per_cycle_stderr_j: out.energy_per_cycle.stderr,
+            energy_per_cycle_stderr_j: energy.stderr,
+            energy_per_cycle_window_stderr_j: out.energy_per_cycle.stderr,
+            bed_to_bed: bed,
             e_max_j: out.e_max_j,
             efficiency: out.efficiency,
-            efficiency_stderr: out.efficiency_stderr,
+            efficiency_stderr: energy.stderr.map(|e| e / out.e_max_j),
             steadiness: out.steadiness,
             cycles: out.cycles,
             steady_first_cycle: out.steady_first_cycle,
@@ -445,7 +456,7 @@ impl ShakeSummary {
     ) -> ShakeSummary {
         let outcome = &experiment.outcome;
         let n = world.particles.len();
-        let dem = DemTruth::new(outcome, scene);
+        let dem = DemTruth::new(outcome, scene, &setup.drive);
         let mut warnings = bed.warnings.clone();
         warnings.extend(experiment.measured.clipping.iter().cloned());
         warnings.extend(dem.warnings(setup.drive.freq_hz(), scene.simulation.steps_per_contact));
@@ -660,6 +671,11 @@ mod tests {
         DemTruth {
             energy_per_cycle_j: 0.056,
             energy_per_cycle_stderr_j: Some(5e-4),
+            energy_per_cycle_window_stderr_j: Some(3e-4),
+            bed_to_bed: BedToBed::Measured {
+                rel: 0.0077,
+                beds: 16,
+            },
             e_max_j: 0.068,
             efficiency: 0.83,
             efficiency_stderr: Some(0.008),
