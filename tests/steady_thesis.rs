@@ -187,7 +187,8 @@ fn default_shake_measures_within_one_percent_of_the_dem_at_every_thesis_conditio
             let eta = run.number(run.dem("efficiency"), "dem.efficiency");
             let se = run.number(run.dem("efficiency_stderr"), "dem.efficiency_stderr");
             let z = z_score(eta, se, truth, se_truth);
-            if !(z.abs() <= Z_MAX) {
+            // A NaN z is outside too.
+            if z.is_nan() || z.abs() > Z_MAX {
                 outside.push(format!(
                     "{}: efficiency {eta:.3} +- {se:.3}, STEADY_160_HZ says {truth} +- {se_truth} (z {z:+.1})",
                     run.what
