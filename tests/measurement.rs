@@ -129,9 +129,23 @@ fn ideal_rig_trace_file_gives_dem_truth() {
 }
 
 /// The electrodynamic shaker: the particles' collective collisions show in the
-/// acceleration (thesis Fig. 7.12) and the measurement stays within 5 %.
+/// acceleration (thesis Fig. 7.12), and the measurement is as good as its
+/// chain allows.
+///
+/// The measured energy per cycle differs from the DEM's dissipation by two
+/// parts: the chain (measured against the work the enclosure put in) and the
+/// bed's unsteadiness over the record (work in against dissipation, which
+/// the DEM ledger gives exactly). The chain's known errors here: the on-the-fly
+/// calibration leaves a few µrad of the rig's 5 mrad phase error (measured
+/// 6 µrad), whose leak is that fraction of the uncorrected -4.35 % (about
+/// 0.005 %), and the noise and quantisation of the sensors, as much again.
+/// So the chain is held to 0.05 %, five times the +0.010 % it measures; a
+/// calibration off by 1 % of the phase error leaks 0.044 %, one that is
+/// skipped -4.35 %. The total against the DEM is held to the bed's own
+/// unsteadiness (+0.155 % over these 5 cycles) plus that 0.05 %
+/// (measured +0.165 %).
 #[test]
-fn electrodynamic_shaker_shows_impacts_and_measures_within_five_percent() {
+fn electrodynamic_shaker_shows_impacts_and_measures_to_its_chain() {
     let e = measure(
         "thesis-shaker",
         ShakerKind::Electrodynamic,
@@ -141,10 +155,26 @@ fn electrodynamic_shaker_shows_impacts_and_measures_within_five_percent() {
         5,
     );
     let m = &e.measured;
+    eprintln!(
+        "electrodynamic, 40 Hz, Gamma 20: measured {:+.4} % vs DEM = chain {:+.4} % and the bed's unsteadiness {:+.4} %; phase correction {:.4} mrad for the rig's {:.4} mrad; uncorrected {:+.3} %",
+        100.0 * m.error_vs_dem_rel,
+        100.0 * m.error_vs_dem_work_rel,
+        100.0 * m.unsteadiness_rel,
+        1e3 * m.phase_correction_rad,
+        1e3 * m.rig_phase_error_rad,
+        100.0 * m.uncorrected_error_vs_dem_rel
+    );
+    const CHAIN: f64 = 5e-4;
     assert!(
-        m.error_vs_dem_rel.abs() < 0.05,
-        "measured {:+.2} % vs DEM",
-        100.0 * m.error_vs_dem_rel
+        m.error_vs_dem_work_rel.abs() < CHAIN,
+        "chain: measured {:+.4} % vs the DEM's work in",
+        100.0 * m.error_vs_dem_work_rel
+    );
+    assert!(
+        m.error_vs_dem_rel.abs() < m.unsteadiness_rel.abs() + CHAIN,
+        "measured {:+.4} % vs DEM, the bed's unsteadiness {:+.4} %",
+        100.0 * m.error_vs_dem_rel,
+        100.0 * m.unsteadiness_rel
     );
     // Remove the fundamental (least squares at 40 Hz): what remains is the
     // disturbance of the motion by the impacts.
