@@ -125,6 +125,12 @@ fn quick_accuracy_writes_three_studies_and_the_collision_converges() {
     assert!(s["dem"]["seed_spread_rel"].as_f64().is_some());
     assert!(s["dem"]["dominant"].as_str().is_some_and(|d| !d.is_empty()));
     assert!(s["impact"]["order_max_overlap"].as_f64().is_some());
+    let yang: Vec<&Vec<&str>> = rows
+        .iter()
+        .filter(|r| r[0] == "yang" && r[1] == "record_periods")
+        .collect();
+    let summary_text = std::fs::read_to_string(dir.path("acc/summary.json")).expect("summary");
+    chain_leads_then_unsteadiness_then_their_sum(&yang, &col, (&s, &summary_text), &stdout(&out));
     let chain = s["yang"]["baseline_error_vs_work_rel"]
         .as_f64()
         .expect("chain error");
@@ -133,13 +139,6 @@ fn quick_accuracy_writes_three_studies_and_the_collision_converges() {
     assert!(chain.abs() < 0.03, "Yang chain error {chain}");
     let files = s["files"].as_array().expect("files");
     assert!(files.iter().any(|f| f == "accuracy.svg"));
-
-    let yang: Vec<&Vec<&str>> = rows
-        .iter()
-        .filter(|r| r[0] == "yang" && r[1] == "record_periods")
-        .collect();
-    let summary_text = std::fs::read_to_string(dir.path("acc/summary.json")).expect("summary");
-    chain_leads_then_unsteadiness_then_their_sum(&yang, &col, (&s, &summary_text), &stdout(&out));
 }
 
 /// One of study (c)'s three leading figures: Yang's estimate or the work in
