@@ -10,6 +10,11 @@ use std::collections::BTreeMap;
 
 use common::{Scratch, json, refuses_in, stderr, vlab};
 
+/// The standard output of a run, as text.
+fn stdout(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
 /// A 60-sphere bed in the thesis enclosure: the same physics, a sixth of the
 /// cost, so the quick run takes seconds.
 const SMALL_SCENE: &str = "[particles]\ncount = 60\n";
@@ -120,6 +125,12 @@ fn quick_accuracy_writes_three_studies_and_the_collision_converges() {
     assert!(s["dem"]["seed_spread_rel"].as_f64().is_some());
     assert!(s["dem"]["dominant"].as_str().is_some_and(|d| !d.is_empty()));
     assert!(s["impact"]["order_max_overlap"].as_f64().is_some());
+    let yang: Vec<&Vec<&str>> = rows
+        .iter()
+        .filter(|r| r[0] == "yang" && r[1] == "record_periods")
+        .collect();
+    let summary_text = std::fs::read_to_string(dir.path("acc/summary.json")).expect("summary");
+    chain_leads_then_unsteadiness_then_their_sum(&yang, &col, (&s, &summary_text), &stdout(&out));
     let chain = s["yang"]["baseline_error_vs_work_rel"]
         .as_f64()
         .expect("chain error");
@@ -128,6 +139,159 @@ fn quick_accuracy_writes_three_studies_and_the_collision_converges() {
     assert!(chain.abs() < 0.03, "Yang chain error {chain}");
     let files = s["files"].as_array().expect("files");
     assert!(files.iter().any(|f| f == "accuracy.svg"));
+}
+
+/// One of study (c)'s three leading figures: Yang's estimate or the work in
+/// against its reference, as the CSV gives it.
+struct Part {
+    estimate: f64,
+    reference: f64,
+    error_rel: f64,
+}
+
+/// The sum of the chain's error `chain` and the bed's unsteadiness `unsteady`
+/// is the error against the DEM's dissipation `sum`:
+/// `(1 + chain)(1 + unsteady) − 1`, so their sum to within their product
+/// (plus 1e-12 for rounding). Also asserts the unsteadiness is not zero, so
+/// that a chain figure that silently equalled the sum cannot pass (with
+/// |chain| < 1, `sum − chain = unsteady (1 + chain)` is then far from zero).
+fn assert_sum(what: &str, chain: f64, unsteady: f64, sum: f64) {
+    assert!(
+        unsteady.abs() > 1e-6,
+        "{what}: the unsteadiness {unsteady:e} is too small to tell the chain from the sum"
+    );
+    assert!(chain.abs() < 0.5, "{what}: chain error {chain}");
+    let slack = (chain * unsteady).abs() + 1e-12;
+    assert!(
+        (sum - (chain + unsteady)).abs() <= slack,
+        "{what}: {sum:e} vs DEM is not the chain {chain:e} plus the unsteadiness {unsteady:e} (slack {slack:e})"
+    );
+}
+
+/// Study (c) leads with the chain's error (Yang against the work in), then
+/// the bed's unsteadiness (work in against dissipated), then their sum (Yang
+/// against the DEM dissipation): in the CSV rows of every record length, in
+/// `summary.json`'s key order (in its `text`) and values, and in the printed line, whose
+/// figures match the summary to the printed 0.001 %. Catches a reordering or
+/// relabelling of the columns, a chain figure that is in fact the sum (or
+/// the sum's reference put on the chain), an unsteadiness computed from the
+/// wrong reference, and a printed line that swaps its figures.
+fn chain_leads_then_unsteadiness_then_their_sum(
+    yang: &[&Vec<&str>],
+    col: &dyn Fn(&str) -> usize,
+    (s, text): (&serde_json::Value, &str),
+    stdout: &str,
+) {
+    let num = |r: &Vec<&str>, c: &str| -> f64 { r[col(c)].parse().expect("a number") };
+    let mut lengths: Vec<&str> = yang.iter().map(|r| r[col("value")]).collect();
+    lengths.dedup();
+    assert!(lengths.len() >= 2, "record lengths {lengths:?}");
+    let y = &s["yang"];
+    let periods = y["baseline_record_periods"].as_u64().expect("baseline");
+    let mut baseline = None;
+    for length in &lengths {
+        let of: Vec<&&Vec<&str>> = yang.iter().filter(|r| r[col("value")] == *length).collect();
+        let quantities: Vec<&str> = of.iter().map(|r| r[col("quantity")]).collect();
+        assert_eq!(
+            quantities[..3],
+            [
+                "energy_per_cycle_vs_work_j",
+                "work_in_per_cycle_j",
+                "energy_per_cycle_j"
+            ],
+            "{length} periods: the chain, the unsteadiness, their sum: {quantities:?}"
+        );
+        let part = |i: usize| {
+            let p = Part {
+                estimate: num(of[i], "estimate"),
+                reference: num(of[i], "reference"),
+                error_rel: num(of[i], "error_rel"),
+            };
+            // The CSV keeps 17 digits: the error is its estimate over its
+            // reference to the last few bits.
+            let e = p.estimate / p.reference - 1.0;
+            assert!(
+                (p.error_rel - e).abs() < 1e-12,
+                "{length} periods, {}: {} vs {e}",
+                quantities[i],
+                p.error_rel
+            );
+            p
+        };
+        let (chain, unsteady, sum) = (part(0), part(1), part(2));
+        // One Yang figure; the chain's reference is the work in, which the
+        // unsteadiness holds against the dissipation, the sum's reference.
+        assert_eq!(
+            chain.estimate, sum.estimate,
+            "{length} periods: one estimate"
+        );
+        assert_eq!(
+            chain.reference, unsteady.estimate,
+            "{length} periods: work in"
+        );
+        assert_eq!(
+            unsteady.reference, sum.reference,
+            "{length} periods: dissipated"
+        );
+        assert!(
+            of[0][col("note")].contains("the chain alone")
+                && of[1][col("note")].contains("unsteadiness"),
+            "{length} periods: notes {:?} {:?}",
+            of[0][col("note")],
+            of[1][col("note")]
+        );
+        assert_sum(
+            &format!("{length} periods"),
+            chain.error_rel,
+            unsteady.error_rel,
+            sum.error_rel,
+        );
+        if length.parse::<f64>().ok() == Some(periods as f64) {
+            baseline = Some((chain.error_rel, unsteady.error_rel, sum.error_rel));
+        }
+    }
+    let (chain, unsteady, sum) = baseline.expect("rows of the baseline length");
+    let key = |k: &str| y[k].as_f64().unwrap_or_else(|| panic!("yang.{k}"));
+    assert_eq!(key("baseline_error_vs_work_rel"), chain);
+    assert_eq!(key("baseline_unsteadiness_rel"), unsteady);
+    assert_eq!(key("baseline_error_rel"), sum);
+    let at = |k: &str| text.find(&format!("\"{k}\"")).expect(k);
+    assert!(
+        at("baseline_error_vs_work_rel") < at("baseline_unsteadiness_rel")
+            && at("baseline_unsteadiness_rel") < at("baseline_error_rel"),
+        "summary.json: the chain, the unsteadiness, their sum: {text}"
+    );
+
+    let line = stdout
+        .lines()
+        .find(|l| l.contains("(c) Yang"))
+        .unwrap_or_else(|| panic!("no study (c) line: {stdout}"));
+    let after = |from: &str, to: &str| -> f64 {
+        let i = line
+            .find(from)
+            .unwrap_or_else(|| panic!("'{from}' in {line}"))
+            + from.len();
+        let rest = &line[i..];
+        let j = rest.find(to).unwrap_or_else(|| panic!("'{to}' in {line}"));
+        rest[..j]
+            .trim()
+            .parse()
+            .unwrap_or_else(|_| panic!("{line}"))
+    };
+    let printed = (
+        after("the chain ", " % vs the work in, "),
+        after("the bed's unsteadiness ", " %: "),
+        after(" %: ", " % vs DEM dissipation"),
+    );
+    assert!(
+        line.find("the chain ") < line.find("unsteadiness")
+            && line.find("unsteadiness") < line.find("vs DEM dissipation"),
+        "{line}"
+    );
+    // Printed as percent to 3 decimals: half a unit of 1e-5, and a little.
+    for (p, j) in [(printed.0, chain), (printed.1, unsteady), (printed.2, sum)] {
+        assert!((p / 100.0 - j).abs() <= 5.1e-6, "{line}: {p} vs {j}");
+    }
 }
 
 #[test]

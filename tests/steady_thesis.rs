@@ -121,22 +121,21 @@ fn cap_is_said(run: &Shake, cap: u64) -> bool {
     capped
 }
 
-/// One line about a run: cycles, error against the DEM, wall times.
+/// One line about a run: cycles, the chain's error, the bed's unsteadiness
+/// and their sum (the error against the DEM), wall times.
 fn report(run: &Shake, capped: bool) -> String {
     let s = &run.summary;
+    let m = &s["measured"];
     format!(
-        "{:<16} {:>4} cycles{:<6} efficiency {:.3} +- {:.3}  measured vs DEM {:+.2} % (chain {:+.2} %)  wall {:.0} s (settle {:.1} s{}, drive {:.1} s, rig {:.2} s)",
+        "{:<16} {:>4} cycles{:<6} efficiency {:.3} +- {:.3}  chain {:+.2} % + unsteadiness {:+.2} % = measured vs DEM {:+.2} %  wall {:.0} s (settle {:.1} s{}, drive {:.1} s, rig {:.2} s)",
         run.what,
         run.dem("cycles"),
         if capped { " (cap)" } else { "" },
         run.number(run.dem("efficiency"), "dem.efficiency"),
         run.number(run.dem("efficiency_stderr"), "dem.efficiency_stderr"),
-        100.0 * run.number(&s["measured"]["error_vs_dem_rel"], "error_vs_dem_rel"),
-        100.0
-            * run.number(
-                &s["measured"]["error_vs_dem_work_rel"],
-                "error_vs_dem_work_rel"
-            ),
+        100.0 * run.number(&m["error_vs_dem_work_rel"], "error_vs_dem_work_rel"),
+        100.0 * run.number(&m["unsteadiness_rel"], "unsteadiness_rel"),
+        100.0 * run.number(&m["error_vs_dem_rel"], "error_vs_dem_rel"),
         run.wall_s,
         run.number(&s["settle_wall_time_s"], "settle_wall_time_s"),
         if s["bed_from_cache"] == true {

@@ -158,11 +158,12 @@ fn print_summary(r: &AccuracyReport, dir: &std::path::Path) {
             .map_or("-".into(), |o| format!("{o:.2}"))
     );
     println!(
-        "  (c) Yang, rig {}, {} periods: {:+.3} % vs DEM dissipation, {:+.3} % vs work in; {} per mrad of residual phase",
+        "  (c) Yang, rig {}, {} periods: the chain {:+.3} % vs the work in, the bed's unsteadiness {:+.3} %: {:+.3} % vs DEM dissipation; {} per mrad of residual phase",
         y.rig,
         y.baseline_record_periods,
-        pct(y.baseline_error_rel),
         pct(y.baseline_error_vs_work_rel),
+        pct(y.baseline_unsteadiness_rel),
+        pct(y.baseline_error_rel),
         y.error_per_mrad
             .map_or("-".into(), |e| format!("{:+.2} %", pct(e)))
     );

@@ -43,10 +43,14 @@
 //! error at the drive frequency (Fig. 7.9) applied as a delay, as a
 //! one-frequency calibration table is; the residual is added to it. The
 //! calibration draws its noise from its own stream (a lab's calibration and
-//! measurement do not share noise). The truth is the
-//! DEM's dissipation over the same cycles as the record; the record-length
-//! rows also compare with the work the enclosure did over those cycles (the
-//! chain alone) and with the bed's long-run mean (chain plus statistics).
+//! measurement do not share noise). The record-length rows lead with the
+//! chain's own error, Yang's estimate against the work the enclosure did over
+//! the record's cycles; then the bed's unsteadiness over them (that work
+//! against the DEM's dissipation, thesis eq. 6.9); then the error against the
+//! DEM truth, the dissipation over the same cycles, which is both together
+//! (`(1 + chain)(1 + unsteadiness) − 1`); and the error against the bed's
+//! long-run mean (chain plus statistics). The chain-setting rows compare with
+//! the dissipation.
 //!
 //! The drive here is the prescribed sine, not the rig's electrodynamic
 //! shaker: the DEM study is about the DEM, and the chain is re-run on the
@@ -550,12 +554,18 @@ pub struct ImpactAccuracy {
 pub struct YangAccuracy {
     pub rig: String,
     pub baseline_record_periods: u32,
-    /// Error against the DEM dissipation over the same cycles, thesis rig
-    /// settings, ideal calibration.
-    pub baseline_error_rel: f64,
-    /// The same against the enclosure's work over those cycles (the chain
-    /// alone).
+    /// The chain's error: Yang's estimate against the enclosure's work over
+    /// the same cycles, thesis rig settings, calibrated on the empty
+    /// enclosure. What a lab's chain and post-processing control.
     pub baseline_error_vs_work_rel: f64,
+    /// The bed's unsteadiness over those cycles: the enclosure's work in
+    /// against the DEM dissipation, minus one (the change of the energy the
+    /// bed holds; not the chain's).
+    pub baseline_unsteadiness_rel: f64,
+    /// Error against the DEM dissipation over the same cycles: the chain's
+    /// error and the unsteadiness together, `(1 + chain)(1 + unsteadiness)
+    /// − 1`, their sum to within their product.
+    pub baseline_error_rel: f64,
     /// The rig model's phase error at the drive frequency (rad).
     pub rig_phase_error_rad: f64,
     /// The phase error the empty-enclosure calibration measured over the
@@ -1529,8 +1539,9 @@ fn yang_study(
         YangAccuracy {
             rig: rig.name.clone(),
             baseline_record_periods: baseline as u32,
-            baseline_error_rel: baseline_err.0,
-            baseline_error_vs_work_rel: baseline_err.1,
+            baseline_error_vs_work_rel: baseline_err.chain,
+            baseline_unsteadiness_rel: baseline_err.unsteadiness,
+            baseline_error_rel: baseline_err.vs_dissipated,
             rig_phase_error_rad: rig.expected_phase_error_rad(plan.freq_hz),
             calibrated_phase_error_rad: baseline_phi,
             error_per_mrad,
@@ -1642,11 +1653,21 @@ fn residual_phase_row(
     row
 }
 
+/// Yang's error at the baseline record length, in its two parts and whole.
+struct BaselineErrors {
+    /// Against the enclosure's work in: the chain's error.
+    chain: f64,
+    /// The work in against the DEM dissipation: the bed's unsteadiness.
+    unsteadiness: f64,
+    /// Against the DEM dissipation: both together.
+    vs_dissipated: f64,
+}
+
 /// What [`record_period_rows`] gives.
 struct RecordPeriods {
     rows: Vec<AccuracyRow>,
-    /// Errors at the baseline length: against dissipation, against work.
-    baseline_err: (f64, f64),
+    /// Errors at the baseline length.
+    baseline_err: BaselineErrors,
     /// The phase error calibrated at the baseline length (rad).
     baseline_phi: f64,
 }
@@ -1666,7 +1687,11 @@ fn record_period_rows(
     let t = plan.transient_cycles as usize;
     let baseline = plan.baseline_record_periods() as usize;
     let mut rows = Vec::new();
-    let mut baseline_err = (f64::NAN, f64::NAN);
+    let mut baseline_err = BaselineErrors {
+        chain: f64::NAN,
+        unsteadiness: f64::NAN,
+        vs_dissipated: f64::NAN,
+    };
     let mut baseline_phi = f64::NAN;
     let cycle_energies = run.cycle_energies(t);
     for &n in &plan.record_periods {
@@ -1681,7 +1706,11 @@ fn record_period_rows(
             (&cycle_energies, pooled),
         )?;
         if n == baseline {
-            baseline_err = (length_rows[0].error_rel, length_rows[1].error_rel);
+            baseline_err = BaselineErrors {
+                chain: length_rows[0].error_rel,
+                unsteadiness: length_rows[1].error_rel,
+                vs_dissipated: length_rows[2].error_rel,
+            };
             baseline_phi = phi;
         }
         rows.extend(length_rows);
@@ -1693,13 +1722,15 @@ fn record_period_rows(
     })
 }
 
-/// Study (c)'s four rows of a record of `n` periods, and the phase error
-/// calibrated on it (rad): Yang on the `record` against the DEM's
-/// `(dissipated, work)` per cycle over the same cycles (J), against the
-/// `pooled` mean with the standard error of the first `n` of the bed's
-/// `cycle_energies` (J), and Yang on the `calibration` record itself (the
-/// chain's false energy); `wall()` is the wall time to there (s), taken once
-/// both are calibrated and estimated.
+/// Study (c)'s five rows of a record of `n` periods, and the phase error
+/// calibrated on it (rad), the chain's error first: Yang on the `record`
+/// against the DEM's work per cycle over the same cycles (the chain), that
+/// work against the dissipation per cycle (the bed's unsteadiness), Yang
+/// against the dissipation (both: the error against the DEM truth), all from
+/// `(dissipated, work)` (J); Yang on the `calibration` record itself (the
+/// chain's false energy); Yang against the `pooled` mean with the standard
+/// error of the first `n` of the bed's `cycle_energies` (J). `wall()` is the
+/// wall time to there (s), taken once both are calibrated and estimated.
 fn record_length_rows(
     bench: &YangBench,
     (record, calibration): (&Chained, &Chained),
@@ -1724,10 +1755,16 @@ fn record_length_rows(
         )
     };
     let note = format!("calibrated phase error {:.4} mrad", 1e3 * phi);
-    let mut vs_dissipated = row("energy_per_cycle_j", e, dissipated, f64::NAN);
-    vs_dissipated.note = format!("against the DEM dissipation over the same cycles; {note}");
     let mut vs_work = row("energy_per_cycle_vs_work_j", e, work, f64::NAN);
     vs_work.note = "against the enclosure's work over the same cycles: the chain alone".into();
+    let mut unsteady = row("work_in_per_cycle_j", work, dissipated, f64::NAN);
+    unsteady.note =
+        "the enclosure's work against the DEM dissipation over the same cycles: the bed's unsteadiness"
+            .into();
+    let mut vs_dissipated = row("energy_per_cycle_j", e, dissipated, f64::NAN);
+    vs_dissipated.note = format!(
+        "against the DEM dissipation over the same cycles: the chain and the unsteadiness; {note}"
+    );
     // The chain's false energy: Yang on the calibration record itself.
     let false_e = bench.estimate(calibration, n, phi)?;
     let mut empty = row(
@@ -1741,7 +1778,7 @@ fn record_length_rows(
     let se = mean_stderr(&cycle_energies[..n.min(cycle_energies.len())]).stderr_or_nan();
     let mut vs_mean = row("energy_per_cycle_vs_bed_mean_j", e, pooled, se / pooled);
     vs_mean.note = "against the bed's long-run mean (all seeds): chain and statistics".into();
-    Ok((vec![vs_dissipated, vs_work, empty, vs_mean], phi))
+    Ok((vec![vs_work, unsteady, vs_dissipated, empty, vs_mean], phi))
 }
 
 /// Study (c)'s rows of chain settings: the noise factors and ADC bits of
@@ -1939,7 +1976,21 @@ mod plots {
                 select(rows, "dem", "seed", dem_q).map(wall_err).collect(),
             ),
             series(
-                "Yang vs DEM, same cycles: |error| by record length",
+                "Yang vs work in, same cycles (the chain): |error| by record length",
+                SeriesStyle::Points,
+                select(rows, "yang", "record_periods", "energy_per_cycle_vs_work_j")
+                    .map(wall_err)
+                    .collect(),
+            ),
+            series(
+                "work in vs DEM dissipation (the bed's unsteadiness): |error| by record length",
+                SeriesStyle::Points,
+                select(rows, "yang", "record_periods", "work_in_per_cycle_j")
+                    .map(wall_err)
+                    .collect(),
+            ),
+            series(
+                "Yang vs DEM, same cycles (chain and unsteadiness): |error| by record length",
                 SeriesStyle::Points,
                 select(rows, "yang", "record_periods", dem_q)
                     .map(wall_err)
