@@ -70,7 +70,11 @@ fn main() -> Result<(), Box<dyn Error>> {
                 .map_or(String::new(), |p| format!("{:e}", p / drive.freq_hz()));
             rows.push_str(&format!("{seed},{},{dem:e},{work:e},{m}\n", c + 1));
         }
-        eprintln!("seed {seed}: {} cycles, {} periods measured", exp.outcome.cycles, measured.len());
+        eprintln!(
+            "seed {seed}: {} cycles, {} periods measured",
+            exp.outcome.cycles,
+            measured.len()
+        );
         std::fs::File::create(&out)?.write_all(rows.as_bytes())?;
     }
     Ok(())

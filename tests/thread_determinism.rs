@@ -39,11 +39,13 @@ fn fingerprint(w: &World) -> (Vec<u64>, String) {
     .flat_map(|v| v.iter().flat_map(|x| x.to_array().map(f64::to_bits)))
     .collect();
     let books = format!(
-        "{:?} {:?} {:?} {:?}",
+        "{:?} {:?} {:?} {:?} {:?} {:?}",
         w.ledger,
         w.energy_state(),
         w.wall_force(),
-        w.impact_speeds
+        w.impact_speeds,
+        w.planned_steps_per_contact,
+        w.fewest_counted_steps_per_contact
     );
     (bits, books)
 }
