@@ -119,6 +119,19 @@ fn assert_sound(what: &str, world: &World, out: &DriveOutcome) {
         "{what}: a collision was planned to take only {:.1} steps",
         out.planned_steps_per_contact
     );
+    // The fastest collision counted took at least 19 steps: planned at 20 or
+    // more, and counted to within a step of its duration.
+    let fastest = out.fastest_collision.expect("a collision counted");
+    eprintln!(
+        "{what}: fastest collision counted {} steps, planned {:.1}; fewest counted {:?}",
+        fastest.counted_steps, fastest.planned_steps, out.fewest_counted_steps_per_contact
+    );
+    assert!(
+        fastest.counted_steps >= 19,
+        "{what}: the fastest collision took only {} steps (planned {:.1})",
+        fastest.counted_steps,
+        fastest.planned_steps
+    );
 }
 
 /// e in {0.05, 1} x mu in {0, 1} on the thesis bed at 40 Hz, Gamma 20. The

@@ -14,7 +14,8 @@
 //! that began this step will take (the Hertz duration at its approach speed,
 //! eq. 5.10, over the step: what the time-step rule planned) and the fewest
 //! a collision that ended this step took, counted step by step in its
-//! contact state; minima, so the same whatever the blocks.
+//! contact state, and of those that ended the one planned the fewest (the
+//! fastest) with its count; minima, so the same whatever the blocks.
 //!
 //! At the end of the step [`close_step`] books the work the walls did and,
 //! as the integrator's own channel, whatever the work the contact forces

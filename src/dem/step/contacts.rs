@@ -7,7 +7,9 @@
 //! and the relative velocity of the contact points, whose lever arms are
 //! eq. 3.27–3.28), evaluated by the contact law of [`crate::dem::contact`],
 //! and given its torques (eq. 3.26) and, when it opens, the Hertz duration of
-//! the collision (eq. 5.10) the checks hold against the time step. The
+//! the collision (eq. 5.10) the checks hold against the time step; each
+//! collision's steps are counted in its [`ContactState`] from the step it
+//! begins to the step it ends, and handed to the books when it ends. The
 //! kernels are instances for a law with or without damping (`D`) and friction
 //! (`F`), always inlined into the loops of [`super::forces`] and
 //! [`super::blocks`].
