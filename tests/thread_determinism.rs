@@ -39,11 +39,14 @@ fn fingerprint(w: &World) -> (Vec<u64>, String) {
     .flat_map(|v| v.iter().flat_map(|x| x.to_array().map(f64::to_bits)))
     .collect();
     let books = format!(
-        "{:?} {:?} {:?} {:?}",
+        "{:?} {:?} {:?} {:?} {:?} {:?} {:?}",
         w.ledger,
         w.energy_state(),
         w.wall_force(),
-        w.impact_speeds
+        w.impact_speeds,
+        w.planned_steps_per_contact,
+        w.fewest_counted_steps_per_contact,
+        w.fastest_collision
     );
     (bits, books)
 }
@@ -68,6 +71,8 @@ fn one_and_two_threads_give_the_same_bits_on_a_bed_that_goes_parallel() {
         let two = run(2, 3000, friction, 300, false);
         assert_same(&one, &two);
         assert!(one.ledger.dissipated.total() > 0.0);
+        // Collisions were counted, so their minima were merged across blocks.
+        assert!(one.fastest_collision.is_some());
     }
 }
 
@@ -76,6 +81,7 @@ fn the_parallel_path_gives_the_serial_bits_on_a_small_bed() {
     let serial = run(1, 400, 0.52, 400, false);
     let parallel = run(2, 400, 0.52, 400, true);
     assert_same(&serial, &parallel);
+    assert!(serial.fastest_collision.is_some());
     let three = run(3, 400, 0.52, 400, true);
     assert_same(&serial, &three);
 }

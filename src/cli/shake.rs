@@ -282,6 +282,31 @@ fn print_dem(d: &DemTruth) {
         "    energy check                  integration error {:+.1e} of the energy that flowed (velocity Verlet's; falls as dt^2)",
         d.integrator_rel
     );
+    println!(
+        "    steps per collision           {}",
+        steps_per_collision(d)
+    );
+}
+
+/// The fewest steps a collision took, counted first, then what the
+/// time-step rule planned.
+fn steps_per_collision(d: &DemTruth) -> String {
+    let counted = match (
+        d.fewest_counted_steps_per_contact,
+        d.fastest_collision_counted_steps,
+        d.fastest_collision_planned_steps,
+    ) {
+        (Some(n), Some(f), Some(p)) => format!(
+            "fastest collision counted {f} (the time-step rule planned {p:.1}); fewest counted {n} (a glancing or interrupted contact)"
+        ),
+        _ => "none counted (no collision began and ended during the drive)".into(),
+    };
+    let planned = if d.planned_steps_per_contact.is_finite() {
+        format!("{:.1}", d.planned_steps_per_contact)
+    } else {
+        "none".into()
+    };
+    format!("{counted}; fewest planned {planned}")
 }
 
 /// What the rig measured, and how it compares with the DEM.

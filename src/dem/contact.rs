@@ -320,6 +320,16 @@ pub struct ContactState {
     /// the trapezoidal work `½ (f_el,prev + f_el) (δ - δ_prev)` summed since
     /// the contact opened, not the exact Hertz potential.
     pub u_normal_j: f64,
+    /// Steps this contact has touched so far (the overlap positive at the
+    /// end of each), counted from the step it began in; zero when apart, and
+    /// for a contact whose beginning was not seen (open when the world was
+    /// built or when the counting restarted), which is never counted. Kept
+    /// by the step's contact kernels, not by the law.
+    pub steps_touching: u32,
+    /// Steps the Hertz duration at the approach speed planned for this
+    /// collision when it began (while it is counted; an f32 so that the
+    /// entry stays 96 bytes).
+    pub planned_steps: f32,
 }
 
 impl ContactState {

@@ -28,4 +28,4 @@ pub use material::Material;
 pub use particles::Particles;
 pub use restitution::RestitutionMode;
 pub use walls::{WallShape, Walls};
-pub use world::{AUTO_PARALLEL_MIN_PAIRS, ImpactSpeeds, Numerics, World};
+pub use world::{AUTO_PARALLEL_MIN_PAIRS, CollisionSteps, ImpactSpeeds, Numerics, World};

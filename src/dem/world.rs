@@ -57,6 +57,7 @@ use super::step::integrate::{KickSums, VelocityVerlet};
 use super::step::{drive, neighbour_update};
 use super::walls::Walls;
 
+pub use super::step::books::CollisionSteps;
 pub use super::step::checks::ImpactSpeeds;
 
 /// Listed pairs from which a step is split across threads, when there are
@@ -141,10 +142,20 @@ pub struct World {
     /// Energy each particle's contacts dissipated since tracking began (J),
     /// while tracked ([`World::track_particle_dissipation`]).
     particle_dissipation_j: Option<Vec<f64>>,
-    /// Fewest time steps a collision that opened since the last reset is
-    /// resolved with (the Hertz duration at its approach speed, eq. 5.10, over
-    /// the step); infinite when none opened.
-    pub fewest_steps_per_contact: f64,
+    /// Fewest time steps a collision that began since the counting started
+    /// ([`World::start_collision_records`]) was planned to take: the Hertz
+    /// duration at its approach speed (eq. 5.10) over the step, what the
+    /// time-step rule plans with; infinite when none began.
+    pub planned_steps_per_contact: f64,
+    /// Fewest time steps a collision took, counted from the first to the
+    /// last step of overlap, over the collisions that both began and ended
+    /// since the counting started (one open then, or still open, is not
+    /// counted); `None` while none did.
+    pub fewest_counted_steps_per_contact: Option<u32>,
+    /// Of the collisions counted, the one the Hertz duration planned the
+    /// fewest steps for (the fastest impact): planned and counted; `None`
+    /// while none was counted.
+    pub fastest_collision: Option<CollisionSteps>,
 }
 
 /// Buffers of the step, kept from step to step so that the step allocates
@@ -187,7 +198,9 @@ impl World {
             baseline: LedgerSnapshot::default(),
             impact_speeds: ImpactSpeeds::default(),
             particle_dissipation_j: None,
-            fewest_steps_per_contact: f64::INFINITY,
+            planned_steps_per_contact: f64::INFINITY,
+            fewest_counted_steps_per_contact: None,
+            fastest_collision: None,
         };
         world.reset_contacts();
         world.compute_forces(0.0)?;
@@ -256,13 +269,31 @@ impl World {
         self.rebaseline();
     }
 
-    /// Starts the energy ledger and the record of impact speeds from zero:
+    /// Starts the energy ledger and the records of the collisions from zero:
     /// what follows is the experiment.
     pub fn start_ledger(&mut self) {
         self.ledger = Ledger::default();
-        self.impact_speeds = ImpactSpeeds::default();
-        self.fewest_steps_per_contact = f64::INFINITY;
+        self.start_collision_records();
         self.rebaseline();
+    }
+
+    /// Starts the records of the collisions from zero: the fastest impacts,
+    /// the fewest steps planned and the fewest counted. The contacts open now
+    /// are left out of the count (their beginning is not in it); only the
+    /// collisions that begin from here on are counted.
+    pub fn start_collision_records(&mut self) {
+        self.impact_speeds = ImpactSpeeds::default();
+        self.planned_steps_per_contact = f64::INFINITY;
+        self.fewest_counted_steps_per_contact = None;
+        self.fastest_collision = None;
+        for st in self
+            .neighbours
+            .states
+            .iter_mut()
+            .chain(&mut self.wall_states)
+        {
+            st.steps_touching = 0;
+        }
     }
 
     /// Changes the Verlet skin (a fraction of the largest radius) and rebuilds the
@@ -515,7 +546,9 @@ impl World {
                 ledger: &mut self.ledger,
                 stored_change_j: &mut self.step_stored_change_j,
                 impact_speeds: &mut self.impact_speeds,
-                fewest_steps_per_contact: &mut self.fewest_steps_per_contact,
+                planned_steps_per_contact: &mut self.planned_steps_per_contact,
+                fewest_counted_steps_per_contact: &mut self.fewest_counted_steps_per_contact,
+                fastest_collision: &mut self.fastest_collision,
                 wall_force: &mut self.wall_force,
                 per_particle_j: self.particle_dissipation_j.as_deref_mut(),
             },

@@ -29,7 +29,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 
-use crate::dem::{Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, World};
+use crate::dem::{CollisionSteps, Dissipation, ImpactSpeeds, LedgerBalance, LedgerSnapshot, World};
 use crate::drive::Drive;
 pub use crate::rig::{EnclosureMotion, Kinematics, SineMotion};
 use crate::scene::{DriveLength, Orientation, SceneError, SteadyCriteria, transient_cycles};
@@ -174,8 +174,15 @@ pub struct DriveOutcome {
     pub largest_speed_mps: f64,
     /// Largest normal approach speeds at contact onset during the drive (m/s).
     pub impact_speeds: ImpactSpeeds,
-    /// Fewest time steps any collision of the drive was resolved with.
-    pub fewest_steps_per_contact: f64,
+    /// Fewest time steps a collision of the drive was planned to take (the
+    /// Hertz duration at its approach speed over the step).
+    pub planned_steps_per_contact: f64,
+    /// Fewest time steps a collision that began and ended during the drive
+    /// took, counted; `None` when none did.
+    pub fewest_counted_steps_per_contact: Option<u32>,
+    /// Of the collisions counted, the one planned the fewest steps (the
+    /// fastest impact): planned and counted.
+    pub fastest_collision: Option<CollisionSteps>,
 }
 
 /// Energy each cycle of `snapshots[first..]` dissipated (J).
@@ -319,8 +326,7 @@ pub fn run_drive(
     let n = world.particles.len() as u64;
     let first_step = world.steps;
     let e_max_j = plan.drive.e_max_j(world.particles.total_mass_kg());
-    world.impact_speeds = ImpactSpeeds::default();
-    world.fewest_steps_per_contact = f64::INFINITY;
+    world.start_collision_records();
     let mut snapshots = vec![world.snapshot()];
     let mut largest_speed: f64 = 0.0;
     let report_every = ((2e-3 / dt).round() as u64).max(1);
@@ -412,7 +418,9 @@ impl DriveTally {
             cycle_snapshots: snapshots,
             largest_speed_mps: self.largest_speed_mps,
             impact_speeds: world.impact_speeds,
-            fewest_steps_per_contact: world.fewest_steps_per_contact,
+            planned_steps_per_contact: world.planned_steps_per_contact,
+            fewest_counted_steps_per_contact: world.fewest_counted_steps_per_contact,
+            fastest_collision: world.fastest_collision,
         }
     }
 }

@@ -10,6 +10,13 @@
 //! step. The force of the walls on the particles, which drives an
 //! electrodynamic shaker, is still summed contact by contact in order.
 //!
+//! The collisions are tallied the same way: the fewest steps a collision
+//! that began this step will take (the Hertz duration at its approach speed,
+//! eq. 5.10, over the step: what the time-step rule planned) and the fewest
+//! a collision that ended this step took, counted step by step in its
+//! contact state, and of those that ended the one planned the fewest (the
+//! fastest) with its count; minima, so the same whatever the blocks.
+//!
 //! At the end of the step [`close_step`] books the work the walls did and,
 //! as the integrator's own channel, whatever the work the contact forces
 //! really did differs from what the contacts booked.
@@ -44,8 +51,15 @@ pub struct BlockBooks {
     pub stored_change_j: f64,
     /// Fastest approach at contact onset (m/s).
     pub fastest_onset_mps: f64,
-    /// Fewest steps an opening collision takes.
-    pub fewest_steps: f64,
+    /// Fewest steps an opening collision takes, as the Hertz duration at its
+    /// approach speed predicts (what the time-step rule plans with).
+    pub planned_steps: f64,
+    /// Fewest steps a collision that ended took, counted; `u32::MAX` when
+    /// none ended.
+    pub fewest_counted_steps: u32,
+    /// Of the collisions that ended, the one planned the fewest steps (the
+    /// fastest): (planned, counted); the fewest counted among equals.
+    pub fastest_counted: (f32, u32),
     /// Walls: each touching contact's force on its particle, in order (their
     /// sum, the force of the walls, is taken contact by contact).
     pub wall_forces: Vec<DVec3>,
@@ -65,7 +79,9 @@ impl Default for BlockBooks {
             integrator_j: 0.0,
             stored_change_j: 0.0,
             fastest_onset_mps: 0.0,
-            fewest_steps: f64::INFINITY,
+            planned_steps: f64::INFINITY,
+            fewest_counted_steps: u32::MAX,
+            fastest_counted: (f32::INFINITY, u32::MAX),
             wall_forces: Vec::new(),
             dissipation: Vec::new(),
             refused: None,
@@ -98,7 +114,12 @@ impl BlockBooks {
             return false;
         }
         self.fastest_onset_mps = self.fastest_onset_mps.max(out.onset_speed_mps);
-        self.fewest_steps = self.fewest_steps.min(out.steps_per_collision);
+        self.planned_steps = self.planned_steps.min(out.steps_per_collision);
+        if out.counted_steps > 0 {
+            let counted = (out.counted_planned_steps, out.counted_steps);
+            self.fewest_counted_steps = self.fewest_counted_steps.min(counted.1);
+            self.fastest_counted = faster(self.fastest_counted, counted);
+        }
         if dt > 0.0 {
             self.normal_j += out.dissipated_normal_j;
             self.tangential_j += out.dissipated_tangential_j;
@@ -118,6 +139,26 @@ impl BlockBooks {
     }
 }
 
+/// The steps of one counted collision: planned when it began (the Hertz
+/// duration at its approach speed over the step), and counted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CollisionSteps {
+    pub planned_steps: f32,
+    pub counted_steps: u32,
+}
+
+/// The collision planned the fewest steps of `a` and `b`, (planned,
+/// counted); of two planned alike, the one counted fewest. A minimum in a
+/// total order, so the same whatever order the contacts come in.
+#[inline(always)]
+fn faster(a: (f32, u32), b: (f32, u32)) -> (f32, u32) {
+    if b.0 < a.0 || (b.0 == a.0 && b.1 < a.1) {
+        b
+    } else {
+        a
+    }
+}
+
 /// Where the books of a step's contacts go: the world's ledger and records,
 /// borrowed field by field.
 pub struct Books<'a> {
@@ -127,8 +168,14 @@ pub struct Books<'a> {
     pub stored_change_j: &'a mut f64,
     /// Fastest approach at contact onset, by kind of contact.
     pub impact_speeds: &'a mut ImpactSpeeds,
-    /// Fewest steps an opening collision took.
-    pub fewest_steps_per_contact: &'a mut f64,
+    /// Fewest steps an opening collision will take, as planned (the Hertz
+    /// duration at its approach speed over the step).
+    pub planned_steps_per_contact: &'a mut f64,
+    /// Fewest steps a collision that ended took, counted; `None` while none
+    /// ended.
+    pub fewest_counted_steps_per_contact: &'a mut Option<u32>,
+    /// Of the collisions that ended, the one planned the fewest steps.
+    pub fastest_collision: &'a mut Option<CollisionSteps>,
     /// Force of the walls on the particles this step (N).
     pub wall_force: &'a mut DVec3,
     /// Energy each particle's contacts dissipated (J), while tracked.
@@ -162,7 +209,20 @@ impl Books<'_> {
                 Kind::Wall => &mut self.impact_speeds.particle_wall_mps,
             };
             *fastest = fastest.max(b.fastest_onset_mps);
-            *self.fewest_steps_per_contact = self.fewest_steps_per_contact.min(b.fewest_steps);
+            *self.planned_steps_per_contact = self.planned_steps_per_contact.min(b.planned_steps);
+            if b.fewest_counted_steps < u32::MAX {
+                let fewest = &mut *self.fewest_counted_steps_per_contact;
+                *fewest =
+                    Some(fewest.map_or(b.fewest_counted_steps, |n| n.min(b.fewest_counted_steps)));
+                let (planned, counted) = match *self.fastest_collision {
+                    Some(c) => faster((c.planned_steps, c.counted_steps), b.fastest_counted),
+                    None => b.fastest_counted,
+                };
+                *self.fastest_collision = Some(CollisionSteps {
+                    planned_steps: planned,
+                    counted_steps: counted,
+                });
+            }
             if kind == Kind::Wall {
                 for &f in &b.wall_forces {
                     *self.wall_force += f;

@@ -7,7 +7,9 @@
 //! and the relative velocity of the contact points, whose lever arms are
 //! eq. 3.27–3.28), evaluated by the contact law of [`crate::dem::contact`],
 //! and given its torques (eq. 3.26) and, when it opens, the Hertz duration of
-//! the collision (eq. 5.10) the checks hold against the time step. The
+//! the collision (eq. 5.10) the checks hold against the time step; each
+//! collision's steps are counted in its [`ContactState`] from the step it
+//! begins to the step it ends, and handed to the books when it ends. The
 //! kernels are instances for a law with or without damping (`D`) and friction
 //! (`F`), always inlined into the loops of [`super::forces`] and
 //! [`super::blocks`].
@@ -57,8 +59,14 @@ pub struct ContactResult {
     pub overlap_ratio: f64,
     /// Normal approach speed now (m/s).
     pub approach_mps: f64,
-    /// Steps the collision will take, set when the contact opens (else infinite).
+    /// Steps the collision will take as the Hertz duration at its approach
+    /// speed predicts, set when the contact opens (else infinite).
     pub steps_per_collision: f64,
+    /// Steps the collision took, counted, set on the step it ends (the first
+    /// step its overlap is gone) when its beginning was seen; else zero.
+    pub counted_steps: u32,
+    /// With `counted_steps`: the steps planned for it when it began.
+    pub counted_planned_steps: f32,
     /// Normal approach speed when the contact opened this step (else zero).
     pub onset_speed_mps: f64,
 }
@@ -138,7 +146,12 @@ pub fn resolve_contact<const D: bool, const F: bool>(
     st: &mut ContactState,
 ) -> ContactResult {
     let (steps_per_collision, onset_speed_mps) = onset(law, geometry, dt, st);
+    let (began, touched, planned) = (st.delta_prev <= 0.0, st.steps_touching, st.planned_steps);
     let out = evaluate_contact_with::<D, F>(law, geometry, dt, st);
+    let counted_steps = count_steps(geometry.delta_m, dt, began, touched, st);
+    if began && dt > 0.0 {
+        st.planned_steps = steps_per_collision as f32;
+    }
     let (torque_i, torque_j) = if F {
         (
             arm_i.cross(out.tangential_on_i),
@@ -160,7 +173,31 @@ pub fn resolve_contact<const D: bool, const F: bool>(
         approach_mps: geometry.v_rel.dot(geometry.normal),
         steps_per_collision,
         onset_speed_mps,
+        counted_steps,
+        counted_planned_steps: planned,
     }
+}
+
+/// Counts the steps of a collision: a contact that `began` this step (of
+/// `dt` > 0) has touched for one step, one that touched `touched` steps
+/// before and still touches (overlap `delta_m` > 0) for one more, unless its
+/// count is zero (its beginning was not seen). Returns the count of a
+/// contact that ended this step (its state already reset by the law), zero
+/// for one that goes on or was not counted. A pure evaluation (`dt` = 0)
+/// counts nothing.
+#[inline(always)]
+fn count_steps(delta_m: f64, dt: f64, began: bool, touched: u32, st: &mut ContactState) -> u32 {
+    if delta_m <= 0.0 {
+        return touched;
+    }
+    if dt > 0.0 {
+        st.steps_touching = if began {
+            1
+        } else {
+            touched.saturating_add(u32::from(touched > 0))
+        };
+    }
+    0
 }
 
 /// One particle-wall contact (thesis Section 3.3: overlap eq. 3.12, normal eq.
