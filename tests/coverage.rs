@@ -13,7 +13,7 @@
 //! Long (about 10 min on 2 cores), so ignored by `cargo test`; run it with
 //!
 //! ```sh
-//! cargo test --release --test coverage -- --ignored --nocapture
+//! cargo test --test coverage -- --ignored --nocapture
 //! ```
 //!
 //! The figures it printed are in `docs/accuracy.md` ("Coverage").
