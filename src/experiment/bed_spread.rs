@@ -9,12 +9,15 @@
 //! claims 0.56 % (at 160 Hz, Γ 10: 2.1 % against 0.8 %; at 40 Hz, Γ 3, where
 //! the bed alternates from cycle to cycle and forgets fast, 0.47 % against
 //! 0.45 %). No estimator on one window can see that part. Where it was
-//! measured, over 16 beds of the built-in thesis damper at one condition
+//! measured, over 32 beds of the built-in thesis damper at one condition
 //! (the beds' spread less their windows' errors, in quadrature, with
 //! `examples/cycle_series.rs`; `docs/accuracy.md`, "Coverage of the printed error"), the printed
 //! +- adds it in quadrature and says so; elsewhere the printed +- is the
 //! window's alone, and the output says the bed-to-bed part is not measured
-//! there. `tests/coverage.rs` checks the result on other beds (seeds 17-32).
+//! there. `tests/coverage.rs` checks the result on other beds: the part
+//! measured on seeds 1-16 failed that check at 40 Hz, Γ 20 on seeds 17-32
+//! (their means spread by 1.32 %: z-scores spread 1.5), so the parts below
+//! pool seeds 1-32, and the test now runs seeds 33-48.
 
 use serde::Serialize;
 
@@ -25,12 +28,16 @@ use crate::scene::Scene;
 /// was measured: frequency (Hz), Γ, the part relative to the energy per
 /// cycle, and how many beds measured it.
 const THESIS_BED_SPREAD: [(f64, f64, f64, u32); 3] = [
-    // Spread of the 16 window means 0.955 %, rms window error 0.563 %.
-    (40.0, 20.0, 0.0077, 16),
-    // Spread 0.472 %, rms window error 0.447 %: little beyond.
-    (40.0, 3.0, 0.0015, 16),
-    // Spread 2.063 %, rms window error 0.802 %.
-    (160.0, 10.0, 0.019, 16),
+    // Seeds 1-16: spread of the window means 0.955 %, rms window error
+    // 0.563 %, part 0.77 %; seeds 17-32 (the coverage test's first beds):
+    // spread 1.32 %, window about 0.52 %, part 1.21 %; pooled 1.0 %.
+    (40.0, 20.0, 0.010, 32),
+    // Seeds 1-16: spread 0.472 %, window 0.447 %, part 0.15 %; 17-32:
+    // spread 0.42 %, window about 0.43 %, part 0; pooled 0.1 %.
+    (40.0, 3.0, 0.001, 32),
+    // Seeds 1-16: spread 2.063 %, window 0.802 %, part 1.90 %; 17-32:
+    // spread 1.80 %, window about 0.85 %, part 1.59 %; pooled 1.75 %.
+    (160.0, 10.0, 0.0175, 32),
 ];
 
 /// The bed-to-bed part of a run's error, and how it is known.
@@ -61,7 +68,7 @@ impl BedToBed {
                 freq_hz,
                 gamma
             ),
-            BedToBed::NotMeasured => "bed-to-bed part not measured for this damper and condition: the +- is the window's alone (the thesis damper's beds add 0.15 % at 40 Hz, Gamma 3, 0.77 % at Gamma 20 and 1.9 % at 160 Hz, Gamma 10)".to_string(),
+            BedToBed::NotMeasured => "bed-to-bed part not measured for this damper and condition: the +- is the window's alone (the thesis damper's beds add 0.1 % at 40 Hz, Gamma 3, 1.0 % at Gamma 20 and 1.75 % at 160 Hz, Gamma 10)".to_string(),
         }
     }
 }
@@ -111,8 +118,8 @@ mod tests {
         assert_eq!(
             bed_to_bed(&scene, &at(40.0, 20.0)),
             BedToBed::Measured {
-                rel: 0.0077,
-                beds: 16
+                rel: 0.010,
+                beds: 32
             }
         );
         assert_eq!(bed_to_bed(&scene, &at(40.0, 12.0)), BedToBed::NotMeasured);

@@ -708,8 +708,8 @@ mod tests {
             energy_per_cycle_stderr_j: Some(5e-4),
             energy_per_cycle_window_stderr_j: Some(3e-4),
             bed_to_bed: BedToBed::Measured {
-                rel: 0.0077,
-                beds: 16,
+                rel: 0.010,
+                beds: 32,
             },
             e_max_j: 0.068,
             efficiency: 0.83,
