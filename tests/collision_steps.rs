@@ -33,9 +33,15 @@ fn sphere_on_plate(e: f64, dt_s: f64) -> World {
         RADIUS_M,
         Material::ACRYLIC.density_kgm3,
     );
+    started_world(p, Walls::plate(), e, dt_s)
+}
+
+/// A world of particles `p` in `walls`, every contact of restitution `e`, no
+/// gravity, step `dt_s`; the records started.
+fn started_world(p: Particles, walls: Walls, e: f64, dt_s: f64) -> World {
     let mut w = World::new(
         p,
-        Walls::plate(),
+        walls,
         law(e),
         law(e),
         DVec3::ZERO,
@@ -60,17 +66,7 @@ fn spheres_head_on(e: f64, dt_s: f64) -> World {
             Material::ACRYLIC.density_kgm3,
         );
     }
-    let mut w = World::new(
-        p,
-        Walls::none(),
-        law(e),
-        law(e),
-        DVec3::ZERO,
-        Numerics::with_dt(dt_s),
-    )
-    .expect("a valid world");
-    w.start_ledger();
-    w
+    started_world(p, Walls::none(), e, dt_s)
 }
 
 /// Sphere mass (kg) and the effective mass and radius of the sphere on the

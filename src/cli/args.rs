@@ -144,8 +144,9 @@ pub struct SceneArgs {
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
     /// Drive cycles in all, fixing the count [scene default: run until steady:
-    /// input work and dissipation within 1 %, standard error of the energy
-    /// per cycle below 1 %, at most 400 cycles].
+    /// input work and dissipation within 1 %, error of the energy per cycle
+    /// below 1 % and no trend over the window (at least 16 cycles), at most
+    /// 400 cycles].
     #[arg(long)]
     pub cycles: Option<u32>,
     /// Last cycles kept as the steady window; alone, the steady rule's

@@ -54,8 +54,8 @@ pub struct SweepArgs {
     scene: Option<PathBuf>,
     /// Drive cycles in all, the same for every condition [scene default:
     /// each condition runs until steady: input work and dissipation within
-    /// 1 %, standard error of the energy per cycle below 1 %, at most 400
-    /// cycles].
+    /// 1 %, error of the energy per cycle below 1 % and no trend over the
+    /// window (at least 16 cycles), at most 400 cycles].
     #[arg(long)]
     cycles: Option<u32>,
     /// Last cycles kept as the steady window [scene default: 5 of --cycles].

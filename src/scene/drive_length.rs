@@ -48,9 +48,11 @@ pub fn transient_cycles(cycles: u32) -> u32 {
 /// When a drive is steady: over the steady window the work the enclosure put
 /// in and the energy the bed dissipated agree within `balance_rel` (of the
 /// dissipation, or of `E_max` per cycle for a bed that dissipates next to
-/// nothing), and the energy per cycle has a standard error below
+/// nothing), and the energy per cycle has a one-sigma error below
 /// `stderr_rel` of its mean (from the cycle-to-cycle spread, see
-/// [`crate::stats`]).
+/// [`crate::stats`]); the window must also hold
+/// [`crate::stats::MIN_SERIES_VALUES`] cycles and show no trend (see
+/// `crate::experiment::damper`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SteadyCriteria {
     pub balance_rel: f64,
