@@ -7,10 +7,12 @@ use anyhow::Result;
 use clap::Args;
 
 use vlab::dem::restitution::realised_restitution;
+use vlab::experiment::damper::first_checkpoint;
 use vlab::scene::contact_laws;
 use vlab::scene::{
     CyclesSpec, Scene, THESIS_DAMPER_TOML, THESIS_SCENE_FILE, TimeStepRule, TimeStepSpec,
 };
+use vlab::stats::MIN_SERIES_VALUES;
 
 #[derive(Debug, Clone, Args)]
 pub struct SceneArgs {
@@ -133,10 +135,10 @@ fn print_run(scene: &Scene) {
             d.steady_cycles
         ),
         CyclesSpec::Rule(_) => format!(
-            "until steady (work in and dissipation within {} %, energy per cycle to {} % standard error), {} to {} cycles",
+            "until steady (work in and dissipation within {} %, energy per cycle to {} % error, no trend, a window of at least {MIN_SERIES_VALUES} cycles), tested from cycle {} to {}",
             100.0 * d.balance_rel,
             100.0 * d.stderr_rel,
-            d.min_cycles,
+            first_checkpoint(d.min_cycles),
             d.max_cycles
         ),
     };

@@ -252,7 +252,7 @@ pub fn steady_checkpoint(done: u32, min_cycles: u32, max_cycles: u32) -> bool {
 /// The first cycle count at or after `min_cycles` whose steady window (all
 /// but the transient, [`transient_cycles`]) holds
 /// [`crate::stats::MIN_SERIES_VALUES`] cycles.
-fn first_checkpoint(min_cycles: u32) -> u32 {
+pub fn first_checkpoint(min_cycles: u32) -> u32 {
     let mut c = min_cycles.max(1);
     while ((c - transient_cycles(c)) as usize) < MIN_SERIES_VALUES {
         c += 1;
@@ -476,6 +476,24 @@ mod tests {
         };
         let mut motion = SineMotion::new(&plan.drive);
         run_drive(world, &plan, &mut motion, &mut NoObserver, &mut |_| {}).expect("drives")
+    }
+
+    /// The rule is tested where the window first holds 16 cycles (25: the
+    /// last 16 of 25 after a transient of 9), then at about 1.25 times the
+    /// count before, and at the cap: 14 looks up to 400 cycles.
+    #[test]
+    fn the_steady_rule_is_tested_at_geometric_checkpoints() {
+        assert_eq!(first_checkpoint(8), 25);
+        assert_eq!(first_checkpoint(30), 30);
+        let looks: Vec<u32> = (1..=400)
+            .filter(|&c| steady_checkpoint(c, 8, 400))
+            .collect();
+        assert_eq!(
+            looks,
+            [
+                25, 32, 40, 50, 63, 79, 99, 124, 155, 194, 243, 304, 380, 400
+            ]
+        );
     }
 
     /// A dissipating bed that does not meet the criteria stops at the cap and
