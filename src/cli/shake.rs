@@ -223,12 +223,28 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
     println!("  wrote {}", dir.display());
 }
 
-/// ` +- x` with `x` formatted by `f`, or why there is no figure.
-fn plus_minus(x: Option<f64>, f: impl Fn(f64) -> String) -> String {
-    x.map_or(
-        format!(" (+- not known: fewer than {MIN_SERIES_VALUES} steady cycles)"),
-        |x| format!(" +- {}", f(x)),
+/// `value +- error unit`, or `value unit` and why there is no error.
+fn with_error(value: String, error: Option<String>, unit: &str) -> String {
+    match error {
+        Some(e) => format!("{value} +- {e}{unit}"),
+        None => {
+            format!("{value}{unit} (+- not known: fewer than {MIN_SERIES_VALUES} steady cycles)")
+        }
+    }
+}
+
+/// An energy per cycle and its error as the summary prints them (J).
+fn energy(value_j: f64, error_j: Option<f64>) -> String {
+    with_error(
+        format!("{value_j:.4e}"),
+        error_j.map(|e| format!("{e:.1e}")),
+        " J",
     )
+}
+
+/// An efficiency and its error as the summary prints them.
+fn efficiency(value: f64, error: Option<f64>) -> String {
+    with_error(format!("{value:.3}"), error.map(|e| format!("{e:.3}")), "")
 }
 
 /// What the DEM knows.
@@ -252,24 +268,25 @@ fn print_dem(d: &DemTruth) {
         }
     );
     println!(
-        "    energy dissipated per cycle   {:.4e}{} J",
-        d.energy_per_cycle_j,
-        plus_minus(d.energy_per_cycle_stderr_j, |x| format!("{x:.1e}"))
+        "    energy dissipated per cycle   {}",
+        energy(d.energy_per_cycle_j, d.energy_per_cycle_stderr_j)
     );
     println!("    E_max = 4 (Gamma g / w)^2 M   {:.4e} J", d.e_max_j);
     println!(
-        "    damping efficiency            {:.3}{}",
-        d.efficiency,
-        plus_minus(d.efficiency_stderr, |x| format!("{x:.3}"))
+        "    damping efficiency            {}",
+        efficiency(d.efficiency, d.efficiency_stderr)
     );
     let drift = match (st.drift_rel, st.drift_stderr_rel) {
         (Some(r), Some(e)) => format!("{:+.2} % +- {:.2} %", 100.0 * r, 100.0 * e),
         _ => "not known".to_string(),
     };
     println!(
-        "    steadiness                    work in vs dissipated {:+.2} %, window's error {} of the mean, drift across the window {drift}",
+        "    steadiness                    work in vs dissipated {:+.2} %, window's error {}, drift across the window {drift}",
         100.0 * st.balance_rel,
-        percent_or_unknown(st.stderr_rel)
+        st.stderr_rel.map_or(percent_or_unknown(None), |r| format!(
+            "{} of the mean",
+            percent_or_unknown(Some(r))
+        ))
     );
     println!(
         "    by source: particle-particle normal {:.1} %, tangential {:.1} %; particle-wall normal {:.1} %, tangential {:.1} %",
@@ -331,14 +348,12 @@ fn print_measured(s: &ShakeSummary) {
         )
     };
     println!(
-        "    energy per cycle              {:.4e}{} J  ({versus})",
-        m.energy_per_cycle_j,
-        plus_minus(m.energy_per_cycle_stderr_j, |x| format!("{x:.1e}")),
+        "    energy per cycle              {}  ({versus})",
+        energy(m.energy_per_cycle_j, m.energy_per_cycle_stderr_j),
     );
     println!(
-        "    damping efficiency            {:.3}{}",
-        m.efficiency,
-        plus_minus(m.efficiency_stderr, |x| format!("{x:.3}"))
+        "    damping efficiency            {}",
+        efficiency(m.efficiency, m.efficiency_stderr)
     );
     println!(
         "    (+- : one sigma, the statistical part: the window's spread from cycle to cycle (period to period for the measurement) and the {}, see docs/accuracy.md; the chain: the measurement against the work the enclosure put in, what a lab's post-processing controls; the bed's unsteadiness: work in vs dissipated over the record; their sum is the error vs the DEM's dissipation)",
