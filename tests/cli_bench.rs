@@ -146,7 +146,8 @@ fn bench_json(dir: &Scratch, args: &[&str]) -> serde_json::Value {
 /// size alone would pair a bed with the other's copies), the CSV has the
 /// column, and a second run reads the bed from the cache with the same
 /// settling. Catches poured rows labelled as lattice ones, missing or
-/// cross-paired rows, and a settling report that is wrong or absent.
+/// cross-paired rows, pair counts left out, and a settling report that is
+/// wrong or absent.
 #[test]
 fn bench_of_a_poured_bed_reports_its_rows_beside_the_lattice_ones() {
     let dir = Scratch::new("bench-poured");
@@ -179,6 +180,20 @@ fn bench_of_a_poured_bed_reports_its_rows_beside_the_lattice_ones() {
             assert_eq!(r["runs"], 2, "{r}");
             let rate = r["particle_steps_per_s"].as_f64().expect("rate");
             assert!(rate.is_finite() && rate > 0.0, "{r}");
+            // Pairs a sphere: given for one bed's steps, not for the copies;
+            // a settled bed rests on its neighbours, so some touch.
+            let listed = r["listed_pairs_per_particle"].as_f64();
+            let touching = r["touching_pairs_per_particle"].as_f64();
+            match r["copies"].as_u64() {
+                Some(1) => {
+                    let (l, t) = (listed.expect("listed"), touching.expect("touching"));
+                    assert!(l >= t && t >= 0.0 && l > 0.0, "{r}");
+                    if bed == "poured" {
+                        assert!(t > 0.0, "{r}");
+                    }
+                }
+                _ => assert!(listed.is_none() && touching.is_none(), "{r}"),
+            }
         }
     }
     assert_eq!(rows.len(), 2 * per_bed, "{report:#}");

@@ -223,6 +223,11 @@ struct BenchRow {
     /// Particle-steps of each run (all copies).
     #[serde(skip)]
     work: f64,
+    /// Of a bed's steps: pairs in the neighbour list, and pairs in contact,
+    /// per particle, at the end of the last run (what a step's cost grows
+    /// with besides the particles).
+    listed_pairs_per_particle: Option<f64>,
+    touching_pairs_per_particle: Option<f64>,
 }
 
 /// One timed run: wall and CPU seconds.
@@ -244,9 +249,15 @@ impl BenchRow {
         Self::copies(case, threads, split, 1, particles, steps, runs)
     }
 
-    /// The same row, of a bed that sits as `bed` says.
-    fn of_bed(self, bed: &'static str) -> Self {
-        BenchRow { bed, ..self }
+    /// The same row, of a bed that sits as `bed` says, with its pairs
+    /// (listed, touching) per particle when known.
+    fn of_bed(self, bed: &'static str, pairs: Option<(f64, f64)>) -> Self {
+        BenchRow {
+            bed,
+            listed_pairs_per_particle: pairs.map(|p| p.0),
+            touching_pairs_per_particle: pairs.map(|p| p.1),
+            ..self
+        }
     }
 
     /// A row of `copies` independent runs of the same work at once.
@@ -286,6 +297,8 @@ impl BenchRow {
             particle_steps_per_cpu_s: (!cpu_rates.is_empty()).then(|| median(&cpu_rates)),
             run_wall_s: walls,
             work,
+            listed_pairs_per_particle: None,
+            touching_pairs_per_particle: None,
         }
     }
 
@@ -455,6 +468,8 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
             "fastest_particle_steps_per_s [1/s]",
             "cpu [s]",
             "particle_steps_per_cpu_s [1/s]",
+            "listed_pairs_per_particle []",
+            "touching_pairs_per_particle []",
         ])?;
         for r in &report.rows {
             out.write_record([
@@ -472,6 +487,10 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
                 r.fastest_particle_steps_per_s.to_string(),
                 r.cpu_s.to_string(),
                 r.particle_steps_per_cpu_s
+                    .map_or(String::new(), |x| x.to_string()),
+                r.listed_pairs_per_particle
+                    .map_or(String::new(), |x| x.to_string()),
+                r.touching_pairs_per_particle
                     .map_or(String::new(), |x| x.to_string()),
             ])?;
         }
@@ -538,6 +557,14 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
             r.steps,
             r.wall_s
         );
+        if let (Some(listed), Some(touching)) =
+            (r.listed_pairs_per_particle, r.touching_pairs_per_particle)
+        {
+            println!(
+                "  {:44} pairs a particle: {listed:.2} listed, {touching:.2} touching",
+                ""
+            );
+        }
     }
     for s in &report.speedups {
         println!(
@@ -816,12 +843,14 @@ fn bed_rows(bed: &Bed, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow
     let (cases, kind) = bed.cases();
     let mut runs = vec![Vec::new(); configs.len()];
     let mut split = vec![false; configs.len()];
+    let mut pairs = vec![None; configs.len()];
     let mut host = Vec::new();
     for _ in 0..a.repeats {
         for (k, pool) in pools.iter().enumerate() {
-            let (run, sp) = pool.install(|| bed_run(bed, a.bed_steps))?;
+            let (run, sp, pp) = pool.install(|| bed_run(bed, a.bed_steps))?;
             runs[k].push(run);
             split[k] = sp;
+            pairs[k] = Some(pp);
         }
         if copies > 1 {
             host.push(independent_copies(bed, a.bed_steps, copies)?);
@@ -837,7 +866,7 @@ fn bed_rows(bed: &Bed, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow
                 u64::from(a.bed_steps),
                 &runs[k],
             )
-            .of_bed(kind),
+            .of_bed(kind, pairs[k]),
         );
     }
     if !host.is_empty() {
@@ -851,21 +880,28 @@ fn bed_rows(bed: &Bed, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow
                 u64::from(a.bed_steps),
                 &host,
             )
-            .of_bed(kind),
+            .of_bed(kind, None),
         );
     }
     Ok(())
 }
 
 /// One timed run of `steps` steps of a new copy of `bed` on the current
-/// pool: the run, and whether its steps ran on all threads.
-fn bed_run(bed: &Bed, steps: u32) -> Result<(Run, bool)> {
+/// pool: the run, whether its steps ran on all threads, and its pairs per
+/// particle at the end (listed, touching).
+fn bed_run(bed: &Bed, steps: u32) -> Result<(Run, bool, (f64, f64))> {
     let mut world = bed.warm()?;
     let clock = Clock::start();
     for _ in 0..steps {
         world.step(0.0)?;
     }
-    Ok((clock.stop(), world.splits_across_threads()))
+    let run = clock.stop();
+    let n = world.particles.len().max(1) as f64;
+    let pairs = (
+        world.listed_pairs() as f64 / n,
+        world.contact_counts().0 as f64 / n,
+    );
+    Ok((run, world.splits_across_threads(), pairs))
 }
 
 /// `copies` copies of `bed` stepped at once, each on its own 1-thread
