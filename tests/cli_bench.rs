@@ -106,22 +106,174 @@ fn bench_options_are_checked() {
     assert!(rows.iter().all(|r| r["copies"] == 1), "{report:#}");
     // The CSV has a row per configuration; a rate per CPU second is a
     // finite number or empty (2 steps of 300 spheres: below the CPU clock).
-    let text = std::fs::read_to_string(dir.path("bench.csv")).expect("bench.csv");
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
-    let at = header
+    // (The case names hold commas: read it as CSV, not split at commas,
+    // which would read the column before.)
+    let mut csv = csv::Reader::from_path(dir.path("bench.csv")).expect("bench.csv");
+    let at = csv
+        .headers()
+        .expect("header")
         .iter()
         .position(|h| h.starts_with("particle_steps_per_cpu_s"))
         .expect("per-CPU column");
-    let body: Vec<&str> = lines.collect();
-    assert_eq!(body.len(), rows.len(), "{text}");
+    let body: Vec<csv::StringRecord> = csv.records().map(|r| r.expect("record")).collect();
+    assert_eq!(body.len(), rows.len(), "{body:?}");
     for line in body {
-        let cell = line.split(',').nth(at).expect("cell");
+        let cell = &line[at];
         assert!(
             cell.is_empty() || cell.parse::<f64>().is_ok_and(f64::is_finite),
-            "{line}"
+            "{line:?}"
         );
     }
     refuses_in(&dir, &["bench", "--beds", "1"], &["--beds", "at least 2"]);
     refuses_in(&dir, &["bench", "--repeats", "0"], &["--repeats"]);
+}
+
+/// Runs `vlab --quiet bench --beds-only --json` with `args` in `dir` (whose
+/// bed cache is its own); the report as JSON.
+fn bench_json(dir: &Scratch, args: &[&str]) -> serde_json::Value {
+    let mut all = vec!["--quiet", "bench", "--beds-only", "--json"];
+    all.extend_from_slice(args);
+    let out = vlab(&dir.0, &all);
+    assert!(out.status.success(), "{}", stderr(&out));
+    serde_json::from_slice(&out.stdout).expect("bench --json prints JSON")
+}
+
+/// A poured bed of 400 spheres of 2 mm (about a layer: it settles in a few
+/// CPU seconds) and a lattice bed of as many, 3 steps, timed twice: every
+/// row says which bed it stepped, the poured rows are there on each thread
+/// count and as the host's copies, each bed's speed-ups compare it with its
+/// own copies (the two beds have the same number of spheres, so a match by
+/// size alone would pair a bed with the other's copies), the CSV has the
+/// column, and a second run reads the bed from the cache with the same
+/// settling. Catches poured rows labelled as lattice ones, missing or
+/// cross-paired rows, pair counts left out, and a settling report that is
+/// wrong or absent.
+#[test]
+fn bench_of_a_poured_bed_reports_its_rows_beside_the_lattice_ones() {
+    let dir = Scratch::new("bench-poured");
+    let args = [
+        "--beds",
+        "400",
+        "--poured",
+        "400",
+        "--bed-steps",
+        "3",
+        "--repeats",
+        "2",
+        "--out",
+        "bench.csv",
+    ];
+    let report = bench_json(&dir, &args);
+    let rows = report["rows"].as_array().expect("rows");
+    let cores = report["cores"].as_u64().expect("cores");
+    let per_bed = if cores > 1 { 3 } else { 1 };
+    for bed in ["lattice", "poured"] {
+        let mine: Vec<_> = rows.iter().filter(|r| r["bed"] == bed).collect();
+        assert_eq!(mine.len(), per_bed, "{bed}: {report:#}");
+        for r in mine {
+            assert!(
+                r["case"].as_str().is_some_and(|c| c.starts_with(bed)),
+                "{r}"
+            );
+            assert_eq!(r["particles"], 400, "{r}");
+            assert_eq!(r["steps"], 3, "{r}");
+            assert_eq!(r["runs"], 2, "{r}");
+            let rate = r["particle_steps_per_s"].as_f64().expect("rate");
+            assert!(rate.is_finite() && rate > 0.0, "{r}");
+            // Pairs a sphere: given for one bed's steps, not for the copies;
+            // a settled bed rests on its neighbours, so some touch.
+            let listed = r["listed_pairs_per_particle"].as_f64();
+            let touching = r["touching_pairs_per_particle"].as_f64();
+            match r["copies"].as_u64() {
+                Some(1) => {
+                    let (l, t) = (listed.expect("listed"), touching.expect("touching"));
+                    assert!(l >= t && t >= 0.0 && l > 0.0, "{r}");
+                    if bed == "poured" {
+                        assert!(t > 0.0, "{r}");
+                    }
+                }
+                _ => assert!(listed.is_none() && touching.is_none(), "{r}"),
+            }
+        }
+    }
+    assert_eq!(rows.len(), 2 * per_bed, "{report:#}");
+    let poured = &report["poured_beds"];
+    assert_eq!(poured.as_array().map(Vec::len), Some(1), "{report:#}");
+    let p = &poured[0];
+    assert_eq!(p["particles"], 400, "{p}");
+    assert_eq!(p["diameter_m"], 0.002, "{p}");
+    // 400 spheres fill less than the thesis length: the thesis cylinder.
+    assert_eq!(p["inner_length_m"], 0.04, "{p}");
+    assert_eq!(p["from_cache"], false, "{p}");
+    let steps = p["settle_steps"].as_u64().expect("settling steps");
+    assert!(steps > 0, "{p}");
+    let wall = p["settle_wall_s"].as_f64().expect("settled here");
+    assert!(wall.is_finite() && wall > 0.0, "{p}");
+    assert!(p["read_wall_s"].is_null(), "{p}");
+    // Random packings of equal spheres: below 0.64; a layer on the floor of
+    // a cylinder 20 diameters across, above 0.2 (0.36 measured).
+    let phi = p["packing_fraction"].as_f64().expect("packing");
+    assert!((0.2..0.64).contains(&phi), "{p}");
+    if cores > 1 {
+        let what: Vec<&str> = report["speedups"]
+            .as_array()
+            .expect("speed-ups")
+            .iter()
+            .filter_map(|s| s["what"].as_str())
+            .collect();
+        for bed in ["lattice", "poured"] {
+            let host = what
+                .iter()
+                .filter(|w| w.contains("what the host gives") && w.ends_with(&format!("{bed} bed")))
+                .count();
+            assert_eq!(host, 1, "{bed}: {what:?}");
+        }
+    }
+    // The CSV names the bed of each row.
+    // (The case names hold commas: read it as CSV.)
+    let mut csv = csv::Reader::from_path(dir.path("bench.csv")).expect("bench.csv");
+    let at = csv
+        .headers()
+        .expect("header")
+        .iter()
+        .position(|h| h == "bed []")
+        .expect("bed column");
+    let beds: Vec<String> = csv
+        .records()
+        .map(|r| r.expect("record")[at].to_string())
+        .collect();
+    assert_eq!(beds.len(), rows.len(), "{beds:?}");
+    for bed in ["lattice", "poured"] {
+        assert_eq!(
+            beds.iter().filter(|b| *b == bed).count(),
+            per_bed,
+            "{beds:?}"
+        );
+    }
+
+    // Again: the bed is read from the cache, with the settling it had.
+    let again = bench_json(
+        &dir,
+        &[
+            "--beds",
+            "none",
+            "--poured",
+            "400",
+            "--bed-steps",
+            "3",
+            "--repeats",
+            "1",
+        ],
+    );
+    let q = &again["poured_beds"][0];
+    assert_eq!(q["from_cache"], true, "{q}");
+    assert_eq!(q["settle_steps"], steps, "{q}");
+    assert!(q["settle_wall_s"].is_null(), "{q}");
+    assert!(q["read_wall_s"].as_f64().is_some_and(f64::is_finite), "{q}");
+    refuses_in(
+        &dir,
+        &["bench", "--poured", "1"],
+        &["--poured", "at least 2"],
+    );
+    refuses_in(&dir, &["bench", "--poured", "2mm"], &["--poured", "1mm"]);
 }

@@ -3,8 +3,8 @@
 //! scene, for pouring/settling (a dense, quasi-static bed) and for the drive at
 //! 40 Hz, Γ 20, with one thread and with all threads, and the same drive
 //! frictionless (μ = 0: no tangential force, no rotation); steps of lattice
-//! beds of many spheres (`--beds`, see `vlab::dem::testbed`) on one thread and
-//! on all; the time to analyse a 5 s, 40 kHz two-channel trace with Yang's
+//! beds of many spheres (`--beds`, see `vlab::dem::testbed`) and of poured
+//! beds (`--poured`) on one thread and on all; the time to analyse a 5 s, 40 kHz two-channel trace with Yang's
 //! method; and the peak memory.
 //!
 //! A virtual machine shares its cores with other work, so one timing is a
@@ -22,6 +22,18 @@
 //! as independent 1-thread copies at once, one per core, work that shares
 //! nothing: their rate over one copy's is the speed-up the host gives, and
 //! the all-threads step is reported against it as well.
+//!
+//! A lattice bed is ordered in space: neighbours sit next to each other in
+//! memory. The beds users drive are poured (`vlab::experiment::settle`): their
+//! spheres sit in memory in the order they were inserted, at random in space,
+//! so a step reads memory all over the bed, and one core and two threads both
+//! fare worse than on a lattice. `--poured` times such beds: `N` spheres of
+//! 2 mm poured and settled in the thesis cylinder (40 mm across), made taller
+//! than the thesis' 40 mm by `N / 5000` for more than 5 000 spheres (the same
+//! fill), or `1mm`, the thesis cylinder filled with 44 740 spheres of 1 mm
+//! (the thesis' fill). A bed comes from the bed cache when it holds it (see
+//! `vlab::experiment::bed_cache`; `--no-cache` settles anew), and its settling
+//! is reported apart from its steps.
 
 use std::path::PathBuf;
 use std::sync::Barrier;
@@ -34,6 +46,7 @@ use serde::Serialize;
 use vlab::atomic_write::write_atomic;
 use vlab::dem::World;
 use vlab::dem::testbed::lattice_bed;
+use vlab::experiment::bed_cache::BedSource;
 use vlab::experiment::damper::{DrivePlan, NoObserver, run_drive};
 use vlab::experiment::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::rig::SineMotion;
@@ -41,6 +54,7 @@ use vlab::scene::DriveLength;
 use vlab::scene::Scene;
 use vlab::signals::bench_yang_power;
 
+use super::cache_cmd::NoCacheArg;
 use super::progress::ProgressLine;
 
 #[derive(Debug, Clone, Args)]
@@ -61,7 +75,13 @@ pub struct BenchArgs {
     /// Lattice beds to time, by number of spheres, comma-separated ("none": no beds).
     #[arg(long, default_value = "5000,20000", value_parser = parse_beds)]
     beds: BedSizes,
-    /// Steps timed per run of a lattice bed.
+    /// Poured beds to time, comma-separated: a number N of 2 mm spheres poured
+    /// in the thesis cylinder (taller by N/5000 above 5 000 spheres), or "1mm"
+    /// for its 44 740 spheres of 1 mm; "none": no poured beds. Each is settled
+    /// once, or read from the bed cache.
+    #[arg(long, default_value = "none", value_parser = parse_poured)]
+    poured: PouredBeds,
+    /// Steps timed per run of a lattice or poured bed.
     #[arg(long, default_value = "300")]
     bed_steps: u32,
     /// Leave out the thesis scene (and Yang's method): time the beds only,
@@ -72,6 +92,8 @@ pub struct BenchArgs {
     /// reference), which hold one bed per core in memory at once.
     #[arg(long)]
     no_copies: bool,
+    #[command(flatten)]
+    cache: NoCacheArg,
 }
 
 /// The lattice beds asked for (sphere counts).
@@ -96,10 +118,83 @@ fn parse_beds(s: &str) -> Result<BedSizes, String> {
         .map(BedSizes)
 }
 
+/// Spheres of the thesis' 1 mm bed: its fill (0.466) in its cylinder.
+const ONE_MM_SPHERES: usize = 44_740;
+/// Spheres of 2 mm that fill the thesis cylinder's 40 mm length; a poured
+/// bed of more is poured in a cylinder taller in proportion.
+const POURED_PER_THESIS_LENGTH: usize = 5000;
+
+/// The poured beds asked for.
+#[derive(Debug, Clone)]
+pub struct PouredBeds(Vec<PouredBed>);
+
+/// One poured bed: spheres and their diameter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct PouredBed {
+    spheres: usize,
+    diameter_m: f64,
+}
+
+impl PouredBed {
+    /// The thesis scene holding this bed, settled for at most 0.1 s once
+    /// closed: 2 mm spheres in a cylinder of the thesis' diameter and of its
+    /// length or taller, so that up to [`POURED_PER_THESIS_LENGTH`] spheres
+    /// fill it to 0.42 and more fill it to the same; the 1 mm bed in the
+    /// thesis cylinder itself.
+    fn scene(&self) -> Result<Scene> {
+        let thesis = Scene::thesis();
+        let length_m = match self.diameter_m < 0.002 {
+            true => thesis.enclosure.inner_length_m,
+            false => {
+                thesis.enclosure.inner_length_m
+                    * (self.spheres as f64 / POURED_PER_THESIS_LENGTH as f64).max(1.0)
+            }
+        };
+        let text = format!(
+            "name = \"poured\"\n[particles]\ncount = {}\ndiameter_m = {}\n\
+             [enclosure]\ninner_length_m = {}\n[simulation]\nsettle_s = 0.1\n",
+            self.spheres, self.diameter_m, length_m
+        );
+        Scene::merge_over_preset(&text, "poured bed").context("building the poured bed's scene")
+    }
+}
+
+/// `--poured`: sphere counts (of 2 mm spheres, each at least 2) or "1mm",
+/// separated by commas; "none" or nothing for no poured beds.
+fn parse_poured(s: &str) -> Result<PouredBeds, String> {
+    let s = s.trim();
+    if s.is_empty() || s.eq_ignore_ascii_case("none") {
+        return Ok(PouredBeds(Vec::new()));
+    }
+    s.split(',')
+        .map(|x| match x.trim() {
+            t if t.eq_ignore_ascii_case("1mm") => Ok(PouredBed {
+                spheres: ONE_MM_SPHERES,
+                diameter_m: 0.001,
+            }),
+            t => match t.parse::<usize>() {
+                Ok(n) if n >= 2 => Ok(PouredBed {
+                    spheres: n,
+                    diameter_m: 0.002,
+                }),
+                _ => Err(format!(
+                    "'{x}' is not a poured bed: a number of 2 mm spheres of at least 2, \
+                     \"1mm\" (or \"none\")"
+                )),
+            },
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(PouredBeds)
+}
+
 /// One configuration (case, thread count) over its repeated runs.
 #[derive(Debug, Serialize)]
 struct BenchRow {
     case: String,
+    /// How the bed's spheres sit: "lattice" (ordered in space, neighbours
+    /// next to each other in memory) or "poured" (in pour order, at random in
+    /// memory), as every bed of a scene is.
+    bed: &'static str,
     threads: usize,
     /// Whether the step ran on all the threads (a small bed stays on one core
     /// whatever the pool: see `vlab::dem::AUTO_PARALLEL_MIN_PAIRS`).
@@ -128,6 +223,11 @@ struct BenchRow {
     /// Particle-steps of each run (all copies).
     #[serde(skip)]
     work: f64,
+    /// Of a bed's steps: pairs in the neighbour list, and pairs in contact,
+    /// per particle, at the end of the last run (what a step's cost grows
+    /// with besides the particles).
+    listed_pairs_per_particle: Option<f64>,
+    touching_pairs_per_particle: Option<f64>,
 }
 
 /// One timed run: wall and CPU seconds.
@@ -147,6 +247,17 @@ impl BenchRow {
         runs: &[Run],
     ) -> Self {
         Self::copies(case, threads, split, 1, particles, steps, runs)
+    }
+
+    /// The same row, of a bed that sits as `bed` says, with its pairs
+    /// (listed, touching) per particle when known.
+    fn of_bed(self, bed: &'static str, pairs: Option<(f64, f64)>) -> Self {
+        BenchRow {
+            bed,
+            listed_pairs_per_particle: pairs.map(|p| p.0),
+            touching_pairs_per_particle: pairs.map(|p| p.1),
+            ..self
+        }
     }
 
     /// A row of `copies` independent runs of the same work at once.
@@ -171,6 +282,7 @@ impl BenchRow {
         let cpus: Vec<f64> = runs.iter().map(|r| r.cpu_s).collect();
         BenchRow {
             case: case.into(),
+            bed: POURED,
             threads,
             split_across_threads: split,
             copies,
@@ -185,6 +297,8 @@ impl BenchRow {
             particle_steps_per_cpu_s: (!cpu_rates.is_empty()).then(|| median(&cpu_rates)),
             run_wall_s: walls,
             work,
+            listed_pairs_per_particle: None,
+            touching_pairs_per_particle: None,
         }
     }
 
@@ -245,9 +359,33 @@ impl Clock {
     }
 }
 
+/// How a poured bed was made ready: settled here, or read from the cache.
+#[derive(Debug, Serialize)]
+struct PouredReport {
+    particles: usize,
+    diameter_m: f64,
+    /// Inner length of the cylinder it was poured in (m); 40 mm across.
+    inner_length_m: f64,
+    /// True when the bed was read from the bed cache (settled by an earlier run).
+    from_cache: bool,
+    /// Steps and simulated time of its settling (of the run that settled it).
+    settle_steps: u64,
+    settle_time_s: f64,
+    /// Wall time to settle it here (s), threads used; none when it was read.
+    settle_wall_s: Option<f64>,
+    settle_threads: usize,
+    /// Particle-steps per wall second of its settling; none when it was read.
+    settle_particle_steps_per_s: Option<f64>,
+    /// Wall time to read it from the cache (s); none when it was settled.
+    read_wall_s: Option<f64>,
+    packing_fraction: f64,
+}
+
 #[derive(Debug, Serialize)]
 struct BenchReport {
     rows: Vec<BenchRow>,
+    /// The poured beds timed, and how each was made ready.
+    poured_beds: Vec<PouredReport>,
     speedups: Vec<Speedup>,
     /// Yang's method on a 5 s, 40 kHz, two-channel trace, planning the FFT (ms).
     yang_power_5s_40khz_ms: Option<f64>,
@@ -274,7 +412,16 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
         thesis_rows(&scene, &a, &configs, &mut progress, &mut rows)?;
     }
     for &n in &a.beds.0 {
-        bed_rows(n, &a, &configs, &mut rows)?;
+        bed_rows(&Bed::Lattice(n), &a, &configs, &mut rows)?;
+    }
+    let mut poured_beds = Vec::new();
+    if !a.poured.0.is_empty() {
+        let source = a.cache.source(&mut |n| progress.warn(n));
+        for p in &a.poured.0 {
+            let (world, made) = poured_bed(p, &source, &configs, &mut progress)?;
+            poured_beds.push(made);
+            bed_rows(&Bed::Poured(world), &a, &configs, &mut rows)?;
+        }
     }
     progress.finish();
     let yang = if a.beds_only {
@@ -285,6 +432,7 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     let report = BenchReport {
         speedups: speedups(&rows),
         rows,
+        poured_beds,
         yang_power_5s_40khz_ms: yang.as_ref().map(|y| y.fresh_median_s * 1e3),
         yang_power_5s_40khz_reused_plan_ms: yang.as_ref().map(|y| y.reused_median_s * 1e3),
         peak_memory_mib: peak_memory_mib(),
@@ -307,6 +455,7 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
         let mut out = csv::Writer::from_writer(w);
         out.write_record([
             "case []",
+            "bed []",
             "threads []",
             "split_across_threads []",
             "copies []",
@@ -319,10 +468,13 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
             "fastest_particle_steps_per_s [1/s]",
             "cpu [s]",
             "particle_steps_per_cpu_s [1/s]",
+            "listed_pairs_per_particle []",
+            "touching_pairs_per_particle []",
         ])?;
         for r in &report.rows {
             out.write_record([
                 r.case.clone(),
+                r.bed.to_string(),
                 r.threads.to_string(),
                 r.split_across_threads.to_string(),
                 r.copies.to_string(),
@@ -336,6 +488,10 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
                 r.cpu_s.to_string(),
                 r.particle_steps_per_cpu_s
                     .map_or(String::new(), |x| x.to_string()),
+                r.listed_pairs_per_particle
+                    .map_or(String::new(), |x| x.to_string()),
+                r.touching_pairs_per_particle
+                    .map_or(String::new(), |x| x.to_string()),
             ])?;
         }
         out.flush()?;
@@ -346,7 +502,7 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
 
 fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
     println!(
-        "thesis scene at dt {:.1e} s and lattice beds of 2 mm spheres; {} cores{}; each row: median and fastest of {} runs",
+        "thesis scene at dt {:.1e} s, lattice and poured beds; {} cores{}; each row: median and fastest of {} runs",
         scene
             .drive(40.0, 20.0)
             .map_or(f64::NAN, |d| scene.drive_dt_s(&d)),
@@ -356,6 +512,27 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
             .map_or(String::new(), |l| format!(", load average {l:.2}")),
         repeats
     );
+    for p in &report.poured_beds {
+        let made = match (p.settle_wall_s, p.read_wall_s) {
+            (Some(w), _) => format!(
+                "settled here in {w:.1} s on {} thread(s), {:.2} M particle-steps/s",
+                p.settle_threads,
+                p.settle_particle_steps_per_s.unwrap_or(f64::NAN) / 1e6
+            ),
+            (None, Some(r)) => format!("read from the bed cache in {r:.2} s"),
+            (None, None) => String::new(),
+        };
+        println!(
+            "  poured bed: {} spheres of {} mm in a cylinder 40 mm across, {} mm long, packing {:.3} ({} settling steps, {:.3} s simulated); {}",
+            p.particles,
+            p.diameter_m * 1e3,
+            p.inner_length_m * 1e3,
+            p.packing_fraction,
+            p.settle_steps,
+            p.settle_time_s,
+            made
+        );
+    }
     for r in &report.rows {
         let how = match (r.threads, r.split_across_threads) {
             _ if r.copies > 1 => format!("{} x 1 thread", r.copies),
@@ -369,8 +546,9 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
                 format!("{:6.2} M per CPU s", x / 1e6)
             });
         println!(
-            "  {:44} {:6} particles {:10} {:6.2} M particle-steps/s, fastest {:6.2} M ({}; {} steps, {:.2} s)",
+            "  {:44} {:7} {:6} particles {:10} {:6.2} M particle-steps/s, fastest {:6.2} M ({}; {} steps, {:.2} s)",
             r.case,
+            r.bed,
             r.particles,
             how,
             r.particle_steps_per_s / 1e6,
@@ -379,6 +557,14 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
             r.steps,
             r.wall_s
         );
+        if let (Some(listed), Some(touching)) =
+            (r.listed_pairs_per_particle, r.touching_pairs_per_particle)
+        {
+            println!(
+                "  {:44} pairs a particle: {listed:.2} listed, {touching:.2} touching",
+                ""
+            );
+        }
     }
     for s in &report.speedups {
         println!(
@@ -418,28 +604,34 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
                 other,
             ));
         }
+        let Some(kind) = [Bed::LATTICE, Bed::POURED]
+            .into_iter()
+            .find(|k| k.steps == base.case)
+        else {
+            continue;
+        };
         for host in rows
             .iter()
-            .filter(|r| r.copies > 1 && r.particles == base.particles && r.case == HOST_COPIES)
+            .filter(|r| r.copies > 1 && r.particles == base.particles && r.case == kind.copies)
         {
             out.push(Speedup::between(
                 format!(
-                    "what the host gives work that shares nothing: {} 1-thread copies at once over 1",
-                    host.copies
+                    "what the host gives work that shares nothing: {} 1-thread copies at once over 1, {} bed",
+                    host.copies, base.bed
                 ),
                 base,
                 host,
             ));
             for split in rows.iter().filter(|r| {
-                r.case == BED_STEPS
+                r.case == kind.steps
                     && r.particles == base.particles
                     && r.threads == host.copies
                     && r.split_across_threads
             }) {
                 out.push(Speedup::between(
                     format!(
-                        "{} threads on one bed against {} copies at once (1 = all the host gives)",
-                        split.threads, host.copies
+                        "{} threads on one bed against {} copies at once (1 = all the host gives), {} bed",
+                        split.threads, host.copies, base.bed
                     ),
                     host,
                     split,
@@ -458,8 +650,11 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
     out
 }
 
-const BED_STEPS: &str = "lattice bed, mu 0.52: steps";
-const HOST_COPIES: &str = "lattice bed, mu 0.52: copies at once";
+/// The case names of a kind of bed's rows.
+struct BedCases {
+    steps: &'static str,
+    copies: &'static str,
+}
 const THESIS_DRIVE: &str = "thesis: drive 40 Hz Gamma 20";
 const FRICTIONLESS_DRIVE: &str = "thesis frictionless: drive 40 Hz Gamma 20";
 
@@ -540,13 +735,102 @@ fn drive_once(
     Ok((clock.stop(), out.steps, world.splits_across_threads()))
 }
 
-/// A lattice bed of `n` spheres: `--bed-steps` steps on each thread count,
-/// `--repeats` times, each run from a new bed after 20 steps that let the
-/// lists and buffers grow. With more than one core, each repeat also runs
-/// as many independent 1-thread copies at once as there are cores: what the
-/// host gives to work that shares nothing, the ceiling of the speed-up of
-/// one bed over all cores on a machine that shares its cores.
-fn bed_rows(n: usize, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow>) -> Result<()> {
+/// A bed the bench steps: a lattice of `n` spheres, built anew for every
+/// run, or a poured bed, settled once and copied for every run.
+enum Bed {
+    Lattice(usize),
+    Poured(Box<World>),
+}
+
+impl Bed {
+    const LATTICE: BedCases = BedCases {
+        steps: "lattice bed, mu 0.52: steps",
+        copies: "lattice bed, mu 0.52: copies at once",
+    };
+    const POURED: BedCases = BedCases {
+        steps: "poured bed, thesis contacts: steps",
+        copies: "poured bed, thesis contacts: copies at once",
+    };
+
+    fn cases(&self) -> (&'static BedCases, &'static str) {
+        match self {
+            Bed::Lattice(_) => (&Self::LATTICE, LATTICE),
+            Bed::Poured(_) => (&Self::POURED, POURED),
+        }
+    }
+
+    fn spheres(&self) -> usize {
+        match self {
+            Bed::Lattice(n) => *n,
+            Bed::Poured(w) => w.particles.len(),
+        }
+    }
+
+    /// A new copy of the bed after 20 untimed steps that let its lists and
+    /// buffers grow.
+    fn warm(&self) -> Result<World> {
+        let mut world = match self {
+            Bed::Lattice(n) => lattice_bed(*n, 0.52, 1).context("building the lattice bed")?,
+            Bed::Poured(w) => (**w).clone(),
+        };
+        for _ in 0..20 {
+            world.step(0.0)?;
+        }
+        Ok(world)
+    }
+}
+
+/// The row's `bed` of a lattice bed.
+const LATTICE: &str = "lattice";
+/// The row's `bed` of a poured bed (the thesis scene's included).
+const POURED: &str = "poured";
+
+/// The poured bed `p`, from the cache or settled here on all the threads
+/// (the settled bed does not depend on them), ready to step with the
+/// thesis contacts at the time step of the drive at 40 Hz, Γ 20; and how it
+/// was made ready.
+fn poured_bed(
+    p: &PouredBed,
+    source: &BedSource,
+    configs: &[usize],
+    progress: &mut ProgressLine,
+) -> Result<(Box<World>, PouredReport)> {
+    let scene = p.scene()?;
+    let threads = configs.last().copied().unwrap_or(1);
+    let clock = Clock::start();
+    let bed = single_pool(threads)?
+        .install(|| source.settle(&scene, &mut |x| progress.update(x)))
+        .with_context(|| format!("settling the poured bed of {} spheres", p.spheres))?;
+    let run = clock.stop();
+    for w in &bed.warnings {
+        progress.warn(&format!("warning: {w}"));
+    }
+    let drive = scene.drive(40.0, 20.0)?;
+    let world = prepare_drive(&bed, &scene, scene.drive_dt_s(&drive))?;
+    let work = bed.settle_steps as f64 * bed.world.particles.len() as f64;
+    let made = PouredReport {
+        particles: bed.world.particles.len(),
+        diameter_m: p.diameter_m,
+        inner_length_m: scene.enclosure.inner_length_m,
+        from_cache: bed.from_cache,
+        settle_steps: bed.settle_steps,
+        settle_time_s: bed.settle_time_s,
+        settle_wall_s: (!bed.from_cache).then_some(run.wall_s),
+        settle_threads: threads,
+        settle_particle_steps_per_s: (!bed.from_cache).then(|| work / run.wall_s),
+        read_wall_s: bed.from_cache.then_some(run.wall_s),
+        packing_fraction: bed.packing_fraction,
+    };
+    Ok((Box::new(world), made))
+}
+
+/// A bed: `--bed-steps` steps on each thread count, `--repeats` times, each
+/// run from a new copy after 20 steps that let the lists and buffers grow.
+/// With more than one core, each repeat also runs as many independent
+/// 1-thread copies at once as there are cores: what the host gives to work
+/// that shares nothing, the ceiling of the speed-up of one bed over all
+/// cores on a machine that shares its cores.
+fn bed_rows(bed: &Bed, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow>) -> Result<()> {
     let pools = configs
         .iter()
         .map(|&t| single_pool(t))
@@ -555,71 +839,78 @@ fn bed_rows(n: usize, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow>
         true => 1,
         false => configs.last().copied().unwrap_or(1),
     };
+    let n = bed.spheres();
+    let (cases, kind) = bed.cases();
     let mut runs = vec![Vec::new(); configs.len()];
     let mut split = vec![false; configs.len()];
+    let mut pairs = vec![None; configs.len()];
     let mut host = Vec::new();
     for _ in 0..a.repeats {
         for (k, pool) in pools.iter().enumerate() {
-            let (run, sp) = pool.install(|| bed_run(n, a.bed_steps))?;
+            let (run, sp, pp) = pool.install(|| bed_run(bed, a.bed_steps))?;
             runs[k].push(run);
             split[k] = sp;
+            pairs[k] = Some(pp);
         }
         if copies > 1 {
-            host.push(independent_copies(n, a.bed_steps, copies)?);
+            host.push(independent_copies(bed, a.bed_steps, copies)?);
         }
     }
     for (k, &threads) in configs.iter().enumerate() {
-        rows.push(BenchRow::new(
-            BED_STEPS,
-            threads,
-            split[k],
-            n,
-            u64::from(a.bed_steps),
-            &runs[k],
-        ));
+        rows.push(
+            BenchRow::new(
+                cases.steps,
+                threads,
+                split[k],
+                n,
+                u64::from(a.bed_steps),
+                &runs[k],
+            )
+            .of_bed(kind, pairs[k]),
+        );
     }
     if !host.is_empty() {
-        rows.push(BenchRow::copies(
-            HOST_COPIES,
-            copies,
-            false,
-            copies,
-            n,
-            u64::from(a.bed_steps),
-            &host,
-        ));
+        rows.push(
+            BenchRow::copies(
+                cases.copies,
+                copies,
+                false,
+                copies,
+                n,
+                u64::from(a.bed_steps),
+                &host,
+            )
+            .of_bed(kind, None),
+        );
     }
     Ok(())
 }
 
-/// A new lattice bed of `n` spheres after 20 untimed steps that let its
-/// lists and buffers grow.
-fn warm_bed(n: usize) -> Result<World> {
-    let mut world = lattice_bed(n, 0.52, 1).context("building the lattice bed")?;
-    for _ in 0..20 {
-        world.step(0.0)?;
-    }
-    Ok(world)
-}
-
-/// One timed run of `steps` steps of a new lattice bed of `n` spheres on
-/// the current pool: the run, and whether its steps ran on all threads.
-fn bed_run(n: usize, steps: u32) -> Result<(Run, bool)> {
-    let mut world = warm_bed(n)?;
+/// One timed run of `steps` steps of a new copy of `bed` on the current
+/// pool: the run, whether its steps ran on all threads, and its pairs per
+/// particle at the end (listed, touching).
+fn bed_run(bed: &Bed, steps: u32) -> Result<(Run, bool, (f64, f64))> {
+    let mut world = bed.warm()?;
     let clock = Clock::start();
     for _ in 0..steps {
         world.step(0.0)?;
     }
-    Ok((clock.stop(), world.splits_across_threads()))
+    let run = clock.stop();
+    let n = world.particles.len().max(1) as f64;
+    let pairs = (
+        world.listed_pairs() as f64 / n,
+        world.contact_counts().0 as f64 / n,
+    );
+    Ok((run, world.splits_across_threads(), pairs))
 }
 
-/// `copies` beds of `n` spheres stepped at once, each on its own 1-thread
+/// `copies` copies of `bed` stepped at once, each on its own 1-thread
 /// pool: the wall time from the common start to the last one's end, and the
 /// process' CPU time over it. The beds are built before any thread starts,
 /// so that every thread reaches the start.
-fn independent_copies(n: usize, steps: u32, copies: usize) -> Result<Run> {
+fn independent_copies(bed: &Bed, steps: u32, copies: usize) -> Result<Run> {
     let worlds = (0..copies)
-        .map(|_| warm_bed(n))
+        .map(|_| bed.warm())
         .collect::<Result<Vec<_>>>()?;
     let pools = (0..copies)
         .map(|_| single_pool(1))
