@@ -19,10 +19,6 @@ fn bench_beds_only(
     extra: &[&str],
 ) -> serde_json::Value {
     let mut args = vec![
-        "--quiet",
-        "bench",
-        "--beds-only",
-        "--json",
         "--beds",
         spheres,
         "--bed-steps",
@@ -31,9 +27,7 @@ fn bench_beds_only(
         repeats,
     ];
     args.extend_from_slice(extra);
-    let out = vlab(&dir.0, &args);
-    assert!(out.status.success(), "{}", stderr(&out));
-    serde_json::from_slice(&out.stdout).expect("bench --json prints JSON")
+    bench_json(dir, &args)
 }
 
 /// A bed of 4000 spheres (enough pairs for its step to split across
@@ -73,12 +67,7 @@ fn bench_of_a_small_bed_reports_its_rows_and_speed_ups() {
             .find(|r| r["threads"] == cores && r["copies"] == 1)
             .expect("all threads");
         assert_eq!(split["split_across_threads"], true, "{split}");
-        let what: Vec<&str> = report["speedups"]
-            .as_array()
-            .expect("speed-ups")
-            .iter()
-            .filter_map(|s| s["what"].as_str())
-            .collect();
+        let what = speedup_whats(&report);
         assert!(
             what.iter().any(|w| w.contains("what the host gives")),
             "{what:?}"
@@ -126,6 +115,16 @@ fn bench_options_are_checked() {
     }
     refuses_in(&dir, &["bench", "--beds", "1"], &["--beds", "at least 2"]);
     refuses_in(&dir, &["bench", "--repeats", "0"], &["--repeats"]);
+}
+
+/// What each speed-up of a bench report compares.
+fn speedup_whats(report: &serde_json::Value) -> Vec<&str> {
+    report["speedups"]
+        .as_array()
+        .expect("speed-ups")
+        .iter()
+        .filter_map(|s| s["what"].as_str())
+        .collect()
 }
 
 /// Runs `vlab --quiet bench --beds-only --json` with `args` in `dir` (whose
@@ -215,12 +214,7 @@ fn bench_of_a_poured_bed_reports_its_rows_beside_the_lattice_ones() {
     let phi = p["packing_fraction"].as_f64().expect("packing");
     assert!((0.2..0.64).contains(&phi), "{p}");
     if cores > 1 {
-        let what: Vec<&str> = report["speedups"]
-            .as_array()
-            .expect("speed-ups")
-            .iter()
-            .filter_map(|s| s["what"].as_str())
-            .collect();
+        let what = speedup_whats(&report);
         for bed in ["lattice", "poured"] {
             let host = what
                 .iter()
