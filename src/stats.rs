@@ -89,15 +89,6 @@ impl MeanStderr {
         self.stderr.unwrap_or(f64::NAN)
     }
 
-    /// The same figure scaled by `k` (a unit change, a normalisation).
-    pub fn scaled(&self, k: f64) -> MeanStderr {
-        MeanStderr {
-            mean: self.mean * k,
-            stderr: self.stderr.map(|e| e * k.abs()),
-            ..*self
-        }
-    }
-
     /// The error widened by an independent part `extra` (same unit), added
     /// in quadrature; an unknown error stays unknown.
     pub fn with_independent_part(&self, extra: f64) -> MeanStderr {
@@ -196,29 +187,6 @@ pub fn mean_stderr(xs: &[f64]) -> MeanStderr {
         stderr: Some((var * f / nf).sqrt() * student_t68(dof)),
         n,
         lag1,
-        dof,
-    }
-}
-
-/// Mean of independent values `xs` (the means of independent beds) and its
-/// one-sigma error: `s / √n` widened by [`student_t68`] with `n − 1` degrees
-/// of freedom; `None` below 2 values.
-pub fn mean_stderr_independent(xs: &[f64]) -> MeanStderr {
-    let n = xs.len();
-    let m = mean_std(xs);
-    if n < 2 {
-        return MeanStderr {
-            mean: if n == 0 { 0.0 } else { m.mean },
-            n,
-            ..MeanStderr::default()
-        };
-    }
-    let dof = (n - 1) as f64;
-    MeanStderr {
-        mean: m.mean,
-        stderr: Some(m.std / (n as f64).sqrt() * student_t68(dof)),
-        n,
-        lag1: 0.0,
         dof,
     }
 }
@@ -414,17 +382,6 @@ mod tests {
             );
         }
         assert!((student_t68(1e9) - 1.0).abs() < 1e-8);
-    }
-
-    /// The mean of independent beds: s/√n widened with n − 1 degrees of
-    /// freedom.
-    #[test]
-    fn independent_means_use_student_with_n_minus_1() {
-        let m = mean_stderr_independent(&[1.0, 2.0, 3.0]);
-        assert_eq!(m.mean, 2.0);
-        let want = 1.0 / 3f64.sqrt() * student_t68(2.0);
-        assert!((m.stderr.expect("3 values") - want).abs() < 1e-12);
-        assert_eq!(mean_stderr_independent(&[1.0]).stderr, None);
     }
 
     /// A 3 % drift over 24 cycles with 0.5 % noise is found; white noise of

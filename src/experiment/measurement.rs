@@ -28,7 +28,7 @@ use serde::Serialize;
 
 use crate::dem::World;
 use crate::drive::Drive;
-use crate::experiment::bed_spread::bed_to_bed;
+use crate::experiment::bed_spread::{BedToBed, bed_to_bed};
 use crate::experiment::damper::{
     DriveOutcome, DrivePlan, NoObserver, Progress, StepObserver, run_drive,
 };
@@ -147,6 +147,8 @@ pub struct ShakeExperiment {
     pub shaker: ShakerReport,
     pub measured: Measured,
     pub calibration: PhaseCalibration,
+    /// The bed-to-bed part of the errors, and how it is known.
+    pub bed_to_bed: BedToBed,
 }
 
 /// Static weight the force gauge carries along the drive axis (N).
@@ -222,11 +224,12 @@ pub fn run_measured_shake_observed(
     )?;
     let yang = measure_trace(&trace, drive.freq_hz(), &calibration)?;
     let shaker_report = shaker.report();
+    let bed = bed_to_bed(scene, drive);
     let measured = compare_with_dem(
         setup,
         &outcome,
         &yang,
-        bed_to_bed(scene, drive).rel(),
+        bed.rel(),
         particle_mass,
         MeasuredBy {
             source,
@@ -242,6 +245,7 @@ pub fn run_measured_shake_observed(
         shaker: shaker_report,
         measured,
         calibration,
+        bed_to_bed: bed,
     })
 }
 

@@ -33,7 +33,7 @@ use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::drive::Drive;
 use crate::experiment::bed_cache::BedSource;
-use crate::experiment::bed_spread::{BedToBed, bed_to_bed};
+use crate::experiment::bed_spread::BedToBed;
 use crate::experiment::damper::{DriveOutcome, Observers, Progress, Steadiness, StepObserver};
 use crate::experiment::measurement::{
     Measured, ShakeExperiment, ShakeSetup, run_measured_shake_observed,
@@ -233,8 +233,9 @@ pub struct DemTruth {
 }
 
 impl DemTruth {
-    /// The truth of a drive of `scene` by `drive`.
-    pub fn new(out: &DriveOutcome, scene: &Scene, drive: &Drive) -> Self {
+    /// The truth of a drive of `scene`, its error widened by the bed-to-bed
+    /// part `bed`.
+    pub fn new(out: &DriveOutcome, scene: &Scene, bed: BedToBed) -> Self {
         // An identity of the books (the integration term is their remainder):
         // only an accounting bug breaks it.
         debug_assert!(
@@ -242,7 +243,6 @@ impl DemTruth {
             "energy books do not close: residual {} J",
             out.whole.residual_j
         );
-        let bed = bed_to_bed(scene, drive);
         let energy = out
             .energy_per_cycle
             .with_independent_part(bed.rel() * out.energy_per_cycle_j.abs());
@@ -491,7 +491,7 @@ impl ShakeSummary {
     ) -> ShakeSummary {
         let outcome = &experiment.outcome;
         let n = world.particles.len();
-        let dem = DemTruth::new(outcome, scene, &setup.drive);
+        let dem = DemTruth::new(outcome, scene, experiment.bed_to_bed);
         let mut warnings = bed.warnings.clone();
         warnings.extend(experiment.measured.clipping.iter().cloned());
         warnings.extend(dem.warnings(setup.drive.freq_hz(), scene.simulation.steps_per_contact));
