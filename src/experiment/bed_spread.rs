@@ -71,7 +71,7 @@ impl BedToBed {
             BedToBed::NotMeasured => {
                 let measured: Vec<String> = THESIS_BED_SPREAD
                     .iter()
-                    .map(|(f, g, rel, _)| format!("{} % at {f} Hz, Gamma {g}", 100.0 * rel))
+                    .map(|(f, g, rel, _)| format!("{:.2} % at {f} Hz, Gamma {g}", 100.0 * rel))
                     .collect();
                 format!(
                     "bed-to-bed part not measured for this damper and condition: the +- is the window's alone (the thesis damper's beds add {})",
@@ -125,7 +125,9 @@ mod tests {
         );
         assert_eq!(bed_to_bed(&scene, &at(40.0, 12.0)), BedToBed::NotMeasured);
         let said = BedToBed::NotMeasured.describe(40.0, 12.0);
-        assert!(said.contains("1 % at 40 Hz, Gamma 20"), "{said}");
+        assert!(said.contains("1.00 % at 40 Hz, Gamma 20"), "{said}");
+        // Printed to two places, not as the float's full expansion.
+        assert!(said.contains("1.75 % at 160 Hz, Gamma 10"), "{said}");
         scene.particles.count = 200;
         assert_eq!(bed_to_bed(&scene, &at(40.0, 20.0)), BedToBed::NotMeasured);
     }
