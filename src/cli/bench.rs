@@ -44,8 +44,8 @@ use clap::Args;
 use serde::Serialize;
 
 use vlab::atomic_write::write_atomic;
-use vlab::dem::World;
 use vlab::dem::testbed::lattice_bed;
+use vlab::dem::{TRIAL_STEPS, World};
 use vlab::experiment::bed_cache::BedSource;
 use vlab::experiment::damper::{DrivePlan, NoObserver, run_drive};
 use vlab::experiment::settle::{SettledBed, prepare_drive, settle_bed};
@@ -766,14 +766,17 @@ impl Bed {
         }
     }
 
-    /// A new copy of the bed after 20 untimed steps that let its lists and
-    /// buffers grow.
+    /// A new copy of the bed after untimed steps that let its lists and
+    /// buffers grow (20) and time the serial step against the parallel one
+    /// (a whole trial, [`TRIAL_STEPS`]), so that the timed steps run the
+    /// way vlab chose, as a long run does.
     fn warm(&self) -> Result<World> {
         let mut world = match self {
             Bed::Lattice(n) => lattice_bed(*n, 0.52, 1).context("building the lattice bed")?,
             Bed::Poured(w) => (**w).clone(),
         };
-        for _ in 0..20 {
+        world.retime_threads();
+        for _ in 0..20 + TRIAL_STEPS {
             world.step(0.0)?;
         }
         Ok(world)

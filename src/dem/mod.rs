@@ -13,6 +13,7 @@ pub mod hertz_theory;
 pub mod ledger;
 pub mod material;
 pub mod neighbours;
+pub mod ordering;
 pub mod particles;
 pub mod restitution;
 mod step;
@@ -27,5 +28,6 @@ pub use ledger::{Dissipation, EnergyState, Ledger, LedgerBalance, LedgerSnapshot
 pub use material::Material;
 pub use particles::Particles;
 pub use restitution::RestitutionMode;
+pub use step::thread_choice::TRIAL_STEPS;
 pub use walls::{WallShape, Walls};
 pub use world::{AUTO_PARALLEL_MIN_PAIRS, CollisionSteps, ImpactSpeeds, Numerics, World};

@@ -14,25 +14,59 @@
 //! pairs only whether they are still apart, and reads 8 bytes for it instead
 //! of the whole 88-byte contact state.
 //!
-//! Each rebuild also lays out, for every particle, its pairs in the order a
-//! serial loop over the pairs adds them to it: first the pairs in which it
-//! is the second particle (`(i, p)`, `i < p`: its *j side*,
-//! [`NeighbourList::j_side_pairs`], in increasing pair order), then those
-//! in which it is the first (its row of the sorted list,
-//! [`NeighbourList::row`]). A thread that owns a particle can then gather
-//! its pair forces in exactly that order, which keeps the parallel force
-//! sums bit-identical to the serial ones.
+//! Each rebuild also lays out, for every particle, its row (the pairs
+//! `(p, j)`, [`NeighbourList::row`]) and the pairs `(i, p)` that reach it
+//! from an earlier block of the step ([`NeighbourList::cross_pairs`], in
+//! pair order): a block of the step then evaluates the rows of its own
+//! particles and adds to them, and the forces that cross from another block
+//! are added afterwards, in a fixed order, so that the sums are the same
+//! bits for any number of threads ([`crate::dem::step`]).
 
 use glam::DVec3;
 
 use super::contact::ContactState;
+use super::step::block_size::PARTICLE_BLOCK;
 
 /// The parts of a [`NeighbourList`] a step of the pair contacts reads and
 /// writes, borrowed apart ([`NeighbourList::step_view`]).
 pub struct StepView<'a> {
     pub pairs: &'a [(u32, u32)],
+    pub adjacency: &'a Adjacency,
     pub gaps: &'a mut [f64],
     pub states: &'a mut [ContactState],
+}
+
+/// Each particle's pairs on the list: its row, and the pairs that reach it
+/// from an earlier block of the step.
+#[derive(Debug, Clone, Default)]
+pub struct Adjacency {
+    /// Pairs `(p, j)` of particle `p`: `row_start[p]..row_start[p + 1]`.
+    row_start: Vec<u32>,
+    /// Pairs `(i, p)` of particle `p` with `i` in an earlier block, in
+    /// increasing pair order: `cross[cross_start[p]..cross_start[p + 1]]`.
+    cross_start: Vec<u32>,
+    cross: Vec<u32>,
+}
+
+impl Adjacency {
+    /// The pairs `(p, j)` of particle `p`: a run of the pair list.
+    #[inline]
+    pub fn row(&self, p: usize) -> std::ops::Range<usize> {
+        self.row_start[p] as usize..self.row_start[p + 1] as usize
+    }
+
+    /// The pairs of the rows of particles `s..e`: a run of the pair list.
+    #[inline]
+    pub fn rows(&self, s: usize, e: usize) -> std::ops::Range<usize> {
+        self.row_start[s] as usize..self.row_start[e] as usize
+    }
+
+    /// The pairs `(i, p)` of particle `p` whose `i` is in an earlier block
+    /// of the step than `p` ([`PARTICLE_BLOCK`]), in increasing pair order.
+    #[inline]
+    pub fn cross_pairs(&self, p: usize) -> &[u32] {
+        &self.cross[self.cross_start[p] as usize..self.cross_start[p + 1] as usize]
+    }
 }
 
 /// Verlet pair list with per-pair contact history.
@@ -48,12 +82,8 @@ pub struct NeighbourList {
     /// negative: the gap. Always current.
     pub gaps: Vec<f64>,
     skin_m: f64,
-    /// Pairs `(p, j)` of particle `p`: `row_start[p]..row_start[p + 1]`.
-    row_start: Vec<u32>,
-    /// Pairs `(i, p)` of particle `p`, in increasing pair order:
-    /// `j_pairs[j_start[p]..j_start[p + 1]]`.
-    j_start: Vec<u32>,
-    j_pairs: Vec<u32>,
+    /// Each particle's row and pairs from earlier blocks.
+    adjacency: Adjacency,
     reference: Vec<DVec3>,
     rebuilds: u64,
     // Scratch reused between rebuilds.
@@ -97,22 +127,28 @@ impl NeighbourList {
     pub fn step_view(&mut self) -> StepView<'_> {
         StepView {
             pairs: &self.pairs,
+            adjacency: &self.adjacency,
             gaps: &mut self.gaps,
             states: &mut self.states,
         }
     }
 
+    /// Each particle's row and pairs from earlier blocks.
+    pub fn adjacency(&self) -> &Adjacency {
+        &self.adjacency
+    }
+
     /// The pairs `(p, j)` of particle `p`: a run of the pair list.
     #[inline]
     pub fn row(&self, p: usize) -> std::ops::Range<usize> {
-        self.row_start[p] as usize..self.row_start[p + 1] as usize
+        self.adjacency.row(p)
     }
 
-    /// The pairs `(i, p)` of particle `p` (its j side), in increasing pair
-    /// order.
+    /// The pairs `(i, p)` of particle `p` whose `i` is in an earlier block
+    /// of the step than `p` ([`PARTICLE_BLOCK`]), in increasing pair order.
     #[inline]
-    pub fn j_side_pairs(&self, p: usize) -> &[u32] {
-        &self.j_pairs[self.j_start[p] as usize..self.j_start[p + 1] as usize]
+    pub fn cross_pairs(&self, p: usize) -> &[u32] {
+        self.adjacency.cross_pairs(p)
     }
 
     /// Where the particles were when the list was last built: a particle
@@ -140,36 +176,56 @@ impl NeighbourList {
                 .any(|(p, r)| (*p - *r).length_squared() > limit_sq)
     }
 
-    /// Lays out the rows and the j sides of every particle (see
-    /// [`Self::row`], [`Self::j_side_pairs`]): counting sorts of the pair ends,
-    /// filled in pair order.
+    /// Lays out the rows and the pairs from earlier blocks of every particle
+    /// (see [`Self::row`], [`Self::cross_pairs`]): counting sorts of the pair
+    /// ends, filled in pair order.
     fn build_adjacency(&mut self, n: usize) {
-        self.row_start.clear();
-        self.row_start.resize(n + 1, 0);
-        self.j_start.clear();
-        self.j_start.resize(n + 1, 0);
+        let a = &mut self.adjacency;
+        a.row_start.clear();
+        a.row_start.resize(n + 1, 0);
+        a.cross_start.clear();
+        a.cross_start.resize(n + 1, 0);
+        let crosses = |i: u32, j: u32| i as usize / PARTICLE_BLOCK != j as usize / PARTICLE_BLOCK;
         for &(i, j) in &self.pairs {
-            self.row_start[i as usize + 1] += 1;
-            self.j_start[j as usize + 1] += 1;
+            a.row_start[i as usize + 1] += 1;
+            if crosses(i, j) {
+                a.cross_start[j as usize + 1] += 1;
+            }
         }
         for p in 0..n {
-            self.row_start[p + 1] += self.row_start[p];
-            self.j_start[p + 1] += self.j_start[p];
+            a.row_start[p + 1] += a.row_start[p];
+            a.cross_start[p + 1] += a.cross_start[p];
         }
-        self.j_pairs.clear();
-        self.j_pairs.resize(self.pairs.len(), 0);
+        a.cross.clear();
+        a.cross.resize(a.cross_start[n] as usize, 0);
         self.fill.clear();
-        self.fill.extend_from_slice(&self.j_start[..n]);
-        for (k, &(_, j)) in self.pairs.iter().enumerate() {
-            let at = &mut self.fill[j as usize];
-            self.j_pairs[*at as usize] = k as u32;
-            *at += 1;
+        self.fill.extend_from_slice(&a.cross_start[..n]);
+        for (k, &(i, j)) in self.pairs.iter().enumerate() {
+            if crosses(i, j) {
+                let at = &mut self.fill[j as usize];
+                a.cross[*at as usize] = k as u32;
+                *at += 1;
+            }
         }
     }
 
     /// Rebuilds the pair list from scratch with a cell grid; carries over the state
     /// of pairs that were already listed. New pairs start apart.
     pub fn rebuild(&mut self, positions: &[DVec3], radii: &[f64]) {
+        self.rebuild_renumbered(positions, radii, None);
+    }
+
+    /// [`Self::rebuild`] after the particles were renumbered: particle `k`
+    /// now was particle `old_of_new[k]` when the list was last built (`None`:
+    /// not renumbered). Each surviving pair keeps its state under its new
+    /// numbers; a pair whose ends swapped order (its body `i` is now the
+    /// second) has its vector history turned to the other body's view.
+    pub fn rebuild_renumbered(
+        &mut self,
+        positions: &[DVec3],
+        radii: &[f64],
+        old_of_new: Option<&[u32]>,
+    ) {
         let n = positions.len();
         self.rebuilds += 1;
         self.reference.clear();
@@ -186,11 +242,33 @@ impl NeighbourList {
         }
         let grid = Grid::around(positions, radii, self.skin_m);
         self.sort_into_cells(&grid, positions);
-        self.list_pairs(&grid, positions, radii);
+        self.list_pairs(&grid, positions, radii, old_of_new);
         std::mem::swap(&mut self.pairs, &mut self.new_pairs);
         std::mem::swap(&mut self.states, &mut self.new_states);
         std::mem::swap(&mut self.gaps, &mut self.new_gaps);
         self.build_adjacency(n);
+    }
+
+    /// The width of the cells the list is built on for particles of largest
+    /// radius `r_max_m` (m): one cutoff, `2 R_max + skin`.
+    pub fn cell_m(&self, r_max_m: f64) -> f64 {
+        2.0 * r_max_m + self.skin_m
+    }
+
+    /// Where pair `(i, j)` (old numbers, either order) is on the list as it
+    /// was last built for `n` particles, and whether its ends are swapped
+    /// there.
+    fn old_slot(&self, n: usize, i: u32, j: u32) -> Option<(usize, bool)> {
+        if self.adjacency.row_start.len() != n + 1 {
+            return None;
+        }
+        let (lo, hi, swapped) = if i < j { (i, j, false) } else { (j, i, true) };
+        let row = self.row(lo as usize);
+        let start = row.start;
+        self.pairs[row]
+            .binary_search_by_key(&hi, |&(_, b)| b)
+            .ok()
+            .map(|k| (start + k, swapped))
     }
 
     /// Counting sort of the particles into the cells of `grid`: the
@@ -220,24 +298,38 @@ impl NeighbourList {
 
     /// The pairs `i < j` within the cutoff, sorted by `(i, j)`, into the new
     /// list: each particle's row from the 27 cells around it, each pair with
-    /// the state it had on the old list, or apart if it is new.
-    fn list_pairs(&mut self, grid: &Grid, positions: &[DVec3], radii: &[f64]) {
-        let mut old = 0usize;
-        for i in 0..positions.len() {
+    /// the state it had on the old list (found in its row there, under its
+    /// old numbers `old_of_new`), or apart if it is new.
+    fn list_pairs(
+        &mut self,
+        grid: &Grid,
+        positions: &[DVec3],
+        radii: &[f64],
+        old_of_new: Option<&[u32]>,
+    ) {
+        let n = positions.len();
+        let old_number = |k: u32| old_of_new.map_or(k, |o| o[k as usize]);
+        for i in 0..n {
             let pi = positions[i];
             self.fill_row(grid, positions, radii, i);
-            for &j in &self.row {
+            for r in 0..self.row.len() {
+                let j = self.row[r];
                 let key = (i as u32, j);
-                // Merge walk: both lists are sorted by (i, j).
-                while old < self.pairs.len() && self.pairs[old] < key {
-                    old += 1;
-                }
-                let (state, overlap) = if old < self.pairs.len() && self.pairs[old] == key {
-                    (self.states[old], self.gaps[old])
-                } else {
-                    let ju = j as usize;
-                    let gap = (positions[ju] - pi).length() - radii[i] - radii[ju];
-                    (ContactState::apart(-gap), -gap)
+                let found = self.old_slot(n, old_number(i as u32), old_number(j));
+                let (state, overlap) = match found {
+                    Some((k, swapped)) => {
+                        let mut st = self.states[k];
+                        if swapped {
+                            st.xi = -st.xi;
+                            st.ft_prev = -st.ft_prev;
+                        }
+                        (st, self.gaps[k])
+                    }
+                    None => {
+                        let ju = j as usize;
+                        let gap = (positions[ju] - pi).length() - radii[i] - radii[ju];
+                        (ContactState::apart(-gap), -gap)
+                    }
                 };
                 self.new_pairs.push(key);
                 self.new_states.push(state);
@@ -388,21 +480,71 @@ mod tests {
         }
     }
 
+    /// Rows and the pairs from earlier blocks against a scan of the whole
+    /// list, on a bed of several blocks: a pair listed under the wrong end,
+    /// or one within a block taken for one that crosses, fails it.
     #[test]
-    fn rows_and_j_sides_list_each_particles_pairs_in_pair_order() {
-        let pos = scattered(300, 0.03, 5);
-        let radii = vec![0.0025; 300];
+    fn rows_and_crossing_pairs_list_each_particles_pairs_in_pair_order() {
+        let n = 3 * PARTICLE_BLOCK;
+        let pos = scattered(n, 0.04, 5);
+        let radii = vec![0.0025; n];
         let mut list = NeighbourList::new(0.0005);
         list.rebuild(&pos, &radii);
-        for p in 0..pos.len() {
+        let block = |p: u32| p as usize / PARTICLE_BLOCK;
+        let mut crossing = 0;
+        for p in 0..n {
             let as_i: Vec<usize> = (0..list.pairs.len())
                 .filter(|&k| list.pairs[k].0 as usize == p)
                 .collect();
-            let as_j: Vec<u32> = (0..list.pairs.len() as u32)
-                .filter(|&k| list.pairs[k as usize].1 as usize == p)
+            let from_before: Vec<u32> = (0..list.pairs.len() as u32)
+                .filter(|&k| {
+                    let (i, j) = list.pairs[k as usize];
+                    j as usize == p && block(i) < block(j)
+                })
                 .collect();
+            crossing += from_before.len();
             assert_eq!(list.row(p).collect::<Vec<_>>(), as_i, "particle {p}");
-            assert_eq!(list.j_side_pairs(p), &as_j[..], "particle {p}");
+            assert_eq!(list.cross_pairs(p), &from_before[..], "particle {p}");
+        }
+        assert!(crossing > 0, "the test bed has pairs across blocks");
+    }
+
+    /// A rebuild after a renumbering finds every surviving pair's history
+    /// under its new numbers, turned to the other body's view where the
+    /// pair's ends swapped order. Losing the history (a lookup under the new
+    /// numbers), or not negating it, fails it.
+    #[test]
+    fn a_renumbered_rebuild_carries_each_history_to_the_pairs_new_numbers() {
+        let n = 400;
+        let pos = scattered(n, 0.03, 9);
+        let radii = vec![0.0025; n];
+        let mut list = NeighbourList::new(0.0005);
+        list.rebuild(&pos, &radii);
+        for (k, st) in list.states.iter_mut().enumerate() {
+            st.xi = DVec3::new(k as f64 + 1.0, 0.0, 0.0);
+            st.ft_prev = DVec3::new(0.0, k as f64 + 1.0, 0.0);
+            st.u_normal_j = k as f64 + 1.0;
+        }
+        let before: Vec<((u32, u32), ContactState)> = list
+            .pairs
+            .iter()
+            .copied()
+            .zip(list.states.clone())
+            .collect();
+        // Reverse the numbering: every pair's ends swap order.
+        let old_of_new: Vec<u32> = (0..n as u32).rev().collect();
+        let moved: Vec<DVec3> = old_of_new.iter().map(|&o| pos[o as usize]).collect();
+        list.rebuild_renumbered(&moved, &radii, Some(&old_of_new));
+        assert_eq!(list.pairs.len(), before.len());
+        for (&(a, b), st) in list.pairs.iter().zip(&list.states) {
+            let (oa, ob) = (old_of_new[a as usize], old_of_new[b as usize]);
+            let (_, old) = before
+                .iter()
+                .find(|(p, _)| *p == (ob, oa))
+                .expect("the pair, its ends swapped");
+            assert_eq!(st.u_normal_j, old.u_normal_j);
+            assert_eq!(st.xi, -old.xi);
+            assert_eq!(st.ft_prev, -old.ft_prev);
         }
     }
 

@@ -8,32 +8,33 @@
 //! 2. the walls move to the prescribed displacement for the end of the step
 //!    ([`drive`]);
 //! 3. the pair list is rebuilt if some particle moved more than half the
-//!    skin ([`neighbour_update`], Section 3.4);
+//!    skin ([`neighbour_update`], Section 3.4), a bed of several blocks
+//!    renumbered in space with it ([`crate::dem::ordering`]);
 //! 4. forces at the new positions (gravity, wall and pair contacts, eq.
 //!    3.25–3.28), with the half-step velocities for damping and tangential
-//!    displacement ([`forces`], in parallel pair blocks and their gather on
-//!    many threads), each contact checked and booked ([`checks`],
-//!    [`books`]);
-//! 5. the second half kick ([`integrate`]);
+//!    displacement ([`forces`], block by block), each contact checked and
+//!    booked ([`checks`], [`books`]);
+//! 5. the second half kick ([`integrate`]), each block first adding the
+//!    forces of the pairs that reach it from earlier blocks;
 //! 6. the step's books are closed ([`books::close_step`], eq. 6.4);
 //! 7. every few thousand steps, the energy books are checked
 //!    ([`checks::energy_closes`]).
 //!
-//! Forces are summed in a fixed order (walls in order, then pairs sorted by
-//! `(i, j)`), so results are bit-identical whatever the number of threads.
-//! When no law has friction the rotation is not integrated at all (nothing
-//! could change it).
+//! Every loop runs over the fixed blocks of particles of [`block_size`], and
+//! each particle's forces are summed in a fixed order (gravity, its walls in
+//! order, its pairs within its block in pair order, then those from earlier
+//! blocks in pair order), so results are bit-identical whatever the number
+//! of threads. When no law has friction the rotation is not integrated at
+//! all (nothing could change it).
 //!
-//! **Threads.** Below [`AUTO_PARALLEL_MIN_PAIRS`] listed pairs (the thesis
-//! scene lists about 2500) one core runs everything, and each pair contact is
-//! added to the forces as soon as it is evaluated. Above it every loop is
-//! split into fixed blocks across the threads: the particle loops (kick,
-//! drift, gravity and walls: each particle's own), the pair loop (contact
-//! states and pair forces, each pair's own), then a gather in which each
-//! particle sums its pair forces in pair order, which is exactly the order
-//! the serial loop adds them in. Both ways give the same bits; the tests
-//! compare them.
+//! **Threads.** A bed of one block (the thesis bed) is one serial loop.
+//! A larger bed's blocks can run side by side on all threads, each writing
+//! only its own particles, pairs and books; whether they do is decided by
+//! timing both ways as the world steps ([`thread_choice`]). Both ways give
+//! the same bits; the tests compare them.
 //!
+//! [`block_size`]: super::step::block_size
+//! [`thread_choice`]: super::step::thread_choice
 //! [`integrate`]: super::step::integrate
 //! [`drive`]: super::step::drive
 //! [`neighbour_update`]: super::step::neighbour_update
@@ -43,6 +44,8 @@
 //! [`books::close_step`]: super::step::books::close_step
 //! [`checks::energy_closes`]: super::step::checks::energy_closes
 
+use std::time::Instant;
+
 use glam::DVec3;
 
 use super::contact::{ContactLaw, ContactState};
@@ -50,19 +53,22 @@ use super::error::DemError;
 use super::ledger::{EnergyState, Ledger, LedgerSnapshot};
 use super::neighbours::NeighbourList;
 use super::particles::Particles;
+use super::step::block_size::spans_blocks;
 use super::step::books::{self, Books};
 use super::step::checks::{self, Diagnosis, Limits};
 use super::step::forces::{ForceScratch, ForceStage};
 use super::step::integrate::{KickSums, VelocityVerlet};
+use super::step::neighbour_update::{OrderScratch, PerParticle};
+use super::step::thread_choice::ThreadChoice;
 use super::step::{drive, neighbour_update};
 use super::walls::Walls;
 
 pub use super::step::books::CollisionSteps;
 pub use super::step::checks::ImpactSpeeds;
 
-/// Listed pairs from which a step is split across threads, when there are
-/// several: below it waking the other threads costs more than they save (a
-/// thesis-scene step, about 2500 pairs, takes some 30 µs on one core).
+/// The default of [`Numerics::parallel_min_pairs`]: vlab decides when to
+/// split a step across threads by timing both ways
+/// ([`super::step::thread_choice`]); a smaller value forces the split.
 pub const AUTO_PARALLEL_MIN_PAIRS: usize = 8192;
 
 /// Tunables of a world that are not physics.
@@ -74,10 +80,11 @@ pub struct Numerics {
     pub skin_ratio: f64,
     /// Overlap, as a fraction of the smaller radius, taken as a sign of instability.
     pub max_overlap_ratio: f64,
-    /// Deprecated: vlab chooses when to use threads ([`AUTO_PARALLEL_MIN_PAIRS`]).
-    /// A value below that makes the step go parallel from this many listed
-    /// pairs on (tests use 0 to run the parallel path on a small bed); the
-    /// results are the same bits either way.
+    /// Deprecated: vlab chooses when to use threads by timing both ways
+    /// ([`AUTO_PARALLEL_MIN_PAIRS`], the default). A value below that makes
+    /// the step go parallel from this many listed pairs on, whenever the bed
+    /// has several blocks (tests use 0 to run the parallel path on a small
+    /// bed); the results are the same bits either way.
     pub parallel_min_pairs: usize,
     /// A collision resolved in fewer time steps than this is refused.
     pub min_steps_per_collision: f64,
@@ -133,6 +140,8 @@ pub struct World {
     wall_gaps: Vec<f64>,
     /// Buffers of the step, kept from step to step.
     scratch: StepScratch,
+    /// Whether steps run on one core or on all threads.
+    threads: ThreadChoice,
     /// Total force of the walls on the particles at the current step (N).
     wall_force: DVec3,
     /// Ledger reading the energy check compares against.
@@ -166,6 +175,8 @@ struct StepScratch {
     kick_sums: Vec<KickSums>,
     /// The force stage's books and pair slots.
     forces: ForceScratch,
+    /// The renumbering's keys and order.
+    order: OrderScratch,
 }
 
 impl World {
@@ -194,6 +205,7 @@ impl World {
             wall_states: Vec::new(),
             wall_gaps: Vec::new(),
             scratch: StepScratch::default(),
+            threads: ThreadChoice::default(),
             wall_force: DVec3::ZERO,
             baseline: LedgerSnapshot::default(),
             impact_speeds: ImpactSpeeds::default(),
@@ -203,7 +215,7 @@ impl World {
             fastest_collision: None,
         };
         world.reset_contacts();
-        world.compute_forces(0.0)?;
+        world.compute_forces(0.0, false, false)?;
         world.rebaseline();
         Ok(world)
     }
@@ -227,11 +239,12 @@ impl World {
     }
 
     /// Forgets every contact history and re-reads the geometry (after the scene was
-    /// edited, e.g. particles placed or walls moved by hand).
+    /// edited, e.g. particles placed or walls moved by hand). A bed of
+    /// several blocks is renumbered in space here, as at every rebuild of
+    /// its pair list.
     pub fn reset_contacts(&mut self) {
         self.neighbours = NeighbourList::new(self.neighbours.skin_m());
-        self.neighbours
-            .rebuild(&self.particles.position, &self.particles.radius);
+        self.update_neighbours(true);
         let n_walls = self.walls.len();
         let offset = self.walls.offset();
         self.wall_states.clear();
@@ -257,7 +270,7 @@ impl World {
         self.pp_law = pp_law;
         self.pw_law = pw_law;
         self.reset_contacts();
-        self.compute_forces(0.0)?;
+        self.compute_forces(0.0, false, false)?;
         self.rebaseline();
         Ok(())
     }
@@ -302,8 +315,26 @@ impl World {
         self.numerics.skin_ratio = skin_ratio;
         self.neighbours
             .set_skin_m(skin_ratio * self.particles.max_radius_m());
-        self.neighbours
-            .rebuild(&self.particles.position, &self.particles.radius);
+        self.update_neighbours(true);
+    }
+
+    /// The neighbour update ([`neighbour_update::update`]): the pair list
+    /// rebuilt when `rebuild` or when it may miss a contact, a bed of
+    /// several blocks renumbered in space with it.
+    fn update_neighbours(&mut self, rebuild: bool) {
+        let per_particle = PerParticle {
+            wall_states: &mut self.wall_states,
+            wall_gaps: &mut self.wall_gaps,
+            n_walls: self.walls.len(),
+            dissipation_j: self.particle_dissipation_j.as_mut(),
+        };
+        neighbour_update::update(
+            &mut self.neighbours,
+            &mut self.particles,
+            per_particle,
+            &mut self.scratch.order,
+            rebuild,
+        );
     }
 
     /// Re-reads the gap to every wall a particle does not touch, after walls were
@@ -369,21 +400,23 @@ impl World {
     }
 
     /// Number of contacts (particle-particle and particle-wall) each particle
-    /// is in now, into `counts` (resized to the particle count).
+    /// is in now, into `counts` (resized to the particle count), in id order
+    /// (the order of [`Particles::by_id`]).
     pub fn contacts_per_particle(&self, counts: &mut Vec<u32>) {
         let n = self.particles.len();
         counts.clear();
         counts.resize(n, 0);
+        let id = |k: usize| self.particles.id[k] as usize;
         for (&(i, j), &d) in self.neighbours.pairs.iter().zip(&self.neighbours.gaps) {
             if d > 0.0 {
-                counts[i as usize] += 1;
-                counts[j as usize] += 1;
+                counts[id(i as usize)] += 1;
+                counts[id(j as usize)] += 1;
             }
         }
         let n_walls = self.walls.len().max(1);
         for (k, &d) in self.wall_gaps.iter().enumerate() {
             if d > 0.0 {
-                counts[k / n_walls] += 1;
+                counts[id(k / n_walls)] += 1;
             }
         }
     }
@@ -396,9 +429,14 @@ impl World {
     }
 
     /// Energy each particle's contacts dissipated since tracking began (J),
-    /// when tracked.
-    pub fn particle_dissipation_j(&self) -> Option<&[f64]> {
-        self.particle_dissipation_j.as_deref()
+    /// when tracked, in id order (the order of [`Particles::by_id`]).
+    pub fn particle_dissipation_j(&self) -> Option<Vec<f64>> {
+        let d = self.particle_dissipation_j.as_ref()?;
+        let mut by_id = vec![0.0; d.len()];
+        for (&id, &e) in self.particles.id.iter().zip(d) {
+            by_id[id as usize] = e;
+        }
+        Some(by_id)
     }
 
     /// Mechanical energy stored now.
@@ -439,22 +477,34 @@ impl World {
         }
     }
 
-    /// Whether a step now runs on all threads of the current pool (several
-    /// threads, and enough listed pairs to pay for waking them); the
-    /// results are the same bits either way.
+    /// Whether steps now run on all threads of the current pool: several
+    /// threads, several blocks, and the parallel step timed faster (or
+    /// forced). The results are the same bits either way.
     pub fn splits_across_threads(&self) -> bool {
-        self.parallel()
+        self.can_split() && (self.forced_split() || self.threads.parallel())
     }
 
-    /// Whether this step runs on all threads: several threads, and enough
-    /// listed pairs to pay for waking them ([`AUTO_PARALLEL_MIN_PAIRS`]).
-    /// Either way the results are the same bits.
-    fn parallel(&self) -> bool {
-        let from = self
-            .numerics
-            .parallel_min_pairs
-            .min(AUTO_PARALLEL_MIN_PAIRS);
-        rayon::current_num_threads() > 1 && self.neighbours.pairs.len() >= from
+    /// Times the serial and the parallel step anew from the next step on
+    /// (a trial of [`TRIAL_STEPS`] steps), as if the world were new: a bench
+    /// calls it before it warms a bed up, so that no trial falls in its
+    /// timed steps.
+    ///
+    /// [`TRIAL_STEPS`]: super::TRIAL_STEPS
+    pub fn retime_threads(&mut self) {
+        self.threads = ThreadChoice::default();
+    }
+
+    /// Whether a step can split across threads: several threads in the
+    /// pool and several blocks of particles.
+    fn can_split(&self) -> bool {
+        rayon::current_num_threads() > 1 && spans_blocks(self.particles.len())
+    }
+
+    /// Whether the split is forced ([`Numerics::parallel_min_pairs`] below
+    /// its default, and that many pairs listed).
+    fn forced_split(&self) -> bool {
+        let from = self.numerics.parallel_min_pairs;
+        from < AUTO_PARALLEL_MIN_PAIRS && self.neighbours.pairs.len() >= from
     }
 
     /// True when some law has friction: only then can a particle's spin change.
@@ -465,7 +515,8 @@ impl World {
     /// Advances one step; the wall body ends the step at `wall_displacement_m`.
     pub fn step(&mut self, wall_displacement_m: f64) -> Result<(), DemError> {
         let dt = self.numerics.dt_s;
-        let parallel = self.parallel();
+        let started = Instant::now();
+        let parallel = self.threads.pick(self.can_split(), self.forced_split());
         let verlet = self.integrator();
         // 1. Integration: half kick and drift; a position that is not finite stops.
         let sums = &mut self.scratch.kick_sums;
@@ -476,14 +527,20 @@ impl World {
         // 2. The walls' stroke.
         let stroke = drive::move_walls(&mut self.walls, wall_displacement_m, dt, self.wall_force);
         // 3. Neighbour update.
-        neighbour_update::update(&mut self.neighbours, &self.particles, drift.moved_far);
+        self.update_neighbours(drift.moved_far);
         // 4. Contact forces, each contact checked and booked.
         let booked_before = self.ledger;
         self.step_stored_change_j = 0.0;
-        self.compute_forces(dt)?;
-        // 5. Integration: second half kick.
+        self.compute_forces(dt, true, parallel)?;
+        // 5. Integration: second half kick, each block first adding the
+        //    forces its pairs from earlier blocks left.
+        let shares = self.scratch.forces.cross_shares(
+            &self.neighbours,
+            self.particles.len(),
+            self.pp_law.has_friction(),
+        );
         let sums = &mut self.scratch.kick_sums;
-        let kick = verlet.kick(&mut self.particles, sums, drift.work, parallel);
+        let kick = verlet.kick(&mut self.particles, shares, sums, drift.work, parallel);
         // 6. The step's books close.
         books::close_step(
             &mut self.ledger,
@@ -494,6 +551,7 @@ impl World {
         );
         self.time_s += dt;
         self.steps += 1;
+        self.threads.record(started.elapsed());
         // 7. Every few thousand steps, the energy books must still close.
         if self.steps % self.numerics.energy_check_steps == 0 {
             self.check_energy()?;
@@ -519,15 +577,25 @@ impl World {
             dt_s: self.numerics.dt_s,
             max_overlap_ratio: self.numerics.max_overlap_ratio,
             wall_names: &self.walls.names,
+            ids: &self.particles.id,
         }
     }
 
     /// Forces and torques at the current positions ([`ForceStage::run`]).
     /// `dt` is the step over which the tangential springs advance and the
     /// ledger accumulates (0 for a pure evaluation that changes no history).
-    fn compute_forces(&mut self, dt: f64) -> Result<(), DemError> {
+    /// `defer_cross`: the shares of pairs into later blocks are left for the
+    /// half kick that follows to add (a step); else added here. `parallel`:
+    /// the blocks run on all threads (the same bits either way).
+    fn compute_forces(
+        &mut self,
+        dt: f64,
+        defer_cross: bool,
+        parallel: bool,
+    ) -> Result<(), DemError> {
         let stage = ForceStage {
-            parallel: self.parallel(),
+            parallel,
+            defer_cross,
             limits: Limits {
                 min_steps_per_collision: self.numerics.min_steps_per_collision,
                 max_overlap_ratio: self.numerics.max_overlap_ratio,

@@ -186,7 +186,7 @@ pub fn encode_bed(scene: &Scene, bed: &SettledBed) -> Vec<u8> {
 
 /// [`encode_bed`] as code of fingerprint `fingerprint` would write it.
 fn encode_bed_with(scene: &Scene, bed: &SettledBed, fingerprint: &str) -> Vec<u8> {
-    let p = &bed.world.particles;
+    let p = &*bed.world.particles.by_id();
     let header = BedHeader {
         key: bed_key_with(scene, fingerprint),
         fingerprint: fingerprint.to_string(),

@@ -432,7 +432,7 @@ pub fn lammps_deck(
         2,
         Some(export.cycles),
     )?;
-    let particles = &bed.world.particles;
+    let particles = &*bed.world.particles.by_id();
     let plan = DeckPlan::new(scene, bed, export, &drive)?;
     let data = packing_data(&plan, particles);
     let input = [
@@ -497,7 +497,7 @@ impl<'a> DeckPlan<'a> {
         export: &'a LammpsExport,
         drive: &Drive,
     ) -> Result<DeckPlan<'a>, SceneError> {
-        let particles = &bed.world.particles;
+        let particles = &*bed.world.particles.by_id();
         let dt = scene.drive_dt_s(drive);
         let g = drive.gravity_mps2();
         let period = drive.period_s();

@@ -198,7 +198,7 @@ impl StepObserver for PhaseSnapshots {
         if k == 0 {
             self.current.clear();
         }
-        let p = &world.particles;
+        let p = world.particles.by_id();
         self.current.push(Snapshot {
             phase_deg: 360.0 * k as f64 / PHASES as f64,
             time_s: t_s,

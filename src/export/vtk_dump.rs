@@ -133,7 +133,7 @@ impl VtkDump {
         let k = self.frames.len();
         let pname = format!("particles-{k:05}.vtp");
         let ename = format!("enclosure-{k:05}.vtp");
-        let p = &world.particles;
+        let p = world.particles.by_id();
         let n = p.len();
         world.contacts_per_particle(&mut self.counts);
         let rate: Vec<f64> = match (world.particle_dissipation_j(), &self.last) {

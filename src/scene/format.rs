@@ -182,8 +182,9 @@ pub struct SimulationSpec {
     pub gravity_mps2: f64,
     pub seed: u64,
     /// Deprecated, and left out of printed scenes: vlab chooses when to use
-    /// threads itself. Still read, so that older scene files load; a value
-    /// below vlab's own threshold makes the step go parallel earlier (the
+    /// threads itself, by timing both ways. Still read, so that older scene
+    /// files load; a value below the default makes a bed of several blocks
+    /// go parallel from that many listed pairs whatever the timing (the
     /// results are the same bits either way).
     #[serde(
         default = "default_parallel_min_pairs",

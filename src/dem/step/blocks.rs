@@ -1,170 +1,182 @@
-//! The parallel pair blocks and their gather.
+//! The pair contacts of one block of particles, and the forces that cross
+//! into a block from earlier ones.
 //!
-//! Above [`AUTO_PARALLEL_MIN_PAIRS`] listed pairs the pair loop is cut into
-//! fixed blocks of [`PAIR_BLOCK`] pairs across the threads ([`pair_blocks`]):
-//! each pair advances its contact state and leaves its forces (eq. 3.25–3.28
-//! of Terzioglu's thesis) in its own slot, and each block sums its books.
-//! Then each particle gathers its pair forces in pair order
-//! ([`gather_block`]), which is exactly the order the serial loop adds them
-//! in, so both ways give the same bits.
+//! A block owns its particles `s..e` ([`PARTICLE_BLOCK`] of them, a lump of
+//! the bed once it is ordered in space) and their rows of the pair list
+//! (the pairs `(i, j)`, `i` in the block): it advances those contacts'
+//! states and adds their forces (eq. 3.25–3.28 of Terzioglu's thesis) to
+//! its own particles as it goes ([`pair_rows`]). A pair whose second
+//! particle is in a later block leaves that particle's share in the pair's
+//! slot, and the later block adds it once every block has run
+//! ([`cross_in`]). So each particle's force is summed in a fixed order —
+//! gravity and its walls, its pairs within the block in pair order, then
+//! the pairs that reach it from earlier blocks in pair order — whichever
+//! thread runs which block, and no thread writes memory another block owns.
 //!
-//! [`AUTO_PARALLEL_MIN_PAIRS`]: crate::dem::AUTO_PARALLEL_MIN_PAIRS
+//! [`PARTICLE_BLOCK`]: super::block_size::PARTICLE_BLOCK
 
 use glam::DVec3;
-use rayon::prelude::*;
 
-use super::block_size::PAIR_BLOCK;
 use super::books::BlockBooks;
 use super::checks::Limits;
 use super::contacts::{Bodies, ContactAt, pair_contact};
 use crate::dem::contact::{ContactLaw, ContactState};
-use crate::dem::neighbours::{NeighbourList, StepView as NeighbourStep};
+use crate::dem::neighbours::Adjacency;
 
-/// What a pair contributes to the forces, kept for the gather of the
-/// parallel step.
+/// What a pair that crosses into a later block leaves for it: the force on
+/// its first particle (the second gets the opposite) and the torque on the
+/// second.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct PairForce {
+pub struct CrossForce {
     force_i: DVec3,
-    torque_i: DVec3,
     torque_j: DVec3,
 }
 
-/// Where the pairs of a parallel step leave their forces for the gather,
-/// each pair in its own slot (a block writes only its own slots, so no two
-/// threads write the same cache line but at a block's ends).
+/// Where the pairs that cross into a later block leave their forces, each in
+/// the slot of its place on the pair list (a block writes only the slots of
+/// its own rows).
 #[derive(Debug, Clone, Default)]
-pub struct PairSlots {
-    /// Per pair: whether it acts this step (touches, or stopped touching:
-    /// the pairs the serial loop adds).
+pub struct CrossSlots {
+    /// Per pair: whether it acts this step (touches, or stopped touching).
     acts: Vec<bool>,
     /// Per pair: its forces, written only when it acts.
-    force: Vec<PairForce>,
+    force: Vec<CrossForce>,
 }
 
-impl PairSlots {
-    fn resize(&mut self, n_pairs: usize) {
+impl CrossSlots {
+    /// Room for `n_pairs` pairs.
+    pub fn resize(&mut self, n_pairs: usize) {
         self.acts.resize(n_pairs, false);
-        self.force.resize(n_pairs, PairForce::default());
+        self.force.resize(n_pairs, CrossForce::default());
     }
-}
 
-/// The pair contacts on all threads, in fixed blocks: each pair advances
-/// its state and leaves its forces in its own slots of `slots`, and each
-/// block sums its books into `books`. Returns the number of blocks.
-pub fn pair_blocks<const D: bool, const F: bool>(
-    law: &ContactLaw,
-    limits: &Limits,
-    bodies: &Bodies,
-    list: &mut NeighbourList,
-    slots: &mut PairSlots,
-    books: &mut Vec<BlockBooks>,
-    dt: f64,
-) -> usize {
-    let n_pairs = list.pairs.len();
-    slots.resize(n_pairs);
-    let n_blocks = n_pairs.div_ceil(PAIR_BLOCK);
-    if books.len() < n_blocks {
-        books.resize_with(n_blocks, BlockBooks::default);
-    }
-    let NeighbourStep {
-        pairs,
-        gaps,
-        states,
-    } = list.step_view();
-    let PairSlots { acts, force } = slots;
-    pairs
-        .par_chunks(PAIR_BLOCK)
-        .zip(gaps.par_chunks_mut(PAIR_BLOCK))
-        .zip(states.par_chunks_mut(PAIR_BLOCK))
-        .zip(acts.par_chunks_mut(PAIR_BLOCK))
-        .zip(force.par_chunks_mut(PAIR_BLOCK))
-        .zip(books[..n_blocks].par_iter_mut())
-        .for_each(|(((((pairs, gaps), states), acts), forces), books)| {
-            pair_block::<D, F>(
-                law,
-                bodies,
-                pairs,
-                (gaps, states),
-                (acts, forces),
-                (limits, books),
-                dt,
-            );
-        });
-    n_blocks
-}
-
-/// The pair contacts `start..` of one block: states advanced, whether each
-/// pair acts written on both its sides and, when it does, its forces, and
-/// its books in `books`; a contact that stops the run ends the block.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn pair_block<const D: bool, const F: bool>(
-    law: &ContactLaw,
-    bodies: &Bodies,
-    pairs: &[(u32, u32)],
-    (gaps, states): (&mut [f64], &mut [ContactState]),
-    (acts, forces): (&mut [bool], &mut [PairForce]),
-    (limits, books): (&Limits, &mut BlockBooks),
-    dt: f64,
-) {
-    books.clear();
-    let slots = gaps.iter_mut().zip(states);
-    let outs = acts.iter_mut().zip(forces);
-    for ((&(i, j), (gap, st)), (act, f)) in pairs.iter().zip(slots).zip(outs) {
-        let out = pair_contact::<D, F>(law, bodies, i as usize, j as usize, dt, gap, st);
-        *act = out.is_some();
-        if let Some(out) = out {
-            if !books.add(limits, ContactAt::Pair(i as usize, j as usize), &out, dt) {
-                return;
-            }
-            *f = PairForce {
-                force_i: out.force_i,
-                torque_i: out.torque_i,
-                torque_j: out.torque_j,
-            };
+    /// All the slots, to be cut into the blocks' runs.
+    pub fn parts_mut(&mut self) -> CrossSlotsMut<'_> {
+        CrossSlotsMut {
+            acts: &mut self.acts,
+            force: &mut self.force,
         }
     }
 }
 
-/// Adds to the forces and torques of the particles `start..` of one block
-/// the forces of their acting pairs, each particle's in pair order: the
-/// pairs, the order, and so the rounding, of the serial loop that adds each
-/// acting pair to both its particles.
+/// The slots of a run of the pair list, borrowed apart.
+pub struct CrossSlotsMut<'a> {
+    pub acts: &'a mut [bool],
+    pub force: &'a mut [CrossForce],
+}
+
+/// The contact histories and gaps of a run of the pair list, borrowed apart.
+pub struct PairRun<'a> {
+    /// The pairs of the run.
+    pub pairs: &'a [(u32, u32)],
+    pub gaps: &'a mut [f64],
+    pub states: &'a mut [ContactState],
+    pub slots: CrossSlotsMut<'a>,
+}
+
+/// The pair contacts of the rows of particles `start..start + force.len()`
+/// (the run of the pair list in `run`): states advanced, books added in
+/// pair order, each force added to the block's particles as it comes, a
+/// pair into a later block leaving its second particle's share in its slot.
+/// A contact that stops the run ends the block.
 #[inline]
-pub fn gather_block<const F: bool>(
-    list: &NeighbourList,
-    slots: &PairSlots,
+pub fn pair_rows<const D: bool, const F: bool>(
+    law: &ContactLaw,
+    bodies: &Bodies,
+    start: usize,
+    run: PairRun,
+    (force, torque): (&mut [DVec3], &mut [DVec3]),
+    (limits, books): (&Limits, &mut BlockBooks),
+    dt: f64,
+) {
+    books.clear();
+    let end = start + force.len();
+    let PairRun {
+        pairs,
+        gaps,
+        states,
+        slots,
+    } = run;
+    let history = gaps.iter_mut().zip(states.iter_mut());
+    let out_slots = slots.acts.iter_mut().zip(slots.force.iter_mut());
+    for ((&(i, j), (gap, st)), (act, slot)) in pairs.iter().zip(history).zip(out_slots) {
+        let (i, j) = (i as usize, j as usize);
+        let out = pair_contact::<D, F>(law, bodies, i, j, dt, gap, st);
+        let crosses = j >= end;
+        if crosses {
+            *act = out.is_some();
+        }
+        let Some(out) = out else {
+            continue;
+        };
+        if !books.add(limits, ContactAt::Pair(i, j), &out, dt) {
+            return;
+        }
+        force[i - start] += out.force_i;
+        if F {
+            torque[i - start] += out.torque_i;
+        }
+        if crosses {
+            *slot = CrossForce {
+                force_i: out.force_i,
+                torque_j: out.torque_j,
+            };
+        } else {
+            force[j - start] -= out.force_i;
+            if F {
+                torque[j - start] += out.torque_j;
+            }
+        }
+    }
+}
+
+/// The shares a step's pairs left for later blocks, to be added to their
+/// particles' forces before those are used: at the end of the force stage,
+/// or by the half kick that follows it, block by block
+/// ([`super::integrate`]), which saves the threads a pass and a wait.
+#[derive(Clone, Copy)]
+pub struct CrossShares<'a> {
+    pub adjacency: &'a Adjacency,
+    pub slots: &'a CrossSlots,
+    /// The pairs have torques (their law has friction).
+    pub torques: bool,
+}
+
+impl CrossShares<'_> {
+    /// Adds to the forces (and torques) of particles `start..` the shares
+    /// their pairs from earlier blocks left, each particle's in pair order.
+    #[inline]
+    pub fn add_to(&self, start: usize, force: &mut [DVec3], torque: &mut [DVec3]) {
+        if self.torques {
+            cross_in::<true>(self.adjacency, self.slots, start, force, torque);
+        } else {
+            cross_in::<false>(self.adjacency, self.slots, start, force, torque);
+        }
+    }
+}
+
+/// Adds to the forces (and torques, `F`) of particles `start..` the shares
+/// their pairs from earlier blocks left in `slots`, each particle's in pair
+/// order.
+#[inline]
+fn cross_in<const F: bool>(
+    list: &Adjacency,
+    slots: &CrossSlots,
     start: usize,
     force: &mut [DVec3],
     torque: &mut [DVec3],
 ) {
     for (m, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
-        let p = start + m;
-        let (mut fa, mut ta) = (*f, *t);
-        // Pairs (i, p), i < p, come first in pair order: the j side.
-        for &k in list.j_side_pairs(p) {
+        for &k in list.cross_pairs(start + m) {
             let k = k as usize;
             if !slots.acts[k] {
                 continue;
             }
             let c = &slots.force[k];
-            fa -= c.force_i;
+            *f -= c.force_i;
             if F {
-                ta += c.torque_j;
+                *t += c.torque_j;
             }
         }
-        // Then pairs (p, j): the row.
-        for k in list.row(p) {
-            if !slots.acts[k] {
-                continue;
-            }
-            let c = &slots.force[k];
-            fa += c.force_i;
-            if F {
-                ta += c.torque_i;
-            }
-        }
-        *f = fa;
-        *t = ta;
     }
 }

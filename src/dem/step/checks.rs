@@ -75,15 +75,28 @@ pub struct Diagnosis<'a> {
     pub max_overlap_ratio: f64,
     /// The walls' names, by wall number.
     pub wall_names: &'a [&'static str],
+    /// The particles' ids, by their place in the arrays: a diagnosis names
+    /// a particle by its id.
+    pub ids: &'a [u32],
 }
 
 impl Diagnosis<'_> {
     /// Human-readable name of a contact, for diagnoses.
     fn contact_name(&self, at: ContactAt) -> String {
         match at {
-            ContactAt::Pair(i, j) => format!("particle-particle ({i}, {j})"),
-            ContactAt::Wall(i, w) => format!("particle-{} (particle {i})", self.wall_names[w]),
+            ContactAt::Pair(i, j) => {
+                let (a, b) = (self.id(i), self.id(j));
+                format!("particle-particle ({}, {})", a.min(b), a.max(b))
+            }
+            ContactAt::Wall(i, w) => {
+                format!("particle-{} (particle {})", self.wall_names[w], self.id(i))
+            }
         }
+    }
+
+    /// The id of the particle at place `k` of the arrays.
+    fn id(&self, k: usize) -> usize {
+        self.ids.get(k).map_or(k, |&id| id as usize)
     }
 
     /// The error that stops the run at the contact a step of `dt` (0 for a
@@ -119,7 +132,7 @@ impl Diagnosis<'_> {
                 DemError::Escaped {
                     time_s: self.time_s + dt,
                     step: self.steps + 1,
-                    particle: i,
+                    particle: self.id(i),
                     wall: self.wall_names[w].to_string(),
                     dt_s: self.dt_s,
                 }
@@ -133,7 +146,7 @@ impl Diagnosis<'_> {
         DemError::NonFinite {
             time_s: self.time_s + dt,
             step: self.steps + 1,
-            particle,
+            particle: self.id(particle),
             dt_s: dt,
         }
     }

@@ -11,26 +11,30 @@
 //! and friction (`D`, `F` below): a law with e = 1 computes no damping, one
 //! with μ = 0 no tangential force, no torque and no lever arms.
 //!
-//! **Threads.** On one core: gravity and the walls, then each pair added to
-//! both its particles as soon as it is evaluated, in pair order. On all
-//! threads: the pairs first, in the fixed blocks of [`super::blocks`], each
-//! leaving its force in its own slot; then one pass over the particles, in
-//! fixed blocks, that sets gravity, adds the walls and gathers the pair
-//! forces in pair order (the order of the serial loop, so the same bits);
-//! then the books, walls first as on one core ([`super::books`]).
+//! **Blocks.** The particles are cut into the fixed blocks of
+//! [`PARTICLE_BLOCK`]; each block sets its particles' weight, adds their
+//! wall contacts, then evaluates the pairs of their rows and adds those
+//! forces to its own particles ([`super::blocks::pair_rows`]); then each
+//! block adds the shares of the pairs that reach it from earlier blocks
+//! ([`super::blocks::cross_in`]). On one core the blocks run one after the
+//! other, on all threads side by side; a thread writes only what its block
+//! owns, and every sum is taken in the same order either way, so the same
+//! bits. A bed of one block (the thesis bed) is one serial loop: walls,
+//! then the pairs in pair order. The books are then added walls first,
+//! block by block ([`super::books`]).
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::block_size::{PAIR_BLOCK, PARTICLE_BLOCK};
-use super::blocks::{PairSlots, gather_block, pair_blocks};
+use super::block_size::PARTICLE_BLOCK;
+use super::blocks::{CrossShares, CrossSlots, CrossSlotsMut, PairRun, pair_rows};
 use super::books::{BlockBooks, Books, Kind};
 use super::checks::{Limits, Refusal, Refused};
 use super::contacts::{
-    Bodies, ContactAt, ContactResult, WallGeometry, bodies, law_kind, pair_contact, wall_contact,
+    Bodies, ContactAt, ContactResult, WallGeometry, bodies, law_kind, wall_contact,
 };
 use crate::dem::contact::{ContactLaw, ContactState};
-use crate::dem::neighbours::NeighbourList;
+use crate::dem::neighbours::{NeighbourList, StepView};
 use crate::dem::particles::Particles;
 use crate::dem::walls::Walls;
 
@@ -40,12 +44,27 @@ use crate::dem::walls::Walls;
 pub struct ForceScratch {
     /// Per particle block: the books of its wall contacts.
     wall_books: Vec<BlockBooks>,
-    /// Where the pairs leave their forces (parallel step).
-    pair_slots: PairSlots,
-    /// Per pair block: the books of its contacts.
+    /// Per particle block: the books of its pair contacts.
     pair_books: Vec<BlockBooks>,
-    /// Pair blocks of the current step (parallel step).
-    pair_blocks: usize,
+    /// Where the pairs into a later block leave their forces.
+    cross: CrossSlots,
+}
+
+impl ForceScratch {
+    /// The shares the last force stage left for later blocks, when it was
+    /// told to defer them and there were several blocks.
+    pub fn cross_shares<'a>(
+        &'a self,
+        neighbours: &'a NeighbourList,
+        n_particles: usize,
+        torques: bool,
+    ) -> Option<CrossShares<'a>> {
+        (n_particles > PARTICLE_BLOCK).then_some(CrossShares {
+            adjacency: neighbours.adjacency(),
+            slots: &self.cross,
+            torques,
+        })
+    }
 }
 
 /// What the force stage reads and writes, borrowed from the world field by
@@ -60,8 +79,12 @@ pub struct ForceStage<'a> {
     /// Gravitational acceleration (m/s²).
     pub gravity: DVec3,
     pub limits: Limits,
-    /// Run on all threads, in blocks.
+    /// Run the blocks on all threads.
     pub parallel: bool,
+    /// Leave the shares of the pairs into later blocks for the half kick
+    /// that follows to add ([`ForceScratch::cross_shares`]), instead of
+    /// adding them here.
+    pub defer_cross: bool,
     pub neighbours: &'a mut NeighbourList,
     /// Contact state of particle `i` with wall `w` at `i * n_walls + w`.
     pub wall_states: &'a mut [ContactState],
@@ -71,224 +94,186 @@ pub struct ForceStage<'a> {
     pub books: Books<'a>,
 }
 
-/// One block of the particle loop of the wall contacts: its index, forces,
-/// torques, wall states and gaps, and books.
-type WallBlock<'b> = (
-    usize,
-    (
-        (
-            ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [ContactState]),
-            &'b mut [f64],
-        ),
-        &'b mut BlockBooks,
-    ),
-);
+/// What one block of the step owns: its particles' forces and torques and
+/// wall contacts, the run of the pair list that is their rows, and its
+/// books.
+struct BlockJob<'b> {
+    /// Its first particle.
+    start: usize,
+    force: &'b mut [DVec3],
+    torque: &'b mut [DVec3],
+    wall_states: &'b mut [ContactState],
+    wall_gaps: &'b mut [f64],
+    run: PairRun<'b>,
+    wall_books: &'b mut BlockBooks,
+    pair_books: &'b mut BlockBooks,
+}
+
+/// Calls `$f::<D, F>($args)` for the law kind `$kind` (damped, frictional).
+macro_rules! by_law_kind {
+    ($kind:expr, $f:ident($($arg:expr),* $(,)?)) => {
+        match $kind {
+            (true, true) => $f::<true, true>($($arg),*),
+            (true, false) => $f::<true, false>($($arg),*),
+            (false, true) => $f::<false, true>($($arg),*),
+            (false, false) => $f::<false, false>($($arg),*),
+        }
+    };
+}
 
 impl ForceStage<'_> {
     /// Forces and torques at the current positions, and the force of the
     /// walls. `dt` is the step over which the tangential springs advance and
     /// the ledger accumulates (0 for a pure evaluation that changes no
     /// history). Stops at the first contact a check refuses.
-    pub fn run(mut self, dt: f64) -> Result<(), Box<Refused>> {
-        *self.books.wall_force = DVec3::ZERO;
-        if !self.parallel {
-            match law_kind(&self.pw_law) {
-                (true, true) => self.wall_contacts::<true, true>(dt, None),
-                (true, false) => self.wall_contacts::<true, false>(dt, None),
-                (false, true) => self.wall_contacts::<false, true>(dt, None),
-                (false, false) => self.wall_contacts::<false, false>(dt, None),
-            }?;
-            return match law_kind(&self.pp_law) {
-                (true, true) => self.pair_contacts::<true, true>(dt),
-                (true, false) => self.pair_contacts::<true, false>(dt),
-                (false, true) => self.pair_contacts::<false, true>(dt),
-                (false, false) => self.pair_contacts::<false, false>(dt),
-            };
-        }
-        match law_kind(&self.pp_law) {
-            (true, true) => self.pair_blocks::<true, true>(dt),
-            (true, false) => self.pair_blocks::<true, false>(dt),
-            (false, true) => self.pair_blocks::<false, true>(dt),
-            (false, false) => self.pair_blocks::<false, false>(dt),
-        }
-        let gather = Some(self.pp_law.has_friction());
-        match law_kind(&self.pw_law) {
-            (true, true) => self.wall_contacts::<true, true>(dt, gather),
-            (true, false) => self.wall_contacts::<true, false>(dt, gather),
-            (false, true) => self.wall_contacts::<false, true>(dt, gather),
-            (false, false) => self.wall_contacts::<false, false>(dt, gather),
-        }?;
-        let n_blocks = self.scratch.pair_blocks;
-        self.books
-            .book(Kind::Pair, &self.scratch.pair_books[..n_blocks], dt)
-    }
-
-    /// Gravity alone, for a world without walls, and on all threads
-    /// (`gather: Some(torques)`) the pair forces gathered.
-    fn gravity_only(&mut self, gather: Option<bool>) {
-        let g = self.gravity;
-        let p = &mut *self.particles;
-        for (f, (t, m)) in p.force.iter_mut().zip(p.torque.iter_mut().zip(&p.mass)) {
-            *f = g * *m;
-            *t = DVec3::ZERO;
-        }
-        if gather.is_some() {
-            let (list, slots) = (&*self.neighbours, &self.scratch.pair_slots);
-            p.force
-                .par_chunks_mut(PARTICLE_BLOCK)
-                .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
-                .enumerate()
-                .for_each(|(c, (f, t))| gather_into(gather, list, slots, c, f, t));
-        }
-    }
-
-    /// Gravity and the wall contacts, particle by particle in fixed blocks;
-    /// what the contacts book is then added up on one thread in contact
-    /// order. `gather: Some(torques)`: the step runs on all threads, and each
-    /// block then also adds its particles' pair forces (and torques, when
-    /// `torques`), which [`Self::pair_blocks`] left one per pair.
-    fn wall_contacts<const D: bool, const F: bool>(
-        &mut self,
-        dt: f64,
-        gather: Option<bool>,
-    ) -> Result<(), Box<Refused>> {
-        if self.walls.is_empty() {
-            self.gravity_only(gather);
-            return Ok(());
-        }
-        let g = self.gravity;
-        let law = self.pw_law;
-        let limits = self.limits;
-        let p = &mut *self.particles;
-        let (list, slots) = (&*self.neighbours, &self.scratch.pair_slots);
-        let walls = WallGeometry {
-            shapes: &self.walls.shapes,
-            offset: self.walls.offset(),
-            v_wall: self.walls.velocity(),
-        };
-        let bodies = bodies!(p);
-        let n_walls = walls.shapes.len();
-        let n_blocks = p.force.len().div_ceil(PARTICLE_BLOCK);
-        let books = &mut self.scratch.wall_books;
-        if books.len() < n_blocks {
-            books.resize_with(n_blocks, BlockBooks::default);
-        }
-        let block = |(c, ((((f, t), st), gaps), bk)): WallBlock<'_>| {
-            wall_block::<D, F>(
-                &law,
-                &walls,
-                &bodies,
-                g,
-                c * PARTICLE_BLOCK,
-                f,
-                t,
-                (st, gaps),
-                (limits, bk),
-                dt,
-            );
-            gather_into(gather, list, slots, c, f, t);
-        };
-        let (states, gaps) = (&mut *self.wall_states, &mut *self.wall_gaps);
-        let chunk = PARTICLE_BLOCK * n_walls;
-        if gather.is_some() {
-            p.force
-                .par_chunks_mut(PARTICLE_BLOCK)
-                .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
-                .zip(states.par_chunks_mut(chunk))
-                .zip(gaps.par_chunks_mut(chunk))
-                .zip(books[..n_blocks].par_iter_mut())
-                .enumerate()
-                .for_each(block);
-        } else {
-            p.force
-                .chunks_mut(PARTICLE_BLOCK)
-                .zip(p.torque.chunks_mut(PARTICLE_BLOCK))
-                .zip(states.chunks_mut(chunk))
-                .zip(gaps.chunks_mut(chunk))
-                .zip(books[..n_blocks].iter_mut())
-                .enumerate()
-                .for_each(block);
-        }
-        self.books
-            .book(Kind::Wall, &self.scratch.wall_books[..n_blocks], dt)
-    }
-
-    /// The pair contacts on one thread, each added to the forces as soon as
-    /// it is evaluated, in pair order; the books block by block.
-    fn pair_contacts<const D: bool, const F: bool>(&mut self, dt: f64) -> Result<(), Box<Refused>> {
-        let law = self.pp_law;
-        let limits = self.limits;
-        let p = &mut *self.particles;
-        let bodies = bodies!(p);
-        let (force, torque) = (&mut p.force, &mut p.torque);
-        let nl = &mut *self.neighbours;
-        let n_blocks = nl.pairs.len().div_ceil(PAIR_BLOCK);
-        let books = &mut self.scratch.pair_books;
-        if books.len() < n_blocks {
-            books.resize_with(n_blocks, BlockBooks::default);
-        }
-        let blocks = nl
-            .pairs
-            .chunks(PAIR_BLOCK)
-            .zip(nl.gaps.chunks_mut(PAIR_BLOCK))
-            .zip(nl.states.chunks_mut(PAIR_BLOCK))
-            .zip(books.iter_mut());
-        'blocks: for (((pairs, gaps), states), bk) in blocks {
-            bk.clear();
-            for (&(i, j), (gap, st)) in pairs.iter().zip(gaps.iter_mut().zip(states.iter_mut())) {
-                let (i, j) = (i as usize, j as usize);
-                let Some(out) = pair_contact::<D, F>(&law, &bodies, i, j, dt, gap, st) else {
-                    continue;
-                };
-                if !bk.add(&limits, ContactAt::Pair(i, j), &out, dt) {
-                    break 'blocks;
-                }
-                force[i] += out.force_i;
-                force[j] -= out.force_i;
-                if F {
-                    torque[i] += out.torque_i;
-                    torque[j] += out.torque_j;
-                }
+    pub fn run(self, dt: f64) -> Result<(), Box<Refused>> {
+        let ForceStage {
+            particles: p,
+            walls,
+            pp_law,
+            pw_law,
+            gravity: g,
+            limits,
+            parallel,
+            defer_cross,
+            neighbours,
+            wall_states,
+            wall_gaps,
+            scratch,
+            mut books,
+        } = self;
+        *books.wall_force = DVec3::ZERO;
+        let n_blocks = p.len().div_ceil(PARTICLE_BLOCK);
+        for bk in [&mut scratch.wall_books, &mut scratch.pair_books] {
+            if bk.len() < n_blocks {
+                bk.resize_with(n_blocks, BlockBooks::default);
             }
         }
-        self.books
-            .book(Kind::Pair, &self.scratch.pair_books[..n_blocks], dt)
-    }
-
-    /// The pair contacts on all threads, in fixed blocks
-    /// ([`super::blocks::pair_blocks`]); their books wait in the scratch
-    /// until the walls are booked.
-    fn pair_blocks<const D: bool, const F: bool>(&mut self, dt: f64) {
-        let p = &*self.particles;
+        scratch.cross.resize(neighbours.pairs.len());
+        let geometry = WallGeometry {
+            shapes: &walls.shapes,
+            offset: walls.offset(),
+            v_wall: walls.velocity(),
+        };
         let bodies = bodies!(p);
-        let sc = &mut *self.scratch;
-        sc.pair_blocks = pair_blocks::<D, F>(
-            &self.pp_law,
-            &self.limits,
-            &bodies,
-            self.neighbours,
-            &mut sc.pair_slots,
-            &mut sc.pair_books,
-            dt,
-        );
-    }
-}
-
-/// On all threads (`gather: Some(torques)`), adds to the forces (and
-/// torques) of particle block `c` its pair forces; nothing on one core.
-#[inline]
-fn gather_into(
-    gather: Option<bool>,
-    list: &NeighbourList,
-    slots: &PairSlots,
-    c: usize,
-    f: &mut [DVec3],
-    t: &mut [DVec3],
-) {
-    match gather {
-        Some(true) => gather_block::<true>(list, slots, c * PARTICLE_BLOCK, f, t),
-        Some(false) => gather_block::<false>(list, slots, c * PARTICLE_BLOCK, f, t),
-        None => {}
+        let StepView {
+            pairs,
+            adjacency,
+            gaps,
+            states,
+        } = neighbours.step_view();
+        // The blocks' shares of every per-particle and per-pair array.
+        let n_walls = geometry.shapes.len();
+        let mut jobs = Vec::with_capacity(n_blocks);
+        let (mut force, mut torque) = (&mut p.force[..], &mut p.torque[..]);
+        let (mut w_states, mut w_gaps) = (wall_states, wall_gaps);
+        let (mut pairs, mut gaps, mut states) = (pairs, gaps, states);
+        let CrossSlotsMut { acts, force: slots } = scratch.cross.parts_mut();
+        let (mut acts, mut slots) = (acts, slots);
+        let books_of_blocks = scratch.wall_books.iter_mut().zip(&mut scratch.pair_books);
+        for (b, (wall_books, pair_books)) in books_of_blocks.take(n_blocks).enumerate() {
+            let start = b * PARTICLE_BLOCK;
+            let len = force.len().min(PARTICLE_BLOCK);
+            let rows = adjacency.rows(start, start + len);
+            let n_rows = rows.len();
+            let (f, rest) = force.split_at_mut(len);
+            force = rest;
+            let (t, rest) = torque.split_at_mut(len);
+            torque = rest;
+            let (ws, rest) = w_states.split_at_mut(len * n_walls);
+            w_states = rest;
+            let (wg, rest) = w_gaps.split_at_mut(len * n_walls);
+            w_gaps = rest;
+            let (pr, rest) = pairs.split_at(n_rows);
+            pairs = rest;
+            let (gp, rest) = gaps.split_at_mut(n_rows);
+            gaps = rest;
+            let (st, rest) = states.split_at_mut(n_rows);
+            states = rest;
+            let (ac, rest) = acts.split_at_mut(n_rows);
+            acts = rest;
+            let (sl, rest) = slots.split_at_mut(n_rows);
+            slots = rest;
+            jobs.push(BlockJob {
+                start,
+                force: f,
+                torque: t,
+                wall_states: ws,
+                wall_gaps: wg,
+                run: PairRun {
+                    pairs: pr,
+                    gaps: gp,
+                    states: st,
+                    slots: CrossSlotsMut {
+                        acts: ac,
+                        force: sl,
+                    },
+                },
+                wall_books,
+                pair_books,
+            });
+        }
+        let (wall_kind, pair_kind) = (law_kind(&pw_law), law_kind(&pp_law));
+        let block = |job: BlockJob<'_>| {
+            by_law_kind!(
+                wall_kind,
+                wall_block(
+                    &pw_law,
+                    &geometry,
+                    &bodies,
+                    g,
+                    job.start,
+                    job.force,
+                    job.torque,
+                    (job.wall_states, job.wall_gaps),
+                    (limits, job.wall_books),
+                    dt,
+                )
+            );
+            by_law_kind!(
+                pair_kind,
+                pair_rows(
+                    &pp_law,
+                    &bodies,
+                    job.start,
+                    job.run,
+                    (job.force, job.torque),
+                    (&limits, job.pair_books),
+                    dt,
+                )
+            );
+        };
+        if parallel {
+            jobs.into_par_iter().for_each(block);
+        } else {
+            jobs.into_iter().for_each(block);
+        }
+        // The shares of the pairs from earlier blocks.
+        if n_blocks > 1 && !defer_cross {
+            let shares = CrossShares {
+                adjacency,
+                slots: &scratch.cross,
+                torques: pp_law.has_friction(),
+            };
+            let add = |(c, (f, t)): (usize, (&mut [DVec3], &mut [DVec3]))| {
+                shares.add_to(c * PARTICLE_BLOCK, f, t);
+            };
+            if parallel {
+                p.force
+                    .par_chunks_mut(PARTICLE_BLOCK)
+                    .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
+                    .enumerate()
+                    .for_each(add);
+            } else {
+                p.force
+                    .chunks_mut(PARTICLE_BLOCK)
+                    .zip(p.torque.chunks_mut(PARTICLE_BLOCK))
+                    .enumerate()
+                    .for_each(add);
+            }
+        }
+        books.book(Kind::Wall, &scratch.wall_books[..n_blocks], dt)?;
+        books.book(Kind::Pair, &scratch.pair_books[..n_blocks], dt)
     }
 }
 

@@ -19,11 +19,16 @@
 //! Each pass also sums the power of the contact forces (gravity taken out)
 //! on the half-step velocities, which [`super::books::close_step`] needs: the
 //! trapezoid of the forces at both ends of the step on the drift.
+//!
+//! The second half kick first adds, block by block, the shares of the pairs
+//! that crossed into the block ([`CrossShares`]), which the force stage left
+//! for it: one pass over the particles instead of two.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::block_size::PARTICLE_BLOCK;
+use super::blocks::CrossShares;
 use crate::dem::neighbours::NeighbourList;
 use crate::dem::particles::Particles;
 
@@ -55,21 +60,23 @@ impl VelocityVerlet {
         let reference = list.reference();
         let reference = (reference.len() == particles.len()).then_some(reference);
         let kick = self.pass(Pass::KickDrift, list.rebuild_travel_sq_m2());
-        half_kick(&kick, particles, reference, sums, 0.0, parallel)
+        half_kick(&kick, particles, (reference, None), sums, 0.0, parallel)
     }
 
     /// The second half kick of every particle, with the forces at the new
-    /// positions. Returns `carry` plus the power `(F - m g)·v + τ·ω` summed
-    /// over the particles, before the kick.
+    /// positions, once each block has added the `shares` of the pairs that
+    /// crossed into it. Returns `carry` plus the power `(F - m g)·v + τ·ω`
+    /// summed over the particles, before the kick.
     pub fn kick(
         &self,
         particles: &mut Particles,
+        shares: Option<CrossShares>,
         sums: &mut Vec<KickSums>,
         carry: f64,
         parallel: bool,
     ) -> KickSums {
         let kick = self.pass(Pass::Kick, f64::INFINITY);
-        half_kick(&kick, particles, None, sums, carry, parallel)
+        half_kick(&kick, particles, (None, shares), sums, carry, parallel)
     }
 
     fn pass(&self, pass: Pass, travel_sq_m2: f64) -> Kick {
@@ -119,8 +126,8 @@ pub struct KickSums {
 
 /// The loads and inertia of a block of particles.
 struct Loads<'a> {
-    force: &'a [DVec3],
-    torque: &'a [DVec3],
+    force: &'a mut [DVec3],
+    torque: &'a mut [DVec3],
     mass: &'a [f64],
     inv_mass: &'a [f64],
     inv_inertia: &'a [f64],
@@ -196,23 +203,32 @@ impl Kick {
 /// one block the order of a plain loop), the first particle whose position
 /// is not finite, and whether some particle drifted far enough from
 /// `reference`, where the pair list was built, for the list to be rebuilt.
+/// Each block first adds its `shares` of the pairs from earlier blocks.
 fn half_kick(
     kick: &Kick,
     p: &mut Particles,
-    reference: Option<&[DVec3]>,
+    (reference, shares): (Option<&[DVec3]>, Option<CrossShares>),
     sums: &mut Vec<KickSums>,
     carry: f64,
     parallel: bool,
 ) -> KickSums {
-    let (force, torque, mass) = (&p.force, &p.torque, &p.mass);
-    let (inv_mass, inv_inertia) = (&p.inv_mass, &p.inv_inertia);
-    type Block<'b> = (usize, ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [DVec3]));
-    let block = |(c, ((x, v), w)): Block<'_>| {
+    let (mass, inv_mass, inv_inertia) = (&p.mass, &p.inv_mass, &p.inv_inertia);
+    type Block<'b> = (
+        usize,
+        (
+            ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [DVec3]),
+            (&'b mut [DVec3], &'b mut [DVec3]),
+        ),
+    );
+    let block = |(c, (((x, v), w), (force, torque))): Block<'_>| {
         let s = c * PARTICLE_BLOCK;
         let e = s + x.len();
+        if let Some(shares) = &shares {
+            shares.add_to(s, force, torque);
+        }
         let loads = Loads {
-            force: &force[s..e],
-            torque: &torque[s..e],
+            force,
+            torque,
             mass: &mass[s..e],
             inv_mass: &inv_mass[s..e],
             inv_inertia: &inv_inertia[s..e],
@@ -229,6 +245,11 @@ fn half_kick(
             .par_chunks_mut(PARTICLE_BLOCK)
             .zip(p.velocity.par_chunks_mut(PARTICLE_BLOCK))
             .zip(p.angular_velocity.par_chunks_mut(PARTICLE_BLOCK))
+            .zip(
+                p.force
+                    .par_chunks_mut(PARTICLE_BLOCK)
+                    .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK)),
+            )
             .enumerate()
             .map(block)
             .collect_into_vec(sums);
@@ -239,6 +260,11 @@ fn half_kick(
                 .chunks_mut(PARTICLE_BLOCK)
                 .zip(p.velocity.chunks_mut(PARTICLE_BLOCK))
                 .zip(p.angular_velocity.chunks_mut(PARTICLE_BLOCK))
+                .zip(
+                    p.force
+                        .chunks_mut(PARTICLE_BLOCK)
+                        .zip(p.torque.chunks_mut(PARTICLE_BLOCK)),
+                )
                 .enumerate()
                 .map(block),
         );

@@ -8,12 +8,13 @@
 //! 2. [`drive`]: the walls move to the prescribed displacement for the end
 //!    of the step;
 //! 3. [`neighbour_update`]: the Verlet pair list is rebuilt when some
-//!    particle moved more than half the skin (Section 3.4);
+//!    particle moved more than half the skin (Section 3.4), a large bed
+//!    renumbered in space with it;
 //! 4. [`forces`]: gravity and the contact forces at the new positions
 //!    (eq. 3.25–3.28), one contact at a time by the kernels of [`contacts`]
-//!    (eq. 3.1–3.8, 3.12–3.14), on one core or in the fixed pair blocks of
-//!    [`blocks`] and their gather;
-//! 5. [`integrate`] again: the second half kick;
+//!    (eq. 3.1–3.8, 3.12–3.14), block by block ([`blocks`]);
+//! 5. [`integrate`] again: the second half kick, each block first adding
+//!    the forces that cross into it from earlier blocks;
 //! 6. [`books`]: what the contacts dissipated and stored, block by block,
 //!    and the step's energy balance (eq. 6.4);
 //! 7. [`checks`]: the refusals (a collision resolved in too few steps, an
@@ -23,7 +24,8 @@
 //! The stages are plain functions over the world's plain state structs,
 //! borrowed field by field; none of them imports the world. Loops are cut
 //! into the fixed blocks of [`block_size`], so that every sum is taken in the
-//! same order whatever the number of threads.
+//! same order whatever the number of threads, and [`thread_choice`] decides
+//! by timing whether they run on one core or on all.
 
 pub mod block_size;
 pub mod blocks;
@@ -34,3 +36,4 @@ pub mod drive;
 pub mod forces;
 pub mod integrate;
 pub mod neighbour_update;
+pub mod thread_choice;

@@ -4,13 +4,79 @@
 //! ([`super::integrate::KickSums::moved_far`]), or when it was built for
 //! another number of particles. Otherwise the list, and every contact
 //! history on it, carries over.
+//!
+//! A bed of more than one block ([`super::block_size::spans_blocks`]) is
+//! renumbered in space at each rebuild ([`crate::dem::ordering`]): the
+//! particles, their wall contacts and what they dissipated move to their new
+//! numbers, and the pair list carries every history over under them.
 
+use crate::dem::contact::ContactState;
 use crate::dem::neighbours::NeighbourList;
-use crate::dem::particles::Particles;
+use crate::dem::ordering::{is_identity, permute_rows, space_order};
+use crate::dem::particles::{Particles, permute};
 
-/// Rebuilds `list` for `particles` if it may miss a contact now.
-pub fn update(list: &mut NeighbourList, particles: &Particles, moved_far: bool) {
+use super::block_size::spans_blocks;
+
+/// What a renumbering moves besides the particles and the pair list,
+/// borrowed from the world field by field.
+pub struct PerParticle<'a> {
+    /// Contact state of particle `i` with wall `w` at `i * n_walls + w`.
+    pub wall_states: &'a mut Vec<ContactState>,
+    /// Overlap of particle `i` with wall `w` at the previous step (m).
+    pub wall_gaps: &'a mut Vec<f64>,
+    pub n_walls: usize,
+    /// Energy each particle dissipated (J), while tracked.
+    pub dissipation_j: Option<&'a mut Vec<f64>>,
+}
+
+/// Scratch of the renumbering, kept between rebuilds.
+#[derive(Debug, Clone, Default)]
+pub struct OrderScratch {
+    keys: Vec<(u64, u32, u32)>,
+    order: Vec<u32>,
+}
+
+/// Rebuilds `list` for `particles` if it may miss a contact now,
+/// renumbering a bed of several blocks in space first.
+pub fn update(
+    list: &mut NeighbourList,
+    particles: &mut Particles,
+    others: PerParticle,
+    scratch: &mut OrderScratch,
+    moved_far: bool,
+) {
     if moved_far || list.reference().len() != particles.len() {
-        list.rebuild(&particles.position, &particles.radius);
+        rebuild(list, particles, others, scratch);
     }
+}
+
+/// Rebuilds `list` for `particles`, renumbering a bed of several blocks in
+/// space first.
+pub fn rebuild(
+    list: &mut NeighbourList,
+    particles: &mut Particles,
+    others: PerParticle,
+    scratch: &mut OrderScratch,
+) {
+    if !spans_blocks(particles.len()) {
+        list.rebuild(&particles.position, &particles.radius);
+        return;
+    }
+    let cell_m = list.cell_m(particles.max_radius_m());
+    let OrderScratch { keys, order } = scratch;
+    space_order(&particles.position, &particles.id, cell_m, keys, order);
+    if is_identity(order) {
+        list.rebuild(&particles.position, &particles.radius);
+        return;
+    }
+    particles.renumber(order);
+    // A world being built has no wall contacts yet: they are read afresh.
+    if others.wall_states.len() == order.len() * others.n_walls {
+        permute_rows(others.wall_states, order, others.n_walls);
+        permute_rows(others.wall_gaps, order, others.n_walls);
+    }
+    if let Some(d) = others.dissipation_j {
+        permute(d, order);
+    }
+    list.rebuild_renumbered(&particles.position, &particles.radius, Some(order));
 }
