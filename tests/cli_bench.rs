@@ -275,3 +275,139 @@ fn bench_of_a_poured_bed_reports_its_rows_beside_the_lattice_ones() {
     );
     refuses_in(&dir, &["bench", "--poured", "2mm"], &["--poured", "1mm"]);
 }
+
+/// Why the test that runs LAMMPS is ignored unless asked for.
+const NEEDS_LMP: &str = "needs lmp (Debian package lammps) on the PATH";
+
+/// `vlab bench --lammps` against LAMMPS, 3 cycles (the deck's fewest) once
+/// each, on the settled thesis bed of 358 spheres (about 10 s of CPU): the
+/// report holds the comparison with positive, finite rates and ratios, the
+/// same spheres and cycles on both sides, LAMMPS' Loop time inside its
+/// process' wall time, and the three rows and two speed-ups. Catches a
+/// comparison left out of the JSON, a Loop time read from the wrong word of
+/// the log (longer than the process that printed it), a deck of other
+/// cycles than vlab's drive (steps apart by a cycle, 20 492, not by the
+/// under 20 of the deck's rounding to whole record rows), and rows or
+/// ratios that are NaN or zero.
+///
+/// Ignored unless asked for: with `lmp` on the PATH run it with
+/// `cargo test --test cli_bench -- --include-ignored`; asked for without
+/// `lmp`, it fails and says why.
+#[test]
+#[ignore = "needs lmp (Debian package lammps) on the PATH"]
+fn bench_against_lammps_reports_both_sides_and_the_ratio() {
+    let found = std::process::Command::new("lmp")
+        .arg("-h")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        found,
+        "bench_against_lammps_reports_both_sides_and_the_ratio {NEEDS_LMP}"
+    );
+    let dir = Scratch::new("bench-lammps");
+    let report = bench_json(
+        &dir,
+        &[
+            "--beds",
+            "none",
+            "--lammps",
+            "--lammps-cycles",
+            "3",
+            "--repeats",
+            "1",
+        ],
+    );
+    let c = &report["lammps"];
+    for key in [
+        "vlab_particle_steps_per_s",
+        "lammps_process_particle_steps_per_s",
+        "lammps_loop_particle_steps_per_s",
+        "vlab_over_lammps_process",
+        "vlab_over_lammps_loop",
+        "dt_s",
+    ] {
+        let x = c[key].as_f64().unwrap_or(f64::NAN);
+        assert!(x.is_finite() && x > 0.0, "{key}: {c:#}");
+    }
+    assert_eq!(c["particles"], 358, "{c:#}");
+    assert_eq!(c["cycles"], 3, "{c:#}");
+    assert_eq!(c["runs"], 1, "{c:#}");
+    assert!(
+        c["lammps_version"]
+            .as_str()
+            .is_some_and(|v| v.starts_with("LAMMPS (")),
+        "{c:#}"
+    );
+    // The deck's run is vlab's rounded up to whole record rows of 20 steps.
+    let vlab_steps = c["vlab_steps"].as_u64().expect("vlab steps");
+    let lmp_steps = c["lammps_steps"].as_u64().expect("lmp steps");
+    assert!(
+        vlab_steps > 60_000 && lmp_steps >= vlab_steps && lmp_steps - vlab_steps < 20,
+        "{c:#}"
+    );
+    let loop_s = c["lammps_loop_s"][0].as_f64().expect("loop time");
+    let process_s = c["lammps_process_wall_s"][0].as_f64().expect("lmp wall");
+    assert!(loop_s > 0.0 && loop_s < process_s, "{c:#}");
+    let rows = report["rows"].as_array().expect("rows");
+    let mine: Vec<_> = rows
+        .iter()
+        .filter(|r| {
+            r["case"]
+                .as_str()
+                .is_some_and(|s| s.starts_with("vs LAMMPS"))
+        })
+        .collect();
+    assert_eq!(mine.len(), 3, "{report:#}");
+    for r in mine {
+        assert_eq!(r["particles"], 358, "{r}");
+        assert_eq!(r["threads"], 1, "{r}");
+        let rate = r["particle_steps_per_s"].as_f64().expect("rate");
+        assert!(rate.is_finite() && rate > 0.0, "{r}");
+    }
+    let what = speedup_whats(&report);
+    assert_eq!(
+        what.iter()
+            .filter(|w| w.starts_with("vlab over LAMMPS per core"))
+            .count(),
+        2,
+        "{what:?}"
+    );
+}
+
+/// `--lammps` without `lmp` on the PATH (the child's PATH an empty folder)
+/// fails at once, naming the Debian package, and writes nothing; fewer
+/// than the deck's 3 cycles are refused. Catches a missing `lmp` found only
+/// after the thesis bed was settled, or reported as a bare "No such file".
+#[test]
+fn bench_lammps_without_lmp_names_the_package() {
+    let dir = Scratch::new("bench-no-lmp");
+    let empty = Scratch::new("bench-empty-path");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vlab"))
+        .args([
+            "--quiet",
+            "bench",
+            "--lammps",
+            "--beds-only",
+            "--beds",
+            "none",
+        ])
+        .current_dir(&dir.0)
+        .env("VLAB_CACHE_DIR", dir.path(".vlab-cache"))
+        .env("PATH", &empty.0)
+        .output()
+        .expect("run vlab");
+    assert!(!out.status.success(), "succeeded without lmp");
+    let err = stderr(&out);
+    let first = err.lines().next().unwrap_or("");
+    assert!(first.starts_with("error:"), "{err}");
+    for word in ["--lammps", "lmp", "Debian package lammps"] {
+        assert!(first.contains(word), "'{first}' does not mention '{word}'");
+    }
+    let written = common::files_below(&dir.0);
+    assert!(written.is_empty(), "{written:?}");
+    refuses_in(
+        &dir,
+        &["bench", "--lammps-cycles", "2"],
+        &["--lammps-cycles"],
+    );
+}

@@ -5,7 +5,9 @@
 //! frictionless (μ = 0: no tangential force, no rotation); steps of lattice
 //! beds of many spheres (`--beds`, see `vlab::dem::testbed`) and of poured
 //! beds (`--poured`) on one thread and on all; the time to analyse a 5 s, 40 kHz two-channel trace with Yang's
-//! method; and the peak memory.
+//! method; and the peak memory. With `--lammps`, LAMMPS' `lmp` and vlab
+//! drive the same settled thesis bed on one core each, in turns (see
+//! [`lammps`]).
 //!
 //! A virtual machine shares its cores with other work, so one timing is a
 //! sample of the load as much as of the code. Every configuration is timed
@@ -57,6 +59,8 @@ use vlab::signals::bench_yang_power;
 use super::cache_cmd::NoCacheArg;
 use super::progress::ProgressLine;
 
+mod lammps;
+
 #[derive(Debug, Clone, Args)]
 pub struct BenchArgs {
     /// Drive cycles timed per run of the thesis scene (40 Hz: 20 500 steps each).
@@ -92,6 +96,16 @@ pub struct BenchArgs {
     /// reference), which hold one bed per core in memory at once.
     #[arg(long)]
     no_copies: bool,
+    /// Also time LAMMPS against vlab per core on the settled thesis bed: the
+    /// deck `vlab export lammps --freq 40 --gamma 20` writes, run by `lmp`
+    /// (one process, one thread), and vlab's same drive on one thread, in
+    /// turns --repeats times. Needs `lmp` on the PATH (Debian package lammps).
+    #[arg(long)]
+    lammps: bool,
+    /// Drive cycles of each run of the LAMMPS comparison (at 40 Hz, 20 500
+    /// steps each; at least 3, the deck's fewest).
+    #[arg(long, default_value = "3", value_parser = clap::value_parser!(u32).range(i64::from(vlab::export::lammps_deck::MIN_EXPORT_CYCLES)..=1000))]
+    lammps_cycles: u32,
     #[command(flatten)]
     cache: NoCacheArg,
 }
@@ -395,12 +409,18 @@ struct BenchReport {
     cores: usize,
     /// Load average over the last minute when the bench ended (Linux).
     load_average_1min: Option<f64>,
+    /// vlab against LAMMPS per core (`--lammps`); none without.
+    lammps: Option<lammps::LammpsComparison>,
 }
 
 pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     let cores = std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(1);
+    if a.lammps {
+        // Before anything is timed: a missing lmp fails at once.
+        lammps::require_lmp()?;
+    }
     let scene = Scene::thesis();
     let mut progress = ProgressLine::new("bench", quiet);
     let mut rows = Vec::new();
@@ -408,9 +428,34 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     if cores > 1 {
         configs.push(cores);
     }
-    if !a.beds_only {
-        thesis_rows(&scene, &a, &configs, &mut progress, &mut rows)?;
-    }
+    let thesis_bed = match a.beds_only {
+        false => Some(thesis_rows(&scene, &a, &configs, &mut progress, &mut rows)?),
+        true => None,
+    };
+    let mut lammps_speedups = Vec::new();
+    let lammps = match a.lammps {
+        true => {
+            let bed = match thesis_bed {
+                Some(bed) => bed,
+                // Without the thesis rows: the bed from the cache, else settled.
+                None => a
+                    .cache
+                    .source(&mut |n| progress.warn(n))
+                    .settle(&scene, &mut |p| progress.update(p))
+                    .context("settling the thesis bed")?,
+            };
+            Some(lammps::lammps_rows(
+                &scene,
+                &bed,
+                a.lammps_cycles,
+                a.repeats,
+                &mut progress,
+                &mut rows,
+                &mut lammps_speedups,
+            )?)
+        }
+        false => None,
+    };
     for &n in &a.beds.0 {
         bed_rows(&Bed::Lattice(n), &a, &configs, &mut rows)?;
     }
@@ -429,8 +474,10 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     } else {
         Some(bench_yang_power(5.0, 40_000.0, 40.0, 20).context("timing Yang's method")?)
     };
+    let mut all_speedups = speedups(&rows);
+    all_speedups.extend(lammps_speedups);
     let report = BenchReport {
-        speedups: speedups(&rows),
+        speedups: all_speedups,
         rows,
         poured_beds,
         yang_power_5s_40khz_ms: yang.as_ref().map(|y| y.fresh_median_s * 1e3),
@@ -438,6 +485,7 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
         peak_memory_mib: peak_memory_mib(),
         cores,
         load_average_1min: load_average(),
+        lammps,
     };
     if let Some(path) = &a.out {
         write_csv(path, &report).with_context(|| format!("writing {}", path.display()))?;
@@ -572,6 +620,9 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
             s.what, s.particles, s.fastest, s.median_paired
         );
     }
+    if let Some(c) = &report.lammps {
+        lammps::print_comparison(c);
+    }
     if let Some(y) = report.yang_power_5s_40khz_ms {
         println!(
             "  Yang's method on a 5 s, 40 kHz two-channel trace: {:.2} ms ({:.2} ms with the FFT plan reused)",
@@ -660,14 +711,14 @@ const FRICTIONLESS_DRIVE: &str = "thesis frictionless: drive 40 Hz Gamma 20";
 
 /// The thesis scene: pour and settle on one thread (once), then the drive at
 /// 40 Hz, Γ 20 on each thread count, with the scene's friction and without,
-/// `--repeats` times from the same settled bed.
+/// `--repeats` times from the same settled bed; the bed.
 fn thesis_rows(
     scene: &Scene,
     a: &BenchArgs,
     configs: &[usize],
     progress: &mut ProgressLine,
     rows: &mut Vec<BenchRow>,
-) -> Result<()> {
+) -> Result<SettledBed> {
     let one = single_pool(1)?;
     let clock = Clock::start();
     let bed = one
@@ -707,7 +758,7 @@ fn thesis_rows(
             rows.push(BenchRow::new(case, threads, split[k], n, steps, &runs[k]));
         }
     }
-    Ok(())
+    Ok(bed)
 }
 
 /// One timed drive of `cycles` at 40 Hz, Γ 20 from the settled bed: the run,
