@@ -438,7 +438,7 @@ fn bounding_box(positions: &[DVec3]) -> (DVec3, DVec3) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Brute-force pair search, the oracle for the cell list.
@@ -455,7 +455,8 @@ mod tests {
         out
     }
 
-    fn scattered(n: usize, box_m: f64, seed: u64) -> Vec<DVec3> {
+    /// `n` points spread at random (a fixed LCG) in a cube `box_m` wide.
+    pub(crate) fn scattered(n: usize, box_m: f64, seed: u64) -> Vec<DVec3> {
         // Small deterministic LCG; any spread of points will do here.
         let mut s = seed;
         let mut next = || {

@@ -91,6 +91,7 @@ pub fn permute_rows<T: Copy>(values: &mut Vec<T>, order: &[u32], width: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dem::neighbours::tests::scattered;
 
     /// The bit interleaving against a slow reference: bit b of x, y, z lands
     /// at 3b, 3b + 1, 3b + 2. A wrong mask constant fails it.
@@ -114,25 +115,12 @@ mod tests {
         );
     }
 
-    fn scattered(n: usize, seed: u64) -> Vec<DVec3> {
-        let mut s = seed;
-        let mut next = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
-        (0..n)
-            .map(|_| DVec3::new(next(), next(), next()) * 0.05)
-            .collect()
-    }
-
     /// The order depends on where the particles are, not on the order they
     /// come in: the same particles shuffled come out in the same id order
     /// (a tie broken by the current number instead of the id fails this).
     #[test]
     fn the_order_is_a_function_of_positions_and_ids() {
-        let pos = scattered(2000, 3);
+        let pos = scattered(2000, 0.05, 3);
         let ids: Vec<u32> = (0..2000).collect();
         let (mut keys, mut order) = (Vec::new(), Vec::new());
         space_order(&pos, &ids, 0.01, &mut keys, &mut order);
@@ -155,7 +143,7 @@ mod tests {
     /// sorted by one axis only would leave it near the box's width.
     #[test]
     fn consecutive_particles_are_close_in_space() {
-        let pos = scattered(4000, 11);
+        let pos = scattered(4000, 0.05, 11);
         let ids: Vec<u32> = (0..4000).collect();
         let (mut keys, mut order) = (Vec::new(), Vec::new());
         let cell = 0.004;

@@ -3,10 +3,13 @@
 //!
 //! `n` acrylic spheres of 2 mm (the large beds) sit on a simple cubic
 //! lattice, 0.05 % of a diameter apart, inside a closed cylinder about as
-//! tall as wide, each with a random velocity of 0.3 m/s, under gravity. From
-//! the first steps on every sphere collides with its neighbours and the
-//! walls, so a step costs what a step of a dense, agitated bed costs,
-//! without the minutes a poured and settled bed of 200 000 spheres would take.
+//! tall as wide, each with a random velocity of 0.3 m/s, under gravity. The
+//! first steps are a burst of collisions, but they scatter the lattice: after
+//! a thousand steps a sphere touches about 0.1 others (a settled poured bed:
+//! about 2.3, measured by `vlab bench`, docs/performance.md), so a lattice
+//! step mostly tests gaps and is several times cheaper than a step of a
+//! dense bed at rest. It is the workload of a loose, agitated bed, built in
+//! no time; `vlab bench --poured` times poured, settled beds beside it.
 
 use glam::DVec3;
 
