@@ -1007,15 +1007,28 @@ fn single_pool(threads: usize) -> Result<rayon::ThreadPool> {
 /// CPU seconds (user + system) this process used so far, from /proc on
 /// Linux (clock ticks of 10 ms); zero elsewhere.
 fn process_cpu_s() -> f64 {
+    // utime and stime: fields 14 and 15 of the stat line.
+    proc_stat_cpu_s(14)
+}
+
+/// CPU seconds in the two clock-tick fields of `/proc/self/stat` from field
+/// `first` on (numbered from 1, as `man proc` does; 10 ms ticks): 14 for
+/// this process' own user and system time, 16 for its finished
+/// children's. Zero where there is no /proc.
+pub(crate) fn proc_stat_cpu_s(first: usize) -> f64 {
     let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
         return 0.0;
     };
-    // Fields after the command name (which may hold spaces) in parentheses.
+    // Fields after the command name (which may hold spaces) in parentheses:
+    // the first of them is field 3.
     let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
     let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |k: usize| f.get(k).and_then(|x| x.parse::<f64>().ok()).unwrap_or(0.0);
-    // utime and stime: fields 14 and 15 of the stat line, 11 and 12 after the name.
-    (ticks(11) + ticks(12)) / 100.0
+    let ticks = |k: usize| {
+        f.get(k - 3)
+            .and_then(|x| x.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    (ticks(first) + ticks(first + 1)) / 100.0
 }
 
 /// Peak resident memory of this process (MiB), from /proc on Linux.

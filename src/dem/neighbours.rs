@@ -144,13 +144,6 @@ impl NeighbourList {
         self.adjacency.row(p)
     }
 
-    /// The pairs `(i, p)` of particle `p` whose `i` is in an earlier block
-    /// of the step than `p` ([`PARTICLE_BLOCK`]), in increasing pair order.
-    #[inline]
-    pub fn cross_pairs(&self, p: usize) -> &[u32] {
-        self.adjacency.cross_pairs(p)
-    }
-
     /// Where the particles were when the list was last built: a particle
     /// that has travelled more than half the skin from there
     /// ([`Self::rebuild_travel_sq_m2`]) may meet a pair not listed.
@@ -505,7 +498,11 @@ pub(crate) mod tests {
                 .collect();
             crossing += from_before.len();
             assert_eq!(list.row(p).collect::<Vec<_>>(), as_i, "particle {p}");
-            assert_eq!(list.cross_pairs(p), &from_before[..], "particle {p}");
+            assert_eq!(
+                list.adjacency().cross_pairs(p),
+                &from_before[..],
+                "particle {p}"
+            );
         }
         assert!(crossing > 0, "the test bed has pairs across blocks");
     }

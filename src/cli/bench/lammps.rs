@@ -35,7 +35,7 @@ use vlab::experiment::settle::SettledBed;
 use vlab::export::lammps_deck::{INPUT_FILE, LammpsExport, MIN_EXPORT_CYCLES, lammps_deck};
 use vlab::scene::{Scene, SceneOverrides};
 
-use super::{BenchRow, Run, Speedup, drive_once, single_pool};
+use super::{BenchRow, Run, Speedup, drive_once, proc_stat_cpu_s, single_pool};
 use crate::cli::progress::ProgressLine;
 
 /// What `--lammps` needs, for its refusal.
@@ -200,16 +200,10 @@ fn lmp_once(dir: &Path) -> Result<(Run, LammpsLog)> {
 }
 
 /// CPU seconds (user + system) of this process' finished children, from
-/// /proc on Linux (cutime, cstime: clock ticks of 10 ms); zero elsewhere.
+/// /proc on Linux; zero elsewhere.
 fn children_cpu_s() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
-        return 0.0;
-    };
-    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |k: usize| f.get(k).and_then(|x| x.parse::<f64>().ok()).unwrap_or(0.0);
-    // cutime and cstime: fields 16 and 17 of the stat line, 13 and 14 after the name.
-    (ticks(13) + ticks(14)) / 100.0
+    // cutime and cstime: fields 16 and 17 of the stat line.
+    proc_stat_cpu_s(16)
 }
 
 /// The comparison on the settled thesis `bed` (of `scene`, the thesis):

@@ -26,7 +26,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::block_size::PARTICLE_BLOCK;
+use super::block_size::{PARTICLE_BLOCK, spans_blocks};
 use super::blocks::{CrossShares, CrossSlots, CrossSlotsMut, PairRun, pair_rows};
 use super::books::{BlockBooks, Books, Kind};
 use super::checks::{Limits, Refusal, Refused};
@@ -59,7 +59,7 @@ impl ForceScratch {
         n_particles: usize,
         torques: bool,
     ) -> Option<CrossShares<'a>> {
-        (n_particles > PARTICLE_BLOCK).then_some(CrossShares {
+        spans_blocks(n_particles).then_some(CrossShares {
             adjacency: neighbours.adjacency(),
             slots: &self.cross,
             torques,

@@ -52,7 +52,7 @@ pub fn update(
 
 /// Rebuilds `list` for `particles`, renumbering a bed of several blocks in
 /// space first.
-pub fn rebuild(
+fn rebuild(
     list: &mut NeighbourList,
     particles: &mut Particles,
     others: PerParticle,
