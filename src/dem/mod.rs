@@ -1,12 +1,15 @@
-//! The discrete-element engine: spheres in rigid walls (thesis Chapters 3 and 5).
+//! The discrete-element engine: spheres and rigid bodies of spheres in rigid
+//! walls (thesis Chapters 3, 4 and 5).
 //!
 //! Pure state and physics, driven by the wall kinematics it is given: no rigs, no
 //! sensors, no files. [`World`] holds the state and advances it with
 //! [`World::step`], a pipeline of named stages (`step/`: integration, wall
 //! drive, neighbour update, contact forces in blocks, books, checks);
 //! [`contact`] holds the force laws as small pure functions; [`ledger`] keeps
-//! the energy books.
+//! the energy books; [`clumps`] and [`rigid_rotation`] make rigid bodies of
+//! sub-spheres (the multi-sphere particles of thesis Chapter 4).
 
+pub mod clumps;
 pub mod contact;
 pub mod error;
 pub mod hertz_theory;
@@ -16,6 +19,7 @@ pub mod neighbours;
 pub mod ordering;
 pub mod particles;
 pub mod restitution;
+pub mod rigid_rotation;
 mod step;
 pub mod testbed;
 pub mod timestep;

@@ -24,6 +24,7 @@
 
 use glam::DVec3;
 
+use super::clumps::NOT_IN_CLUMP;
 use super::contact::ContactState;
 use super::step::block_size::PARTICLE_BLOCK;
 
@@ -203,9 +204,11 @@ impl NeighbourList {
     }
 
     /// Rebuilds the pair list from scratch with a cell grid; carries over the state
-    /// of pairs that were already listed. New pairs start apart.
-    pub fn rebuild(&mut self, positions: &[DVec3], radii: &[f64]) {
-        self.rebuild_renumbered(positions, radii, None);
+    /// of pairs that were already listed. New pairs start apart. Two
+    /// sub-spheres of one rigid body (`clump`, [`crate::dem::clumps`]; empty
+    /// when there are none) never form a pair.
+    pub fn rebuild(&mut self, positions: &[DVec3], radii: &[f64], clump: &[u32]) {
+        self.rebuild_renumbered(positions, radii, clump, None);
     }
 
     /// [`Self::rebuild`] after the particles were renumbered: particle `k`
@@ -217,6 +220,7 @@ impl NeighbourList {
         &mut self,
         positions: &[DVec3],
         radii: &[f64],
+        clump: &[u32],
         old_of_new: Option<&[u32]>,
     ) {
         let n = positions.len();
@@ -235,7 +239,7 @@ impl NeighbourList {
         }
         let grid = Grid::around(positions, radii, self.skin_m);
         self.sort_into_cells(&grid, positions);
-        self.list_pairs(&grid, positions, radii, old_of_new);
+        self.list_pairs(&grid, (positions, radii, clump), old_of_new);
         std::mem::swap(&mut self.pairs, &mut self.new_pairs);
         std::mem::swap(&mut self.states, &mut self.new_states);
         std::mem::swap(&mut self.gaps, &mut self.new_gaps);
@@ -296,8 +300,7 @@ impl NeighbourList {
     fn list_pairs(
         &mut self,
         grid: &Grid,
-        positions: &[DVec3],
-        radii: &[f64],
+        (positions, radii, clump): (&[DVec3], &[f64], &[u32]),
         old_of_new: Option<&[u32]>,
     ) {
         let n = positions.len();
@@ -305,6 +308,10 @@ impl NeighbourList {
         for i in 0..n {
             let pi = positions[i];
             self.fill_row(grid, positions, radii, i);
+            if !clump.is_empty() && clump[i] != NOT_IN_CLUMP {
+                let own = clump[i];
+                self.row.retain(|&j| clump[j as usize] != own);
+            }
             for r in 0..self.row.len() {
                 let j = self.row[r];
                 let key = (i as u32, j);
@@ -469,7 +476,7 @@ pub(crate) mod tests {
             let pos = scattered(n, box_m, seed);
             let radii = vec![0.0025; n];
             let mut list = NeighbourList::new(0.0005);
-            list.rebuild(&pos, &radii);
+            list.rebuild(&pos, &radii, &[]);
             assert_eq!(list.pairs, brute_force(&pos, &radii, 0.0005), "n {n}");
         }
     }
@@ -483,7 +490,7 @@ pub(crate) mod tests {
         let pos = scattered(n, 0.04, 5);
         let radii = vec![0.0025; n];
         let mut list = NeighbourList::new(0.0005);
-        list.rebuild(&pos, &radii);
+        list.rebuild(&pos, &radii, &[]);
         let block = |p: u32| p as usize / PARTICLE_BLOCK;
         let mut crossing = 0;
         for p in 0..n {
@@ -517,7 +524,7 @@ pub(crate) mod tests {
         let pos = scattered(n, 0.03, 9);
         let radii = vec![0.0025; n];
         let mut list = NeighbourList::new(0.0005);
-        list.rebuild(&pos, &radii);
+        list.rebuild(&pos, &radii, &[]);
         for (k, st) in list.states.iter_mut().enumerate() {
             st.xi = DVec3::new(k as f64 + 1.0, 0.0, 0.0);
             st.ft_prev = DVec3::new(0.0, k as f64 + 1.0, 0.0);
@@ -532,7 +539,7 @@ pub(crate) mod tests {
         // Reverse the numbering: every pair's ends swap order.
         let old_of_new: Vec<u32> = (0..n as u32).rev().collect();
         let moved: Vec<DVec3> = old_of_new.iter().map(|&o| pos[o as usize]).collect();
-        list.rebuild_renumbered(&moved, &radii, Some(&old_of_new));
+        list.rebuild_renumbered(&moved, &radii, &[], Some(&old_of_new));
         assert_eq!(list.pairs.len(), before.len());
         for (&(a, b), st) in list.pairs.iter().zip(&list.states) {
             let (oa, ob) = (old_of_new[a as usize], old_of_new[b as usize]);
@@ -551,7 +558,7 @@ pub(crate) mod tests {
         let pos = scattered(200, 0.03, 7);
         let radii = vec![0.0025; 200];
         let mut list = NeighbourList::new(0.0005);
-        list.rebuild(&pos, &radii);
+        list.rebuild(&pos, &radii, &[]);
         for (k, st) in list.states.iter_mut().enumerate() {
             st.xi = DVec3::splat(k as f64);
         }
@@ -564,7 +571,7 @@ pub(crate) mod tests {
         // Nudge one particle far away: its pairs vanish, the rest keep their state.
         let mut moved = pos.clone();
         moved[0] += DVec3::splat(1.0);
-        list.rebuild(&moved, &radii);
+        list.rebuild(&moved, &radii, &[]);
         for (pair, st) in list.pairs.iter().zip(&list.states) {
             let old = before
                 .iter()

@@ -10,11 +10,18 @@
 //! space as it moves ([`crate::dem::ordering`]), so that particles that touch
 //! sit close in memory. Whatever reads particles by number from outside the
 //! engine (files, dumps, caches) takes them in id order ([`Particles::by_id`]).
+//!
+//! **Bodies.** A particle may be a sub-sphere of a rigid multi-sphere body
+//! ([`super::clumps`]): then `clump` names its body, its inverse mass and
+//! inertia are zero (the body moves it, not the sphere integrator) and its
+//! mass is the body's (what its contacts read). Energies and masses count
+//! each body once.
 
 use std::borrow::Cow;
 
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 
+use super::clumps::{ClumpTemplate, Clumps, NOT_IN_CLUMP};
 use super::material::sphere_mass_kg;
 
 /// All particles of a scene, structure-of-arrays.
@@ -32,6 +39,10 @@ pub struct Particles {
     /// Each particle's id: the order it was added in, kept when the arrays
     /// are renumbered.
     pub id: Vec<u32>,
+    /// Each particle's body ([`NOT_IN_CLUMP`] for a free sphere).
+    pub clump: Vec<u32>,
+    /// The rigid bodies the sub-spheres belong to (empty: spheres only).
+    pub clumps: Clumps,
 }
 
 impl Particles {
@@ -66,7 +77,72 @@ impl Particles {
         self.inv_mass.push(1.0 / mass);
         self.inv_inertia.push(1.0 / inertia);
         self.id.push(self.id.len() as u32);
+        self.clump.push(NOT_IN_CLUMP);
         self.len() - 1
+    }
+
+    /// Adds a rigid body of `template`'s sub-spheres with its centre of mass
+    /// at `position`, turned by `orientation` (body to space), moving at
+    /// `velocity` and spinning at `spin` (space frame, rad/s); returns the
+    /// body's number. Its sub-spheres are placed and given their velocities.
+    pub fn push_clump(
+        &mut self,
+        template: &ClumpTemplate,
+        (position, orientation): (DVec3, DQuat),
+        (velocity, spin): (DVec3, DVec3),
+    ) -> usize {
+        let first = self.len() as u32;
+        let b = self.clumps.push(
+            template,
+            (position, orientation),
+            (velocity, spin),
+            (first, first),
+        );
+        for &r in &template.radii_m {
+            self.position.push(position);
+            self.velocity.push(velocity);
+            self.angular_velocity.push(spin);
+            self.force.push(DVec3::ZERO);
+            self.torque.push(DVec3::ZERO);
+            self.radius.push(r);
+            self.mass.push(template.mass_kg);
+            self.inv_mass.push(0.0);
+            self.inv_inertia.push(0.0);
+            self.id.push(self.id.len() as u32);
+            self.clump.push(b as u32);
+        }
+        self.place_clump(b);
+        b
+    }
+
+    /// Puts body `b`'s sub-spheres where the body is: position, velocity and
+    /// spin of each from the body's.
+    #[inline]
+    pub fn place_clump(&mut self, b: usize) {
+        let c = &self.clumps;
+        let (x, v, q) = (c.position[b], c.velocity[b], c.orientation[b]);
+        let w = c.angular_velocity(b);
+        for slot in c.slots(b) {
+            let k = c.index[slot] as usize;
+            let arm = q * c.offsets_m[slot];
+            self.position[k] = x + arm;
+            self.velocity[k] = v + w.cross(arm);
+            self.angular_velocity[k] = w;
+        }
+    }
+
+    /// Sets the spins and sub-sphere velocities of body `b` from its
+    /// velocity and angular momentum, leaving positions.
+    #[inline]
+    pub fn set_clump_velocities(&mut self, b: usize) {
+        let c = &self.clumps;
+        let (x, v) = (c.position[b], c.velocity[b]);
+        let w = c.angular_velocity(b);
+        for slot in c.slots(b) {
+            let k = c.index[slot] as usize;
+            self.velocity[k] = v + w.cross(self.position[k] - x);
+            self.angular_velocity[k] = w;
+        }
     }
 
     /// True when particle `k` of the arrays is the `k`-th added, for every
@@ -105,11 +181,25 @@ impl Particles {
         permute(&mut self.inv_mass, order);
         permute(&mut self.inv_inertia, order);
         permute(&mut self.id, order);
+        permute(&mut self.clump, order);
+        if !self.clumps.is_empty() {
+            self.clumps.reindex(&self.clump, &self.id);
+        }
     }
 
-    /// Total mass (kg).
+    /// True when particle `k` is a sub-sphere of a body.
+    #[inline]
+    pub fn in_clump(&self, k: usize) -> bool {
+        self.clump[k] != NOT_IN_CLUMP
+    }
+
+    /// Total mass (kg): free spheres and bodies, each once.
     pub fn total_mass_kg(&self) -> f64 {
-        self.mass.iter().sum()
+        let free: f64 = (0..self.len())
+            .filter(|&k| !self.in_clump(k))
+            .map(|k| self.mass[k])
+            .sum();
+        free + self.clumps.mass.iter().sum::<f64>()
     }
 
     /// Largest radius (m), zero when empty.
@@ -122,24 +212,32 @@ impl Particles {
         self.radius.iter().copied().fold(f64::INFINITY, f64::min)
     }
 
-    /// Translational and rotational kinetic energy (J).
+    /// Translational and rotational kinetic energy (J), of the free spheres
+    /// and the bodies.
     pub fn kinetic_energy_j(&self) -> (f64, f64) {
         let mut trans = 0.0;
         let mut rot = 0.0;
         for i in 0..self.len() {
+            if self.in_clump(i) {
+                continue;
+            }
             trans += 0.5 * self.mass[i] * self.velocity[i].length_squared();
             rot += 0.5 / self.inv_inertia[i] * self.angular_velocity[i].length_squared();
         }
-        (trans, rot)
+        let (bt, br) = self.clumps.kinetic_energy_j();
+        (trans + bt, rot + br)
     }
 
-    /// Gravitational potential energy (J) relative to the origin.
+    /// Gravitational potential energy (J) relative to the origin, of the
+    /// free spheres and the bodies.
     pub fn potential_energy_j(&self, gravity: DVec3) -> f64 {
         let mut pe = 0.0;
         for i in 0..self.len() {
-            pe -= self.mass[i] * gravity.dot(self.position[i]);
+            if !self.in_clump(i) {
+                pe -= self.mass[i] * gravity.dot(self.position[i]);
+            }
         }
-        pe
+        pe + self.clumps.potential_energy_j(gravity)
     }
 
     /// Largest particle speed (m/s).

@@ -4,7 +4,9 @@
 //! [`World::step`], a short pipeline of the named stages of
 //! [`super::step`], each in its own file:
 //! 1. half kick and drift of velocity Verlet ([`integrate`]; symplectic,
-//!    unlike the explicit Euler of Terzioglu's thesis eq. 3.29–3.30);
+//!    unlike the explicit Euler of Terzioglu's thesis eq. 3.29–3.30), of the
+//!    free spheres and then of the rigid bodies ([`clump_motion`], Section
+//!    4.2), which places their sub-spheres;
 //! 2. the walls move to the prescribed displacement for the end of the step
 //!    ([`drive`]);
 //! 3. the pair list is rebuilt if some particle moved more than half the
@@ -15,7 +17,8 @@
 //!    displacement ([`forces`], block by block), each contact checked and
 //!    booked ([`checks`], [`books`]);
 //! 5. the second half kick ([`integrate`]), each block first adding the
-//!    forces of the pairs that reach it from earlier blocks;
+//!    forces of the pairs that reach it from earlier blocks, then the
+//!    bodies' from their sub-spheres' forces ([`clump_motion`]);
 //! 6. the step's books are closed ([`books::close_step`], eq. 6.4);
 //! 7. every few thousand steps, the energy books are checked
 //!    ([`checks::energy_closes`]).
@@ -37,6 +40,7 @@
 //! [`thread_choice`]: super::step::thread_choice
 //! [`integrate`]: super::step::integrate
 //! [`drive`]: super::step::drive
+//! [`clump_motion`]: super::step::clump_motion
 //! [`neighbour_update`]: super::step::neighbour_update
 //! [`forces`]: super::step::forces
 //! [`checks`]: super::step::checks
@@ -60,7 +64,7 @@ use super::step::forces::{ForceScratch, ForceStage};
 use super::step::integrate::{KickSums, VelocityVerlet};
 use super::step::neighbour_update::{OrderScratch, PerParticle};
 use super::step::thread_choice::ThreadChoice;
-use super::step::{drive, neighbour_update};
+use super::step::{clump_motion, drive, neighbour_update};
 use super::walls::Walls;
 
 pub use super::step::books::CollisionSteps;
@@ -457,7 +461,8 @@ impl World {
                     + p.torque[i].length_squared() * p.inv_inertia[i]
             })
             .sum::<f64>()
-            * (dt * dt / 8.0);
+            * (dt * dt / 8.0)
+            + p.clumps.verlet_shadow_j(dt);
         EnergyState {
             verlet_shadow_j,
             kinetic_translational_j: kt,
@@ -520,7 +525,22 @@ impl World {
         let verlet = self.integrator();
         // 1. Integration: half kick and drift; a position that is not finite stops.
         let sums = &mut self.scratch.kick_sums;
-        let drift = verlet.kick_drift(&mut self.particles, &self.neighbours, sums, parallel);
+        let mut drift = verlet.kick_drift(&mut self.particles, &self.neighbours, sums, parallel);
+        if !self.particles.clumps.is_empty() {
+            let built = self.neighbours.reference();
+            let built = (built.len() == self.particles.len()).then_some(built);
+            let bodies = clump_motion::kick_drift(
+                &mut self.particles,
+                (dt, self.gravity),
+                (built, self.neighbours.rebuild_travel_sq_m2()),
+                drift.work,
+            );
+            drift = KickSums {
+                work: bodies.work,
+                nonfinite: drift.nonfinite.or(bodies.nonfinite),
+                moved_far: drift.moved_far || bodies.moved_far,
+            };
+        }
         if let Some(i) = drift.nonfinite {
             return Err(self.diagnosis().nonfinite(i, dt));
         }
@@ -540,7 +560,10 @@ impl World {
             self.pp_law.has_friction(),
         );
         let sums = &mut self.scratch.kick_sums;
-        let kick = verlet.kick(&mut self.particles, shares, sums, drift.work, parallel);
+        let mut kick = verlet.kick(&mut self.particles, shares, sums, drift.work, parallel);
+        if !self.particles.clumps.is_empty() {
+            kick.work = clump_motion::kick(&mut self.particles, (dt, self.gravity), kick.work);
+        }
         // 6. The step's books close.
         books::close_step(
             &mut self.ledger,
@@ -623,6 +646,13 @@ impl World {
         };
         stage
             .run(dt)
-            .map_err(|refused| self.diagnosis().refusal(&refused, dt))
+            .map_err(|refused| self.diagnosis().refusal(&refused, dt))?;
+        // A pure evaluation leaves the bodies their resultants now; a step's
+        // second half kick gathers them itself, once the crossing shares
+        // are in.
+        if !defer_cross && !self.particles.clumps.is_empty() {
+            clump_motion::gather(&mut self.particles, self.gravity);
+        }
+        Ok(())
     }
 }

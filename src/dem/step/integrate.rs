@@ -29,6 +29,7 @@ use rayon::prelude::*;
 
 use super::block_size::PARTICLE_BLOCK;
 use super::blocks::CrossShares;
+use crate::dem::clumps::NOT_IN_CLUMP;
 use crate::dem::neighbours::NeighbourList;
 use crate::dem::particles::Particles;
 
@@ -135,18 +136,22 @@ struct Loads<'a> {
 
 impl Kick {
     /// The pass over one block of positions `x`, velocities `v` and spins `w`
-    /// (`built_at`: where the pair list was built for them): returns `carry`
+    /// (`built_at`: where the pair list was built for them), leaving alone
+    /// the sub-spheres of bodies (`clump`, read only when `CLUMPS`; their
+    /// bodies move them, [`super::clump_motion`]): returns `carry`
     /// plus the contact power `(F - m g)·v + τ·ω` summed over the block in
     /// order, and on the first pass the first particle of the block whose
     /// position is not finite and whether one drifted far enough to need a
     /// new pair list.
     #[inline]
-    fn block(
+    #[allow(clippy::too_many_arguments)]
+    fn block<const CLUMPS: bool>(
         &self,
         l: &Loads,
         x: &mut [DVec3],
         v: &mut [DVec3],
         w: &mut [DVec3],
+        clump: &[u32],
         built_at: Option<&[DVec3]>,
         carry: f64,
     ) -> KickSums {
@@ -154,6 +159,9 @@ impl Kick {
         let g = self.gravity;
         let mut work = carry;
         for k in 0..x.len() {
+            if CLUMPS && clump[k] != NOT_IN_CLUMP {
+                continue;
+            }
             let contact = l.force[k] - g * l.mass[k];
             match self.pass {
                 Pass::KickDrift => {
@@ -213,6 +221,8 @@ fn half_kick(
     parallel: bool,
 ) -> KickSums {
     let (mass, inv_mass, inv_inertia) = (&p.mass, &p.inv_mass, &p.inv_inertia);
+    let clump = &p.clump;
+    let has_clumps = !p.clumps.is_empty();
     type Block<'b> = (
         usize,
         (
@@ -234,7 +244,12 @@ fn half_kick(
             inv_inertia: &inv_inertia[s..e],
         };
         let built_at = reference.map(|r| &r[s..e]);
-        let sums = kick.block(&loads, x, v, w, built_at, if c == 0 { carry } else { 0.0 });
+        let carry = if c == 0 { carry } else { 0.0 };
+        let sums = if has_clumps {
+            kick.block::<true>(&loads, x, v, w, &clump[s..e], built_at, carry)
+        } else {
+            kick.block::<false>(&loads, x, v, w, &[], built_at, carry)
+        };
         KickSums {
             nonfinite: sums.nonfinite.map(|k| s + k),
             ..sums

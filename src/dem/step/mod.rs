@@ -4,7 +4,10 @@
 //! Section 3.6 does):
 //!
 //! 1. [`integrate`]: first half of velocity Verlet, kick and drift (the
-//!    symplectic replacement of the explicit Euler of eq. 3.29–3.30);
+//!    symplectic replacement of the explicit Euler of eq. 3.29–3.30) of the
+//!    free spheres, then [`clump_motion`] of the rigid multi-sphere bodies
+//!    (eq. 4.3–4.7, with the gyroscopic term), which places their
+//!    sub-spheres;
 //! 2. [`drive`]: the walls move to the prescribed displacement for the end
 //!    of the step;
 //! 3. [`neighbour_update`]: the Verlet pair list is rebuilt when some
@@ -14,7 +17,8 @@
 //!    (eq. 3.25–3.28), one contact at a time by the kernels of [`contacts`]
 //!    (eq. 3.1–3.8, 3.12–3.14), block by block ([`blocks`]);
 //! 5. [`integrate`] again: the second half kick, each block first adding
-//!    the forces that cross into it from earlier blocks;
+//!    the forces that cross into it from earlier blocks; then the bodies'
+//!    ([`clump_motion`]), from the resultants of their sub-spheres' forces;
 //! 6. [`books`]: what the contacts dissipated and stored, block by block,
 //!    and the step's energy balance (eq. 6.4);
 //! 7. [`checks`]: the refusals (a collision resolved in too few steps, an
@@ -31,6 +35,7 @@ pub mod block_size;
 pub mod blocks;
 pub mod books;
 pub mod checks;
+pub mod clump_motion;
 pub mod contacts;
 pub mod drive;
 pub mod forces;

@@ -59,14 +59,14 @@ fn rebuild(
     scratch: &mut OrderScratch,
 ) {
     if !spans_blocks(particles.len()) {
-        list.rebuild(&particles.position, &particles.radius);
+        list.rebuild(&particles.position, &particles.radius, &particles.clump);
         return;
     }
     let cell_m = list.cell_m(particles.max_radius_m());
     let OrderScratch { keys, order } = scratch;
     space_order(&particles.position, &particles.id, cell_m, keys, order);
     if is_identity(order) {
-        list.rebuild(&particles.position, &particles.radius);
+        list.rebuild(&particles.position, &particles.radius, &particles.clump);
         return;
     }
     particles.renumber(order);
@@ -78,5 +78,10 @@ fn rebuild(
     if let Some(d) = others.dissipation_j {
         permute(d, order);
     }
-    list.rebuild_renumbered(&particles.position, &particles.radius, Some(order));
+    list.rebuild_renumbered(
+        &particles.position,
+        &particles.radius,
+        &particles.clump,
+        Some(order),
+    );
 }
