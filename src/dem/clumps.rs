@@ -2,7 +2,7 @@
 //! sub-spheres rigidly joined, the non-spherical particles of Terzioglu's
 //! thesis, Chapter 4 (Section 4.2, eq. 4.1–4.7).
 //!
-//! The sub-spheres are ordinary particles of [`Particles`]: the cell lists,
+//! The sub-spheres are ordinary particles of [`super::Particles`]: the cell lists,
 //! the pair list and every contact kernel see spheres, as the multi-sphere
 //! method intends ("the kinematics and contact detection ... are also valid
 //! for the multi-sphere particles", Section 4.2). Two sub-spheres of one
@@ -26,12 +26,12 @@
 //! restitution damping of a contact between two bodies is then set by the
 //! bodies' masses, as it is between two spheres. A sub-sphere's own inverse
 //! mass and inertia are zero: the sphere integrator does not move it; the
-//! body does ([`super::step::clump_motion`]).
+//! body does (the step's `clump_motion` stage).
 //!
 //! **Mass and inertia** come with the body ([`ClumpTemplate`]): computed
 //! from the union of the sub-spheres (eq. 4.1, 4.5), not by summing
 //! overlapping spheres, which counts the overlaps twice (see
-//! [`crate::shape`]).
+//! the `shape` module).
 
 use glam::{DQuat, DVec3};
 

@@ -16,7 +16,7 @@
 //!
 //! Each rebuild also lays out, for every particle, its row (the pairs
 //! `(p, j)`, [`NeighbourList::row`]) and the pairs `(i, p)` that reach it
-//! from an earlier block of the step ([`NeighbourList::cross_pairs`], in
+//! from an earlier block of the step ([`Adjacency::cross_pairs`], in
 //! pair order): a block of the step then evaluates the rows of its own
 //! particles and adds to them, and the forces that cross from another block
 //! are added afterwards, in a fixed order, so that the sums are the same
