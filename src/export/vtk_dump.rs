@@ -9,6 +9,11 @@
 //!   the previous frame over the time between (W; a pair contact's energy is
 //!   shared half and half; zero in the first frame, and throughout unless the
 //!   world tracks it, [`crate::dem::World::track_particle_dissipation`]);
+//!   with rigid multi-sphere bodies, also `body` (the body each sub-sphere
+//!   belongs to, 4294967295 for a free sphere) and `body_x_axis`,
+//!   `body_z_axis` (its body's principal axes in space: a prolate's long
+//!   axis is x, a torus's axis z), so that ParaView can colour by body or
+//!   draw the axes as glyphs;
 //! - `enclosure-NNNNN.vtp`: the closed cylinder as polygons (side wall and both
 //!   end caps) at its current displacement.
 //!
@@ -48,7 +53,8 @@ use quick_xml::Writer;
 use quick_xml::events::{BytesEnd, BytesStart, BytesText, Event};
 
 use crate::atomic_write::write_atomic;
-use crate::dem::World;
+use crate::dem::clumps::NOT_IN_CLUMP;
+use crate::dem::{Particles, World};
 use crate::experiment::damper::{Kinematics, StepObserver};
 
 /// Segments of the drawn cylinder.
@@ -153,16 +159,25 @@ impl VtkDump {
         let points = flat(&p.position);
         let connectivity: Vec<u64> = (0..n as u64).collect();
         let offsets: Vec<u64> = (1..=n as u64).collect();
+        let bodies = BodyArrays::of(&p);
+        let mut point_data = vec![
+            DataArray::named("velocity", 3, Values::F64(&velocity)),
+            DataArray::named("speed", 1, Values::F64(&speed)),
+            DataArray::named("spin", 3, Values::F64(&spin)),
+            DataArray::named("radius", 1, Values::F64(&p.radius)),
+            DataArray::named("contact_count", 1, Values::U32(&self.counts)),
+            DataArray::named("dissipation_rate_w", 1, Values::F64(&rate)),
+        ];
+        if let Some(b) = &bodies {
+            point_data.extend([
+                DataArray::named("body", 1, Values::U32(&p.clump)),
+                DataArray::named("body_x_axis", 3, Values::F64(&b.x_axis)),
+                DataArray::named("body_z_axis", 3, Values::F64(&b.z_axis)),
+            ]);
+        }
         let piece = Piece {
             points: &points,
-            point_data: vec![
-                DataArray::named("velocity", 3, Values::F64(&velocity)),
-                DataArray::named("speed", 1, Values::F64(&speed)),
-                DataArray::named("spin", 3, Values::F64(&spin)),
-                DataArray::named("radius", 1, Values::F64(&p.radius)),
-                DataArray::named("contact_count", 1, Values::U32(&self.counts)),
-                DataArray::named("dissipation_rate_w", 1, Values::F64(&rate)),
-            ],
+            point_data,
             cells: Cells::Verts,
             connectivity: &connectivity,
             offsets: &offsets,
@@ -241,6 +256,33 @@ impl Values<'_> {
             Values::U32(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
             Values::U64(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
         }
+    }
+}
+
+/// Per sub-sphere of a rigid body, its body's principal x and z axes in
+/// space (flattened): a prolate's long axis is x, a torus's axis z, so
+/// ParaView can draw them as glyphs; `None` for spheres only.
+struct BodyArrays {
+    x_axis: Vec<f64>,
+    z_axis: Vec<f64>,
+}
+
+impl BodyArrays {
+    fn of(p: &Particles) -> Option<BodyArrays> {
+        if p.clumps.is_empty() {
+            return None;
+        }
+        let axis = |k: usize, e: glam::DVec3| match p.clump[k] {
+            NOT_IN_CLUMP => glam::DVec3::ZERO,
+            b => p.clumps.orientation[b as usize] * e,
+        };
+        let flat = |e: glam::DVec3| -> Vec<f64> {
+            (0..p.len()).flat_map(|k| axis(k, e).to_array()).collect()
+        };
+        Some(BodyArrays {
+            x_axis: flat(glam::DVec3::X),
+            z_axis: flat(glam::DVec3::Z),
+        })
     }
 }
 

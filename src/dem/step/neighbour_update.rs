@@ -8,7 +8,9 @@
 //! A bed of more than one block ([`super::block_size::spans_blocks`]) is
 //! renumbered in space at each rebuild ([`crate::dem::ordering`]): the
 //! particles, their wall contacts and what they dissipated move to their new
-//! numbers, and the pair list carries every history over under them.
+//! numbers, and the pair list carries every history over under them. The
+//! sub-spheres of a rigid body are ordered by where the body is, so they
+//! stay together.
 
 use crate::dem::contact::ContactState;
 use crate::dem::neighbours::NeighbourList;
@@ -34,6 +36,8 @@ pub struct PerParticle<'a> {
 pub struct OrderScratch {
     keys: Vec<(u64, u32, u32)>,
     order: Vec<u32>,
+    /// Each particle's position, or its body's centre for a sub-sphere.
+    at_body: Vec<glam::DVec3>,
 }
 
 /// Rebuilds `list` for `particles` if it may miss a contact now,
@@ -63,8 +67,27 @@ fn rebuild(
         return;
     }
     let cell_m = list.cell_m(particles.max_radius_m());
-    let OrderScratch { keys, order } = scratch;
-    space_order(&particles.position, &particles.id, cell_m, keys, order);
+    let OrderScratch {
+        keys,
+        order,
+        at_body,
+    } = scratch;
+    let placed = if particles.clumps.is_empty() {
+        &particles.position
+    } else {
+        // A body's sub-spheres are ordered where its centre is, so that they
+        // stay together in the arrays (ties by id keep them in id order).
+        at_body.clear();
+        at_body.extend_from_slice(&particles.position);
+        let c = &particles.clumps;
+        for b in 0..c.len() {
+            for slot in c.slots(b) {
+                at_body[c.index[slot] as usize] = c.position[b];
+            }
+        }
+        &*at_body
+    };
+    space_order(placed, &particles.id, cell_m, keys, order);
     if is_identity(order) {
         list.rebuild(&particles.position, &particles.radius, &particles.clump);
         return;
