@@ -13,7 +13,9 @@
 //! Module boundaries (imports that must never exist):
 //! - `signals` imports neither `rig` nor `dem`: it works on real lab files alone;
 //! - `rig` does not import `dem`: it sees the damper only as a force;
-//! - `dem` knows nothing of rigs, sensors or files.
+//! - `dem` knows nothing of rigs, sensors or files;
+//! - `shape` (multi-sphere grain geometry, thesis Chapter 4 and 8.2) is pure
+//!   geometry and imports no other vlab module.
 
 pub mod atomic_write;
 pub mod dem;
@@ -22,6 +24,7 @@ pub mod experiment;
 pub mod export;
 pub mod rig;
 pub mod scene;
+pub mod shape;
 pub mod signals;
 pub mod stats;
 pub mod study;
