@@ -10,7 +10,8 @@ use vlab::dem::restitution::realised_restitution;
 use vlab::experiment::damper::first_checkpoint;
 use vlab::scene::contact_laws;
 use vlab::scene::{
-    CyclesSpec, Scene, THESIS_DAMPER_TOML, THESIS_SCENE_FILE, TimeStepRule, TimeStepSpec,
+    CyclesSpec, ParticleBody, Scene, ShapeKind, THESIS_DAMPER_TOML, THESIS_SCENE_FILE,
+    TimeStepRule, TimeStepSpec,
 };
 use vlab::stats::MIN_SERIES_VALUES;
 
@@ -22,6 +23,11 @@ pub struct SceneArgs {
     /// Print the scene as TOML (the annotated preset when no --scene is given).
     #[arg(long)]
     print: bool,
+    /// Print the particles' figures as JSON: count, shape, mass, and for a
+    /// body that is not a sphere its volume, inertia, sphericity and the
+    /// multi-sphere errors.
+    #[arg(long, conflicts_with = "print")]
+    json: bool,
 }
 
 pub fn run(a: SceneArgs) -> Result<()> {
@@ -37,6 +43,13 @@ pub fn run(a: SceneArgs) -> Result<()> {
         }
         return Ok(());
     }
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&particles_json(&scene)?)?
+        );
+        return Ok(());
+    }
     match &a.scene {
         Some(path) => println!(
             "scene \"{}\" ({} over the built-in {THESIS_SCENE_FILE})",
@@ -48,7 +61,7 @@ pub fn run(a: SceneArgs) -> Result<()> {
             scene.name
         ),
     }
-    print_bed(&scene);
+    print_bed(&scene)?;
     print_contacts(&scene);
     print_time_step(&scene)?;
     print_run(&scene);
@@ -56,15 +69,18 @@ pub fn run(a: SceneArgs) -> Result<()> {
 }
 
 /// The particles and the enclosure.
-fn print_bed(scene: &Scene) {
+fn print_bed(scene: &Scene) -> Result<()> {
     let p = &scene.particles;
     let e = &scene.enclosure;
-    println!(
-        "  particles        {} spheres of {} mm, {:.4} kg in all",
-        p.count,
-        p.diameter_m * 1e3,
-        scene.particle_mass_kg()
-    );
+    match scene.particle_body()? {
+        None => println!(
+            "  particles        {} spheres of {} mm, {:.4} kg in all",
+            p.count,
+            p.diameter_m * 1e3,
+            scene.particle_mass_kg()
+        ),
+        Some(body) => print_body(scene, &body),
+    }
     println!(
         "  enclosure        {} mm x {} mm closed cylinder, {}; fill ratio {:.3} (eq. 6.1; {} would fill it at random close packing; pouring and closing reach about 0.57 in the thesis cylinder)",
         e.inner_diameter_m * 1e3,
@@ -73,6 +89,109 @@ fn print_bed(scene: &Scene) {
         scene.fill_ratio(),
         scene.max_particles()
     );
+    Ok(())
+}
+
+/// What one body of a scene of shapes is: its shape, its union against
+/// the exact shape, its mass and moments.
+fn print_body(scene: &Scene, body: &ParticleBody) {
+    let p = &scene.particles;
+    let t = &body.template;
+    println!(
+        "  particles        {} {}s ({}), volume of a {} mm sphere each, {:.4} kg in all",
+        p.count,
+        p.shape.as_str(),
+        shape_words(scene, body),
+        p.diameter_m * 1e3,
+        p.count as f64 * t.mass_kg
+    );
+    let errors = match (body.volume_error(), body.surface_error(), body.sphericity()) {
+        (Some(v), Some(s), Some(psi)) => format!(
+            "; against the exact shape: volume {:+.2} %, surface {:+.2} %; exact shape's sphericity {psi:.3} (eq. 8.3)",
+            100.0 * v,
+            100.0 * s
+        ),
+        _ => String::new(),
+    };
+    println!(
+        "  body             union of its sub-spheres {:.2} mm3, {:.3} mm2{errors}",
+        body.union_volume_m3 * 1e9,
+        body.union_surface_m2 * 1e6
+    );
+    println!(
+        "                   mass {:.4e} kg, principal moments {:.3e} {:.3e} {:.3e} kg m2; sub-spheres {:.3} to {:.3} mm in radius, reach {:.3} mm from the centre of mass",
+        t.mass_kg,
+        t.inertia_kgm2.x,
+        t.inertia_kgm2.y,
+        t.inertia_kgm2.z,
+        body.min_sub_radius_m * 1e3,
+        t.radii_m.iter().copied().fold(0.0, f64::max) * 1e3,
+        body.bounding_radius_m * 1e3
+    );
+}
+
+/// The shape's own numbers, in words.
+fn shape_words(scene: &Scene, body: &ParticleBody) -> String {
+    let p = &scene.particles;
+    let n = body.template.len();
+    match p.shape {
+        ShapeKind::Prolate | ShapeKind::Oblate => format!(
+            "aspect ratio {}, {n} sub-spheres",
+            p.aspect_ratio.unwrap_or(1.0)
+        ),
+        ShapeKind::Toroid => format!(
+            "hole ratio {}, {n} sub-spheres",
+            p.hole_ratio.unwrap_or(0.0)
+        ),
+        ShapeKind::Clump => format!(
+            "{n} sub-spheres from {}",
+            p.clump_file
+                .as_ref()
+                .map(|f| f.display().to_string())
+                .unwrap_or_default()
+        ),
+        ShapeKind::Sphere => "spheres".into(),
+    }
+}
+
+/// The particles' figures as JSON (`vlab scene --json`).
+fn particles_json(scene: &Scene) -> Result<serde_json::Value> {
+    let p = &scene.particles;
+    let body = scene.particle_body()?.map(|b| {
+        let t = &b.template;
+        serde_json::json!({
+            "sub_spheres": t.len(),
+            "mass_kg": t.mass_kg,
+            "principal_moments_kgm2": t.inertia_kgm2.to_array(),
+            "union_volume_m3": b.union_volume_m3,
+            "union_surface_m2": b.union_surface_m2,
+            "exact_volume_m3": b.exact.map(|e| e.0),
+            "exact_surface_m2": b.exact.map(|e| e.1),
+            "volume_error": b.volume_error(),
+            "surface_error": b.surface_error(),
+            "sphericity": b.sphericity(),
+            "min_sub_radius_m": b.min_sub_radius_m,
+            "bounding_radius_m": b.bounding_radius_m,
+            "sub_sphere_centres_m": t.offsets_m.iter().map(|o| o.to_array()).collect::<Vec<_>>(),
+            "sub_sphere_radii_m": t.radii_m,
+        })
+    });
+    let drive = scene.drive(40.0, 20.0)?;
+    Ok(serde_json::json!({
+        "scene": scene.name,
+        "particles": {
+            "count": p.count,
+            "shape": p.shape.as_str(),
+            "aspect_ratio": p.aspect_ratio,
+            "hole_ratio": p.hole_ratio,
+            "equivalent_diameter_m": p.diameter_m,
+            "total_mass_kg": scene.particle_mass_kg(),
+            "body": body,
+        },
+        "fill_ratio": scene.fill_ratio(),
+        "dt_s_at_40hz_gamma20": scene.drive_dt_s(&drive),
+        "rayleigh_limit_s": scene.rayleigh_limit_s(),
+    }))
 }
 
 /// The two contact laws.

@@ -192,13 +192,16 @@ fn plot_snapshots(sn: &PhaseSnapshots, scene: &Scene, drive: &Drive, dir: &Path)
 
 /// The summary as a person reads it.
 fn print_summary(s: &ShakeSummary, dir: &Path) {
+    let particles = match &s.bodies {
+        Some(b) => format!("{} {}s of {} sub-spheres", b.count, b.shape, s.n_particles),
+        None => format!("{} particles", s.n_particles),
+    };
     println!(
-        "{} damper, {} Hz, Gamma {}, {}: {} particles ({:.4} kg, fill {:.3}), dt {:.1e} s, seed {}",
+        "{} damper, {} Hz, Gamma {}, {}: {particles} ({:.4} kg, fill {:.3}), dt {:.1e} s, seed {}",
         s.scene,
         s.freq_hz,
         s.gamma,
         s.orientation,
-        s.n_particles,
         s.particle_mass_kg,
         s.fill_ratio,
         s.dt_s,

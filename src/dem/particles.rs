@@ -193,6 +193,18 @@ impl Particles {
         self.clump[k] != NOT_IN_CLUMP
     }
 
+    /// Every free sphere and every body once, as `(mass, centre, velocity)`:
+    /// what a sum over the bed's masses (its centre of mass, momentum,
+    /// granular temperature) runs over.
+    pub fn movers(&self) -> impl Iterator<Item = (f64, DVec3, DVec3)> + '_ {
+        let free = (0..self.len())
+            .filter(|&k| !self.in_clump(k))
+            .map(|k| (self.mass[k], self.position[k], self.velocity[k]));
+        let c = &self.clumps;
+        let bodies = (0..c.len()).map(|b| (c.mass[b], c.position[b], c.velocity[b]));
+        free.chain(bodies)
+    }
+
     /// Total mass (kg): free spheres and bodies, each once.
     pub fn total_mass_kg(&self) -> f64 {
         let free: f64 = (0..self.len())

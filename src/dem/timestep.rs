@@ -30,6 +30,20 @@ pub fn shortest_contact_s(
     speed_mps: f64,
 ) -> f64 {
     let m = sphere_mass_kg(radius_m, density_kgm3);
+    shortest_contact_with_mass_s(pp, pw, radius_m, m, speed_mps)
+}
+
+/// [`shortest_contact_s`] for contacts of spheres of `radius_m` that move
+/// with a mass of `mass_kg`: the sub-spheres of rigid bodies, whose contacts
+/// read their body's mass (thesis Section 4.2: the smallest sub-sphere sets
+/// the step).
+pub fn shortest_contact_with_mass_s(
+    pp: &ContactLaw,
+    pw: &ContactLaw,
+    radius_m: f64,
+    m: f64,
+    speed_mps: f64,
+) -> f64 {
     let pair = hertz_theory::contact_duration_s(
         effective_mass_kg(m, m),
         pp.e_star_pa,

@@ -118,6 +118,36 @@ struct BedKey<'a> {
     seed: u64,
     /// Longest a settling stage may run (s): a bed that needs it is shaped by it.
     settle_s: f64,
+    /// The body each particle is, when not a sphere: its sub-spheres
+    /// (principal frame, `[x, y, z, r]`), mass and moments, so that a
+    /// changed generator or clump file makes another bed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    body: Option<BodyKey>,
+}
+
+/// The body of a bed of bodies, in its key.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+struct BodyKey {
+    sub_spheres: Vec<[f64; 4]>,
+    mass_kg: f64,
+    inertia_kgm2: [f64; 3],
+}
+
+impl BodyKey {
+    fn of(scene: &Scene) -> Option<BodyKey> {
+        let body = scene.particle_body().ok().flatten()?;
+        let t = &body.template;
+        Some(BodyKey {
+            sub_spheres: t
+                .offsets_m
+                .iter()
+                .zip(&t.radii_m)
+                .map(|(o, r)| [o.x, o.y, o.z, *r])
+                .collect(),
+            mass_kg: t.mass_kg,
+            inertia_kgm2: t.inertia_kgm2.to_array(),
+        })
+    }
 }
 
 /// The cache key of the bed `scene` settles to (JSON text), with this
@@ -142,6 +172,7 @@ fn bed_key_with(scene: &Scene, fingerprint: &str) -> String {
         gravity_mps2: scene.simulation.gravity_mps2,
         seed: scene.simulation.seed,
         settle_s: scene.simulation.settle_s,
+        body: BodyKey::of(scene),
     };
     // Plain data with string keys: serialising cannot fail.
     serde_json::to_string(&key).unwrap_or_else(|e| panic!("bed key: {e}"))
@@ -177,6 +208,27 @@ pub struct BedHeader {
     pub bed_height_m: f64,
     /// Time step the bed settled at last (s).
     pub dt_s: f64,
+    /// Rigid bodies the particles are sub-spheres of (none for spheres);
+    /// their states follow the particles' ([`BodyState`]).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub n_bodies: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+/// Numbers per body of a bed file: centre, velocity, orientation
+/// (x, y, z, w) and angular momentum.
+const F64_PER_BODY: usize = 13;
+
+/// One rigid body of a bed file: what its sub-spheres' states follow from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyState {
+    pub position_m: DVec3,
+    pub velocity_mps: DVec3,
+    pub orientation: glam::DQuat,
+    pub angular_momentum_kgm2ps: DVec3,
 }
 
 /// Encodes `bed` of `scene` as a bed file.
@@ -198,6 +250,7 @@ fn encode_bed_with(scene: &Scene, bed: &SettledBed, fingerprint: &str) -> Vec<u8
         packing_fraction: bed.packing_fraction,
         bed_height_m: bed.bed_height_m,
         dt_s: bed.world.dt_s(),
+        n_bodies: p.clumps.len(),
     };
     let header = serde_json::to_vec(&header).unwrap_or_else(|e| panic!("bed header: {e}"));
     let mut out = Vec::with_capacity(24 + header.len() + 8 * F64_PER_PARTICLE * p.len());
@@ -212,6 +265,19 @@ fn encode_bed_with(scene: &Scene, bed: &SettledBed, fingerprint: &str) -> Vec<u8
             }
         }
         out.extend_from_slice(&p.radius[i].to_le_bytes());
+    }
+    let c = &p.clumps;
+    for b in 0..c.len() {
+        let numbers = [
+            c.position[b].to_array().as_slice(),
+            c.velocity[b].to_array().as_slice(),
+            c.orientation[b].to_array().as_slice(),
+            c.angular_momentum[b].to_array().as_slice(),
+        ]
+        .concat();
+        for x in numbers {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
     }
     let sum = fnv1a64(&out);
     out.extend_from_slice(&sum.to_le_bytes());
@@ -239,6 +305,8 @@ pub struct DecodedBed {
     pub header: BedHeader,
     /// Each particle's state.
     pub state: Vec<ParticleState>,
+    /// Each rigid body's state (none for spheres).
+    pub bodies: Vec<BodyState>,
 }
 
 /// One particle of a bed file.
@@ -282,7 +350,8 @@ pub fn decode_bed(bytes: &[u8], expect_key: Option<&str>) -> Result<DecodedBed, 
         return Err(BadBed::OtherKey(header.scene));
     }
     let data = &body[16 + h..];
-    if data.len() != 8 * F64_PER_PARTICLE * header.n_particles {
+    let particle_bytes = 8 * F64_PER_PARTICLE * header.n_particles;
+    if data.len() != particle_bytes + 8 * F64_PER_BODY * header.n_bodies {
         return Err(BadBed::Corrupt);
     }
     let f = |k: usize| {
@@ -302,7 +371,23 @@ pub fn decode_bed(bytes: &[u8], expect_key: Option<&str>) -> Result<DecodedBed, 
             }
         })
         .collect();
-    Ok(DecodedBed { header, state })
+    let bodies = (0..header.n_bodies)
+        .map(|b| {
+            let o = F64_PER_PARTICLE * header.n_particles + F64_PER_BODY * b;
+            let v = |k: usize| DVec3::new(f(o + k), f(o + k + 1), f(o + k + 2));
+            BodyState {
+                position_m: v(0),
+                velocity_mps: v(3),
+                orientation: glam::DQuat::from_xyzw(f(o + 6), f(o + 7), f(o + 8), f(o + 9)),
+                angular_momentum_kgm2ps: v(10),
+            }
+        })
+        .collect();
+    Ok(DecodedBed {
+        header,
+        state,
+        bodies,
+    })
 }
 
 /// One entry of the cache, for `vlab cache list`.
@@ -385,15 +470,46 @@ impl BedCache {
             )
         })?;
         let density = scene.particle_material().density_kgm3;
+        let unusable = |why: String| {
+            format!(
+                "cached bed {} was not used: {why}; settled anew",
+                path.display()
+            )
+        };
         let mut particles = Particles::default();
-        for s in decoded.state {
-            particles.push(
-                s.position_m,
-                s.velocity_mps,
-                s.angular_velocity_radps,
-                s.radius_m,
-                density,
-            );
+        if decoded.bodies.is_empty() {
+            for s in decoded.state {
+                particles.push(
+                    s.position_m,
+                    s.velocity_mps,
+                    s.angular_velocity_radps,
+                    s.radius_m,
+                    density,
+                );
+            }
+        } else {
+            let body = scene
+                .particle_body()
+                .map_err(|e| unusable(e.to_string()))?
+                .ok_or_else(|| unusable("it holds bodies, the scene spheres".into()))?;
+            for s in &decoded.bodies {
+                let b = particles.push_clump(
+                    &body.template,
+                    (s.position_m, s.orientation),
+                    (s.velocity_mps, DVec3::ZERO),
+                );
+                // The momentum as it was, not through the spin: the same bits.
+                particles.clumps.angular_momentum[b] = s.angular_momentum_kgm2ps;
+                particles.clumps.orientation[b] = s.orientation;
+                particles.place_clump(b);
+            }
+            if particles.len() != decoded.state.len() {
+                return Err(unusable(format!(
+                    "its {} sub-spheres are not the scene's {}",
+                    decoded.state.len(),
+                    particles.len()
+                )));
+            }
         }
         let h = decoded.header;
         let mut world = rebuild_settled_world(scene, particles, h.dt_s).map_err(|e| {

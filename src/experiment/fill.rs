@@ -1,4 +1,5 @@
-//! Random, non-overlapping placement of spheres in a cylinder.
+//! Random, non-overlapping placement of spheres in a cylinder (and of
+//! bodies, by their bounding spheres, at random orientations).
 //!
 //! Random sequential insertion jams near a volume fill of 0.38, so a dense fill
 //! such as the thesis' 0.466 cannot be placed inside its closed enclosure. The
@@ -7,7 +8,7 @@
 //! design length (see `damper`). Placement is driven by a seeded xoshiro256++
 //! generator, so the same seed gives the same bed on every platform.
 
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -36,6 +37,22 @@ impl SceneRng {
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.uniform()
     }
+}
+
+/// An orientation drawn uniformly over all rotations (Shoemake's unit
+/// quaternion from three uniform numbers): how a body falls into the pour
+/// column.
+pub fn random_orientation(rng: &mut SceneRng) -> DQuat {
+    let (u1, u2, u3) = (rng.uniform(), rng.uniform(), rng.uniform());
+    let tau = std::f64::consts::TAU;
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    DQuat::from_xyzw(
+        a * (tau * u2).sin(),
+        a * (tau * u2).cos(),
+        b * (tau * u3).sin(),
+        b * (tau * u3).cos(),
+    )
+    .normalize()
 }
 
 /// Places `count` spheres of `radius_m` inside a cylinder around the z axis of

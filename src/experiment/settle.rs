@@ -59,12 +59,12 @@ use std::time::Instant;
 use glam::DVec3;
 
 use crate::dem::material::Material;
-use crate::dem::timestep::{rayleigh_time_step_s, shortest_contact_s};
+use crate::dem::timestep::{rayleigh_time_step_s, shortest_contact_with_mass_s};
 use crate::dem::{
     ContactLaw, ContactParams, DemError, Numerics, Particles, RestitutionMode, Walls, World,
 };
 use crate::experiment::damper::{Progress, gravity_vector};
-use crate::experiment::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder};
+use crate::experiment::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder, random_orientation};
 use crate::scene::contact_laws;
 use crate::scene::{Orientation, Scene, SceneError};
 use crate::warning::RunWarning;
@@ -168,8 +168,15 @@ fn resolving_step_s(
         youngs_pa: pm.youngs_pa * stiffness_factor,
         ..pm
     };
-    let rayleigh = rayleigh_time_step_s(&soft, scene.radius_m());
-    let contact = shortest_contact_s(pp, pw, scene.radius_m(), pm.density_kgm3, speed_mps);
+    let scale = scene.contact_scale();
+    let rayleigh = rayleigh_time_step_s(&soft, scale.radius_m);
+    let contact = shortest_contact_with_mass_s(
+        pp,
+        pw,
+        scale.radius_m,
+        scale.mass_kg,
+        speed_mps * scale.speed_factor,
+    );
     (contact / steps).min(0.25 * rayleigh)
 }
 
@@ -221,11 +228,22 @@ fn pour(
     let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
     let g = scene.simulation.gravity_mps2;
     let mut rng = SceneRng::new(scene.simulation.seed);
-    let (positions, column) = pour_column(scene, &mut rng)?;
+    let body = scene.particle_body()?;
+    let reach_m = body.as_ref().map_or(radius, |b| b.bounding_radius_m);
+    let (positions, column) = pour_column(scene, reach_m, &mut rng)?;
     let density = scene.particle_material().density_kgm3;
     let mut particles = Particles::default();
     for p in positions {
-        particles.push(p, DVec3::ZERO, DVec3::ZERO, radius, density);
+        match &body {
+            // A body falls from a random orientation.
+            Some(b) => {
+                let q = random_orientation(&mut rng);
+                particles.push_clump(&b.template, (p, q), (DVec3::ZERO, DVec3::ZERO));
+            }
+            None => {
+                particles.push(p, DVec3::ZERO, DVec3::ZERO, radius, density);
+            }
+        }
     }
     let (pp, pw) = settling_laws(scene, SETTLE_STIFFNESS_FACTOR);
     let fall_mps = (2.0 * g * column).sqrt().max(0.1);
@@ -354,8 +372,11 @@ pub fn rebuild_settled_world(
 /// Random positions in a pouring column of the enclosure's diameter, and the
 /// column's height (m): at [`COLUMN_FILL`], or taller until every sphere fits
 /// (narrow cylinders jam sooner).
-fn pour_column(scene: &Scene, rng: &mut SceneRng) -> Result<(Vec<DVec3>, f64), SceneError> {
-    let radius = scene.radius_m();
+fn pour_column(
+    scene: &Scene,
+    radius: f64,
+    rng: &mut SceneRng,
+) -> Result<(Vec<DVec3>, f64), SceneError> {
     let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
     let length = scene.enclosure.inner_length_m;
     let n = scene.particles.count;
@@ -644,6 +665,7 @@ pub fn prepare_drive(bed: &SettledBed, scene: &Scene, dt_s: f64) -> Result<World
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dem::timestep::shortest_contact_s;
 
     #[test]
     fn cap_volumes_add_up() {

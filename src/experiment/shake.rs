@@ -361,6 +361,13 @@ impl DemTruth {
     }
 }
 
+/// The rigid bodies of a shake of shapes: how many, and what shape.
+#[derive(Debug, Clone, Serialize)]
+pub struct BodiesSummary {
+    pub count: usize,
+    pub shape: &'static str,
+}
+
 /// Everything `summary.json` says about a shake.
 #[derive(Debug, Clone, Serialize)]
 pub struct ShakeSummary {
@@ -370,7 +377,11 @@ pub struct ShakeSummary {
     pub gamma: f64,
     pub orientation: &'static str,
     pub gravity_mps2: f64,
+    /// Spheres in the DEM: the particles, or the sub-spheres of the bodies.
     pub n_particles: usize,
+    /// Rigid bodies the spheres make (none in a scene of spheres).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bodies: Option<BodiesSummary>,
     pub particle_mass_kg: f64,
     pub fill_ratio: f64,
     /// Seed of the bed (`simulation.seed`): the pour, hence the DEM truth.
@@ -503,6 +514,10 @@ impl ShakeSummary {
             orientation: scene.enclosure.orientation.as_str(),
             gravity_mps2: scene.simulation.gravity_mps2,
             n_particles: n,
+            bodies: (!world.particles.clumps.is_empty()).then(|| BodiesSummary {
+                count: world.particles.clumps.len(),
+                shape: scene.particles.shape.as_str(),
+            }),
             particle_mass_kg: world.particles.total_mass_kg(),
             fill_ratio: scene.fill_ratio(),
             seed: scene.simulation.seed,

@@ -105,6 +105,8 @@ pub enum SceneError {
         problem: String,
         option: ReplayOption,
     },
+    #[error("particles: {0}")]
+    Shape(#[from] crate::shape::ShapeError),
     #[error(transparent)]
     Dem(#[from] DemError),
     #[error(transparent)]

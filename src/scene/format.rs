@@ -13,11 +13,12 @@ use serde::{Deserialize, Serialize};
 use crate::dem::material::{
     Material, effective_mass_kg, effective_radius_m, effective_youngs_pa, sphere_mass_kg,
 };
-use crate::dem::timestep::{check_time_step, rayleigh_time_step_s, shortest_contact_s};
+use crate::dem::timestep::{check_time_step, rayleigh_time_step_s, shortest_contact_with_mass_s};
 use crate::dem::{RestitutionMode, hertz_theory};
 use crate::drive::Drive;
 use crate::scene::drive_length::{DriveLength, SteadyCriteria};
 use crate::scene::error::SceneError;
+use crate::scene::particle_shape::{ParticleBody, ShapeKeys, ShapeKind, quick_reach_m};
 use crate::scene::validity::YieldVelocities;
 use crate::validation::{
     self, Bound, InvalidParameter, count_in, in_range, non_negative, positive, require,
@@ -142,8 +143,81 @@ impl TryFrom<NumberOrWord<f64>> for TimeStepSpec {
 #[serde(deny_unknown_fields)]
 pub struct ParticlesSpec {
     pub count: usize,
+    /// A sphere's diameter; for another shape, the diameter of the sphere of
+    /// the same volume (m).
+    #[serde(default = "not_given")]
     pub diameter_m: f64,
+    /// Another name for `diameter_m` that says what it is for a shape that
+    /// is not a sphere; read into `diameter_m` when the scene is parsed.
+    #[serde(default, skip_serializing)]
+    pub equivalent_diameter_m: Option<f64>,
     pub material: MaterialSpec,
+    /// The particles' shape ([`ShapeKind`]); spheres when absent.
+    #[serde(default, skip_serializing_if = "ShapeKind::is_sphere")]
+    pub shape: ShapeKind,
+    /// a/b of a prolate (> 1) or oblate (< 1) spheroid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aspect_ratio: Option<f64>,
+    /// (a − b)/(a + b) of a toroid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hole_ratio: Option<f64>,
+    /// Sub-spheres of a generated body (the thesis' by default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sub_spheres: Option<usize>,
+    /// A file of sub-spheres (`x_m,y_m,z_m,radius_m` rows) for `shape =
+    /// "clump"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clump_file: Option<std::path::PathBuf>,
+}
+
+/// What sets the time step of a scene's contacts ([`Scene::contact_scale`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactScale {
+    /// Radius of the smallest sphere in contact (m).
+    pub radius_m: f64,
+    /// Mass behind it (kg): the sphere's, or its body's.
+    pub mass_kg: f64,
+    /// How much faster than the particle it can meet another (1 for a
+    /// sphere).
+    pub speed_factor: f64,
+}
+
+/// A size no scene gave: refused by validation with the key's name.
+fn not_given() -> f64 {
+    f64::NAN
+}
+
+impl ParticlesSpec {
+    /// The shape keys as given.
+    pub fn shape_keys(&self) -> ShapeKeys<'_> {
+        ShapeKeys {
+            kind: self.shape,
+            aspect_ratio: self.aspect_ratio,
+            hole_ratio: self.hole_ratio,
+            sub_spheres: self.sub_spheres,
+            clump_file: self.clump_file.as_ref(),
+        }
+    }
+
+    /// Reads `equivalent_diameter_m` into `diameter_m`; both given is a
+    /// contradiction.
+    fn settle_diameter(&mut self) -> Result<(), InvalidParameter> {
+        if let Some(d) = self.equivalent_diameter_m.take() {
+            if !self.diameter_m.is_nan() {
+                return Err(InvalidParameter::new(
+                    "particles.equivalent_diameter_m",
+                    d,
+                    "m",
+                    format!(
+                        "given alone: particles.diameter_m = {} m says the same (the diameter of the sphere of equal volume)",
+                        self.diameter_m
+                    ),
+                ));
+            }
+            self.diameter_m = d;
+        }
+        Ok(())
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -304,8 +378,15 @@ impl Scene {
             path: origin.to_string(),
             message,
         };
-        let scene: Scene =
+        let mut scene: Scene =
             toml::from_str(text).map_err(|e| error(one_line(&e, own_text.then_some(text))))?;
+        scene
+            .particles
+            .settle_diameter()
+            .map_err(|e| SceneError::File {
+                path: origin.to_string(),
+                source: Box::new(e.into()),
+            })?;
         scene.validate().map_err(|e| SceneError::File {
             path: origin.to_string(),
             source: Box::new(e),
@@ -333,6 +414,15 @@ impl Scene {
         };
         let mut base = parse(THESIS_DAMPER_TOML, "built-in thesis scene")?;
         let overlay = parse(text, origin)?;
+        // A file that sizes its particles by `equivalent_diameter_m` replaces
+        // the preset's `diameter_m` (the same size under another name).
+        if let (Some(toml::Value::Table(b)), Some(toml::Value::Table(t))) =
+            (base.get_mut("particles"), overlay.get("particles"))
+            && t.contains_key("equivalent_diameter_m")
+            && !t.contains_key("diameter_m")
+        {
+            b.remove("diameter_m");
+        }
         merge_tables(&mut base, overlay);
         let merged = toml::to_string(&base).map_err(|e| SceneError::Parse {
             path: origin.to_string(),
@@ -370,6 +460,7 @@ impl Scene {
     fn validate_bed(&self) -> Result<(), SceneError> {
         let p = &self.particles;
         positive("particles.diameter_m", p.diameter_m, "m")?;
+        p.shape_keys().validate()?;
         let particle = p.material.resolve("particles.material")?;
         require(
             particle.youngs_pa.is_finite(),
@@ -382,11 +473,15 @@ impl Scene {
         positive("enclosure.inner_diameter_m", e.inner_diameter_m, "m")?;
         positive("enclosure.inner_length_m", e.inner_length_m, "m")?;
         e.material.resolve("enclosure.material")?;
-        if e.inner_diameter_m <= p.diameter_m || e.inner_length_m <= p.diameter_m {
+        let across_m = match p.shape_keys().sub_spheres_of(self.radius_m())? {
+            Some(generated) => 2.0 * quick_reach_m(&generated)?,
+            None => p.diameter_m,
+        };
+        if e.inner_diameter_m <= across_m || e.inner_length_m <= across_m {
             return Err(SceneError::ParticleTooLarge {
                 diameter_m: e.inner_diameter_m,
                 length_m: e.inner_length_m,
-                particle_m: p.diameter_m,
+                particle_m: across_m,
             });
         }
         let fill = self.fill_ratio();
@@ -534,15 +629,46 @@ impl Scene {
         (MAX_FILL * self.enclosure_volume_m3() / self.particle_volume_m3()).floor() as usize
     }
 
-    /// Total particle mass (kg).
+    /// Total particle mass (kg): of the spheres, or of the bodies, each the
+    /// mass of the union of its sub-spheres (eq. 4.1).
     pub fn particle_mass_kg(&self) -> f64 {
-        self.particles.count as f64
-            * sphere_mass_kg(self.radius_m(), self.particle_material().density_kgm3)
+        self.particles.count as f64 * self.contact_scale().mass_kg
     }
 
-    /// Rayleigh time step, the stability limit (s), eq. 3.31.
+    /// One particle as the DEM takes it when the particles are not spheres
+    /// (the union of its sub-spheres measured once per process and shape);
+    /// `None` for spheres. Validated scenes only.
+    pub fn particle_body(&self) -> Result<Option<ParticleBody>, SceneError> {
+        let density = self.particle_material().density_kgm3;
+        ParticleBody::of(&self.particles.shape_keys(), self.radius_m(), density)
+    }
+
+    /// The smallest sphere that makes contact, the mass behind it, and how
+    /// much faster than the particle it can meet a wall: a sphere's own, or
+    /// a body's smallest sub-sphere, its mass and [`ParticleBody::impact_speed_factor`].
+    /// Validated scenes only (a body that cannot be built counts as a
+    /// sphere).
+    pub fn contact_scale(&self) -> ContactScale {
+        let density = self.particle_material().density_kgm3;
+        match self.particle_body() {
+            Ok(Some(b)) => ContactScale {
+                radius_m: b.min_sub_radius_m,
+                mass_kg: b.template.mass_kg,
+                speed_factor: b.impact_speed_factor(),
+            },
+            _ => ContactScale {
+                radius_m: self.radius_m(),
+                mass_kg: sphere_mass_kg(self.radius_m(), density),
+                speed_factor: 1.0,
+            },
+        }
+    }
+
+    /// Rayleigh time step, the stability limit (s), eq. 3.31, of the
+    /// smallest sphere in contact (a body's smallest sub-sphere, Section
+    /// 4.2).
     pub fn rayleigh_limit_s(&self) -> f64 {
-        rayleigh_time_step_s(&self.particle_material(), self.radius_m())
+        rayleigh_time_step_s(&self.particle_material(), self.contact_scale().radius_m)
     }
 
     /// The drive at `freq_hz` and `gamma` under the scene's gravity
@@ -567,12 +693,13 @@ impl Scene {
             TimeStepSpec::Rule(TimeStepRule::Rayleigh) => rayleigh,
             TimeStepSpec::Rule(TimeStepRule::Contacts) => {
                 let laws = crate::scene::contact_laws(self);
-                let speed = self.expected_impact_speed_mps(drive);
-                let t_c = shortest_contact_s(
+                let scale = self.contact_scale();
+                let speed = self.expected_impact_speed_mps(drive) * scale.speed_factor;
+                let t_c = shortest_contact_with_mass_s(
                     &laws.particle_particle,
                     &laws.particle_wall,
-                    self.radius_m(),
-                    self.particle_material().density_kgm3,
+                    scale.radius_m,
+                    scale.mass_kg,
                     speed,
                 );
                 (t_c / sim.steps_per_contact)

@@ -8,9 +8,11 @@ pub mod drive_length;
 pub mod error;
 pub mod format;
 pub mod packing;
+pub mod particle_shape;
 pub mod validity;
 
 pub use contact_laws::{ContactLaws, contact_laws};
 pub use drive_length::{DriveLength, SteadyCriteria, transient_cycles};
 pub use error::{ReplayOption, SceneError};
 pub use format::*;
+pub use particle_shape::{ParticleBody, ShapeKind};

@@ -437,22 +437,22 @@ impl PhaseObserver {
     }
 }
 
-/// Centre of mass of the particles relative to the enclosure along its axis
+/// Centre of mass of the particles (each body once) relative to the enclosure along its axis
 /// (m), and the mass-weighted velocity fluctuation `Σ m |v − v_cm|² / (3 M)`.
 fn bed_state(world: &World) -> (f64, f64) {
     let p = &world.particles;
     let m_total = p.total_mass_kg();
     let mut com = DVec3::ZERO;
     let mut momentum = DVec3::ZERO;
-    for i in 0..p.len() {
-        com += p.position[i] * p.mass[i];
-        momentum += p.velocity[i] * p.mass[i];
+    for (m, x, v) in p.movers() {
+        com += x * m;
+        momentum += v * m;
     }
     com /= m_total;
     let v_cm = momentum / m_total;
     let mut fluct = 0.0;
-    for i in 0..p.len() {
-        fluct += p.mass[i] * (p.velocity[i] - v_cm).length_squared();
+    for (m, _, v) in p.movers() {
+        fluct += m * (v - v_cm).length_squared();
     }
     let axis = world.walls.axis;
     (
