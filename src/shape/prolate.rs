@@ -1,5 +1,5 @@
 //! Markauskas' analytical multi-sphere prolate spheroid (thesis Section
-//! 4.4.1, eq. 4.8–4.15; D. Markauskas et al., the thesis' ref. [164]).
+//! 4.4.1, eq. 4.8–4.15; D. Markauskas et al., the thesis' ref. 164).
 //!
 //! 2n + 1 sub-spheres sit on the spheroid's axis x: a central sphere of
 //! radius b at x₀ = 0 and n mirrored pairs at ±xᵢ. Each touches the

@@ -224,7 +224,7 @@ mod tests {
     /// 4.27; prolate α 6: 13). Catches a table mixing rows.
     #[test]
     fn error_tables_fall_with_n() {
-        let pro = prolate_error_table(&FIG_4_7_ASPECT_RATIOS, &[13, 21, 31]).unwrap();
+        let pro = prolate_error_table(&FIG_4_7_ASPECT_RATIOS, &[13, 17, 21]).unwrap();
         assert_eq!(pro.len(), 9);
         assert!(prolate_error_table(&[6.0], &[5, 13]).unwrap().len() == 1);
         for w in pro.chunks(3) {
