@@ -169,7 +169,13 @@ pub fn union_properties(body: &MultiSphere, rel_tol: f64) -> Result<UnionPropert
 /// squared radii and d their centres' distance, tangency is
 /// (d² − p² − q²)² = 4p²q², i.e. d⁴ − 2d²(p² + q²) + (p² − q²)² = 0; p² and
 /// q² are quadratic in z with the same −z² term, so this is a quadratic in z.
+/// Spheres that do not meet (apart, or one strictly inside the other) have
+/// no common point, so their slice circles are never tangent: skipped.
 fn tangency_heights((ca, ra): (DVec3, f64), (cb, rb): (DVec3, f64), out: &mut Vec<f64>) {
+    let dist = (ca - cb).length();
+    if dist > ra + rb || dist < (ra - rb).abs() {
+        return;
+    }
     let d2 = (ca.x - cb.x).powi(2) + (ca.y - cb.y).powi(2);
     let (za, zb) = (ca.z, cb.z);
     let (lo, hi) = ((za - ra).max(zb - rb), (za + ra).min(zb + rb));
