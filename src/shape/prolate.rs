@@ -78,8 +78,8 @@ pub fn markauskas(spheroid: &Spheroid, n_subs: usize) -> Result<ProlatePlacement
 /// The least odd count whose placement has every pair of neighbours
 /// overlapping. With few spheres at a high aspect ratio eq. 4.15 spreads
 /// the centres so far that the tip sphere (radius b²/a) stands apart from
-/// its neighbour: α = 3 needs 7 spheres, α = 6 needs 13, and Fig. 4.7's
-/// smallest counts there describe a body in pieces.
+/// its neighbour: α = 1.5 connects from 3 spheres, α = 3 needs 7 and
+/// α = 6 needs 13; fewer describe a body in pieces.
 pub fn min_connected_subs(spheroid: &Spheroid) -> Result<usize, ShapeError> {
     let mut n_subs = 3;
     while n_subs <= 100_001 {
