@@ -80,9 +80,10 @@ pub fn markauskas(spheroid: &Spheroid, n_subs: usize) -> Result<ProlatePlacement
 /// the centres so far that the tip sphere (radius b²/a) stands apart from
 /// its neighbour: α = 1.5 connects from 3 spheres, α = 3 needs 7 and
 /// α = 6 needs 13; fewer describe a body in pieces.
+/// Counts are tried in turn up to [`MAX_PROLATE_SUBS`].
 pub fn min_connected_subs(spheroid: &Spheroid) -> Result<usize, ShapeError> {
     let mut n_subs = 3;
-    while n_subs <= 100_001 {
+    while n_subs <= MAX_PROLATE_SUBS {
         if place(spheroid, n_subs)?.largest_gap_m().is_none() {
             return Ok(n_subs);
         }
@@ -90,9 +91,12 @@ pub fn min_connected_subs(spheroid: &Spheroid) -> Result<usize, ShapeError> {
     }
     Err(ShapeError::SubCount {
         n_subs,
-        valid: "no count up to 100001 connects this prolate".into(),
+        valid: format!("no count up to {MAX_PROLATE_SUBS} connects this prolate"),
     })
 }
+
+/// The most sub-spheres [`min_connected_subs`] tries.
+pub const MAX_PROLATE_SUBS: usize = 4001;
 
 /// Eq. 4.9–4.15 without the connectivity check.
 fn place(spheroid: &Spheroid, n_subs: usize) -> Result<ProlatePlacement, ShapeError> {
