@@ -113,12 +113,6 @@ impl Spheroid {
         true_sphericity(self.volume_m3(), self.surface_m2())
     }
 
-    /// Whether `p` (body frame, m) is inside or on the surface, with a
-    /// relative slack `rel_slack` on the implicit function of eq. 4.8.
-    pub fn contains(&self, p: glam::DVec3, rel_slack: f64) -> bool {
-        self.implicit(p) <= rel_slack
-    }
-
     /// The implicit function of eq. 4.8: (x/a)² + (y/b)² + (z/b)² − 1.
     pub fn implicit(&self, p: glam::DVec3) -> f64 {
         (p.x / self.a_m).powi(2) + (p.y / self.b_m).powi(2) + (p.z / self.b_m).powi(2) - 1.0
@@ -329,7 +323,9 @@ mod tests {
         assert!((from_h.volume_m3() / v_ref - 1.0).abs() < 1e-12);
     }
 
-    /// Out-of-range shapes are refused with the parameter named.
+    /// Out-of-range shapes are refused with the parameter named (exact
+    /// message text). Catches a spindle torus (a < b) or a negative aspect
+    /// ratio slipping through to NaN dimensions.
     #[test]
     fn torus_refuses_bad_hole_ratio() {
         let e = Torus::from_hole_ratio(1.2, 1e-3).unwrap_err().to_string();

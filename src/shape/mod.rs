@@ -150,7 +150,8 @@ pub enum ShapeError {
     /// The union integration did not reach its tolerance.
     #[error(
         "the union integration stopped at an estimated relative error {achieved:e}, \
-         above the requested tolerance {requested:e} (rel_tol must be >= 1e-13)"
+         above the requested rel_tol {requested:e} (dimensionless): ask a looser rel_tol \
+         (the default is 1e-6)"
     )]
     ToleranceNotReached {
         /// Requested relative tolerance.

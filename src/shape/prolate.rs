@@ -1,5 +1,5 @@
 //! Markauskas' analytical multi-sphere prolate spheroid (thesis Section
-//! 4.4.1, eq. 4.8–4.15; D. Markauskas et al., the thesis' ref. [164]).
+//! 4.4.1, eq. 4.8–4.15; D. Markauskas et al., the thesis' ref. 164).
 //!
 //! 2n + 1 sub-spheres sit on the spheroid's axis x: a central sphere of
 //! radius b at x₀ = 0 and n mirrored pairs at ±xᵢ. Each touches the
@@ -78,11 +78,12 @@ pub fn markauskas(spheroid: &Spheroid, n_subs: usize) -> Result<ProlatePlacement
 /// The least odd count whose placement has every pair of neighbours
 /// overlapping. With few spheres at a high aspect ratio eq. 4.15 spreads
 /// the centres so far that the tip sphere (radius b²/a) stands apart from
-/// its neighbour: α = 3 needs 7 spheres, α = 6 needs 13, and Fig. 4.7's
-/// smallest counts there describe a body in pieces.
+/// its neighbour: α = 1.5 connects from 3 spheres, α = 3 needs 7 and
+/// α = 6 needs 13; fewer describe a body in pieces.
+/// Counts are tried in turn up to [`MAX_PROLATE_SUBS`].
 pub fn min_connected_subs(spheroid: &Spheroid) -> Result<usize, ShapeError> {
     let mut n_subs = 3;
-    while n_subs <= 100_001 {
+    while n_subs <= MAX_PROLATE_SUBS {
         if place(spheroid, n_subs)?.largest_gap_m().is_none() {
             return Ok(n_subs);
         }
@@ -90,9 +91,12 @@ pub fn min_connected_subs(spheroid: &Spheroid) -> Result<usize, ShapeError> {
     }
     Err(ShapeError::SubCount {
         n_subs,
-        valid: "no count up to 100001 connects this prolate".into(),
+        valid: format!("no count up to {MAX_PROLATE_SUBS} connects this prolate"),
     })
 }
+
+/// The most sub-spheres [`min_connected_subs`] tries.
+pub const MAX_PROLATE_SUBS: usize = 4001;
 
 /// Eq. 4.9–4.15 without the connectivity check.
 fn place(spheroid: &Spheroid, n_subs: usize) -> Result<ProlatePlacement, ShapeError> {

@@ -41,6 +41,9 @@ pub struct BodyReport {
     pub min_radius_m: f64,
     /// Union's centre of mass in the body frame (m).
     pub centre_of_mass_m: DVec3,
+    /// Union's principal moments of inertia per unit density, ascending
+    /// (m⁵; times the density in kg m²).
+    pub principal_moments_m5: DVec3,
 }
 
 /// Compare `body` with an exact shape of volume `exact_volume_m3` and
@@ -62,6 +65,7 @@ pub fn compare(
         sphericity: super::exact::true_sphericity(exact_volume_m3, exact_surface_m2),
         min_radius_m: body.min_radius_m().ok_or(ShapeError::EmptyBody)?,
         centre_of_mass_m: u.centre_of_mass_m,
+        principal_moments_m5: u.principal().0,
     })
 }
 
@@ -211,6 +215,9 @@ mod tests {
             );
         }
         assert!(p.volume_rel_err < 0.0 && p.volume_rel_err > -0.01);
+        // A prolate about x: one small moment, two equal large ones (1e-9).
+        let m = p.principal_moments_m5;
+        assert!(m.x < m.y && ((m.z - m.y) / m.y).abs() < 1e-9, "{m}");
         assert!(t.volume_rel_err < 0.0 && t.volume_rel_err > -0.01);
         assert!(o.volume_rel_err.abs() < 0.10);
         assert_eq!(o.n_subs, 9);
@@ -224,7 +231,7 @@ mod tests {
     /// 4.27; prolate α 6: 13). Catches a table mixing rows.
     #[test]
     fn error_tables_fall_with_n() {
-        let pro = prolate_error_table(&FIG_4_7_ASPECT_RATIOS, &[13, 21, 31]).unwrap();
+        let pro = prolate_error_table(&FIG_4_7_ASPECT_RATIOS, &[13, 17, 21]).unwrap();
         assert_eq!(pro.len(), 9);
         assert!(prolate_error_table(&[6.0], &[5, 13]).unwrap().len() == 1);
         for w in pro.chunks(3) {

@@ -4,8 +4,8 @@
 //! The thesis takes a multi-sphere grain's volume from its outer surface
 //! (eq. 4.1) and its inertia as an integral over its mass (eq. 4.5): the
 //! union of the sub-spheres, not a sum over spheres that overlap (a sum
-//! counts each overlap twice; for Markauskas' 51-sphere prolate it would
-//! be several times the spheroid's volume).
+//! counts each overlap twice or more; for Markauskas' 51-sphere prolate
+//! of α = 1.5 it is 24.7 times the union's volume).
 //!
 //! Method. Cut the body by planes z = const. Each slice is a union of discs
 //! (the sub-spheres cut by the plane), whose area, first and second area
@@ -16,18 +16,26 @@
 //! R the area between z and z + dz over an azimuth dθ is R dθ dz, so the
 //! union's surface is ∫ Σᵢ Rᵢ θᵢ(z) dz with θᵢ(z) the exposed angle of
 //! sphere i's circle in the slice (a point of sphere i is inside sphere j
-//! exactly when it is inside j's disc in its slice). The slice quantities
-//! are smooth in z except where a sphere starts or ends (z = c_z ± R, used
-//! as breakpoints) and where two circles start or stop crossing; the
-//! integral over z is adaptive Gauss–Kronrod (7–15 points), splitting every
-//! interval whose |K15 − G7| exceeds its share of the tolerance.
+//! exactly when it is inside j's disc in its slice).
+//!
+//! The slice quantities are analytic in z except where a sphere starts or
+//! ends (z = c_z ± R) and where two slice circles become tangent, inside or
+//! outside (a quadratic in z per pair, `tangency_heights`); all these
+//! heights are breakpoints, so each interval's integrand is smooth. The
+//! integral over each is adaptive Gauss–Kronrod (7–15 points), splitting
+//! every interval whose |K15 − G7| exceeds its share of the tolerance.
+//! Without the tangency breakpoints a kink could hide between the nodes:
+//! the 50-sphere toroid's surface then came out 4e-6 off while the estimate
+//! said 2e-7.
 //!
 //! Tolerance, as stated to the caller: the sum over intervals of the
 //! largest of |ΔV|/V, |Δ first moment|/(V L), |Δ second moment|/tr and
 //! |ΔS|/S, with L the body's radius of gyration about the integration
 //! origin and tr the trace of its second-moment tensor, is kept at or below
 //! `rel_tol` (default [`DEFAULT_REL_TOL`] = 1e-6). |K15 − G7| overstates the
-//! error of the K15 sum used; the tests find the true errors far below it.
+//! error of the K15 sum used: on the thesis' bodies at 1e-6 the true errors
+//! (against a 1e-10 run) are 1e-13 in volume and inertia and 2e-8 to 5e-8
+//! in surface.
 
 use super::section::{Disc, disc_union};
 use super::{MultiSphere, ShapeError, out_of_range};
@@ -113,16 +121,17 @@ pub fn union_properties(body: &MultiSphere, rel_tol: f64) -> Result<UnionPropert
         .iter()
         .flat_map(|&(c, r)| [c.z - r, c.z + r])
         .collect();
+    for (i, &si) in spheres.iter().enumerate() {
+        for &sj in &spheres[i + 1..] {
+            tangency_heights(si, sj, &mut breaks);
+        }
+    }
     breaks.sort_by(f64::total_cmp);
     breaks.dedup_by(|a, b| (*a - *b).abs() <= 1e-14 * scale_m);
 
     let mut intervals: Vec<Interval> = breaks
         .windows(2)
-        .flat_map(|w| {
-            let mid = 0.5 * (w[0] + w[1]);
-            [(w[0], mid), (mid, w[1])]
-        })
-        .map(|(a, b)| Interval::new(&spheres, a, b))
+        .map(|w| Interval::new(&spheres, w[0], w[1]))
         .collect();
 
     loop {
@@ -151,6 +160,47 @@ pub fn union_properties(body: &MultiSphere, rel_tol: f64) -> Result<UnionPropert
             }
         }
         intervals = next;
+    }
+}
+
+/// Push the heights z at which the slice circles of spheres `a` and `b`
+/// are tangent (internally or externally): there the slice's union changes
+/// shape and its quantities are not smooth in z. With p², q² the circles'
+/// squared radii and d their centres' distance, tangency is
+/// (d² − p² − q²)² = 4p²q², i.e. d⁴ − 2d²(p² + q²) + (p² − q²)² = 0; p² and
+/// q² are quadratic in z with the same −z² term, so this is a quadratic in z.
+/// Spheres that do not meet (apart, or one strictly inside the other) have
+/// no common point, so their slice circles are never tangent: skipped.
+fn tangency_heights((ca, ra): (DVec3, f64), (cb, rb): (DVec3, f64), out: &mut Vec<f64>) {
+    let dist = (ca - cb).length();
+    if dist > ra + rb || dist < (ra - rb).abs() {
+        return;
+    }
+    let d2 = (ca.x - cb.x).powi(2) + (ca.y - cb.y).powi(2);
+    let (za, zb) = (ca.z, cb.z);
+    let (lo, hi) = ((za - ra).max(zb - rb), (za + ra).min(zb + rb));
+    if lo >= hi {
+        return;
+    }
+    let a0 = ra * ra - za * za + rb * rb - zb * zb;
+    let a1 = 2.0 * (za + zb);
+    let b0 = ra * ra - za * za - rb * rb + zb * zb;
+    let b1 = 2.0 * (za - zb);
+    let qa = 4.0 * d2 + b1 * b1;
+    let qb = -2.0 * d2 * a1 + 2.0 * b0 * b1;
+    let qc = d2 * d2 - 2.0 * d2 * a0 + b0 * b0;
+    if qa == 0.0 {
+        return; // concentric equal-height spheres: no event
+    }
+    let disc = qb * qb - 4.0 * qa * qc;
+    if disc < 0.0 {
+        return;
+    }
+    let root = disc.sqrt();
+    for z in [(-qb - root) / (2.0 * qa), (-qb + root) / (2.0 * qa)] {
+        if z > lo && z < hi {
+            out.push(z);
+        }
     }
 }
 
@@ -549,5 +599,94 @@ mod tests {
             assert!(axes.col(k).dot(rot.col(k)).abs() > 1.0 - 1e-12);
         }
         assert!((axes.determinant() - 1.0).abs() < 1e-12);
+    }
+}
+
+#[cfg(test)]
+mod revolution_tests {
+    use super::super::exact::Spheroid;
+    use super::super::prolate::markauskas;
+    use super::*;
+    use std::f64::consts::PI;
+
+    /// A Markauskas prolate (α 1.5, 31 spheres) is a solid of revolution
+    /// about x with profile ρ(x) = maxᵢ √(Rᵢ² − (x − xᵢ)²): V = ∫πρ² dx,
+    /// I_xx = ∫πρ⁴/2 dx, I_yy = ∫(πρ⁴/4 + πρ²x²) dx, and (Archimedes) S =
+    /// ∫ 2π R_top(x) dx with R_top the radius of the sphere on top. Those
+    /// 1D integrals, by the midpoint rule on 400 000 steps (error ~1e-9 for
+    /// V and I, ~1e-6 for S at the profile's kinks), agree with the slice
+    /// integration at 1e-6 to 2e-6 relative; the naive sum of sphere
+    /// volumes is several times V. Catches a slice integration that
+    /// mishandles many nested, overlapping discs.
+    #[test]
+    fn prolate_union_matches_solid_of_revolution() {
+        let s = Spheroid::from_aspect_ratio(1.5, 1.0).unwrap();
+        let body = markauskas(&s, 31).unwrap().body();
+        let p = union_properties(&body, DEFAULT_REL_TOL).unwrap();
+        let steps = 400_000;
+        let h = 2.0 * s.a_m / steps as f64;
+        let (mut v, mut ixx, mut iyy, mut area) = (0.0, 0.0, 0.0, 0.0);
+        for k in 0..steps {
+            let x = -s.a_m + (k as f64 + 0.5) * h;
+            let (rho2, r_top) = body
+                .subs
+                .iter()
+                .map(|q| {
+                    (
+                        q.radius_m * q.radius_m - (x - q.centre_m.x).powi(2),
+                        q.radius_m,
+                    )
+                })
+                .fold((0.0f64, 0.0), |best, c| if c.0 > best.0 { c } else { best });
+            v += PI * rho2 * h;
+            ixx += 0.5 * PI * rho2 * rho2 * h;
+            iyy += (0.25 * PI * rho2 * rho2 + PI * rho2 * x * x) * h;
+            area += 2.0 * PI * r_top * h;
+        }
+        let rel = |got: f64, want: f64| (got / want - 1.0).abs();
+        assert!(rel(p.volume_m3, v) < 1e-6, "{} vs {v}", p.volume_m3);
+        assert!(rel(p.inertia_per_density_m5.x_axis.x, ixx) < 1e-6);
+        assert!(rel(p.inertia_per_density_m5.y_axis.y, iyy) < 1e-6);
+        assert!(rel(p.inertia_per_density_m5.z_axis.z, iyy) < 1e-6);
+        assert!(rel(p.surface_m2, area) < 2e-6, "{} vs {area}", p.surface_m2);
+        let naive: f64 = body
+            .subs
+            .iter()
+            .map(|q| 4.0 / 3.0 * PI * q.radius_m.powi(3))
+            .sum();
+        eprintln!(
+            "naive sum / union volume = {:.2}, intervals {}",
+            naive / p.volume_m3,
+            p.n_intervals
+        );
+        assert!(naive > 5.0 * p.volume_m3);
+    }
+
+    /// The error estimate is honest on the thesis' bodies: at the default
+    /// 1e-6 the volume, surface and inertia trace of a 21-sphere prolate
+    /// (α 3) and the thesis' 50-sphere toroid (a/b 2) lie within 1e-6 of the same
+    /// at 1e-10. Catches a stopping rule that stops early.
+    #[test]
+    fn default_tolerance_holds_against_tight_run() {
+        let pro = markauskas(&Spheroid::from_aspect_ratio(3.0, 1.0).unwrap(), 21)
+            .unwrap()
+            .body();
+        let tor = super::super::toroid::ring(
+            &super::super::exact::Torus::from_tube_ratio(2.0, 1.0).unwrap(),
+            50,
+        )
+        .unwrap();
+        for body in [pro, tor] {
+            let loose = union_properties(&body, DEFAULT_REL_TOL).unwrap();
+            let tight = union_properties(&body, 1e-10).unwrap();
+            let trace = |p: &UnionProperties| {
+                let i = p.inertia_per_density_m5;
+                i.x_axis.x + i.y_axis.y + i.z_axis.z
+            };
+            let rel = |a: f64, b: f64| (a / b - 1.0).abs();
+            assert!(rel(loose.volume_m3, tight.volume_m3) <= 1e-6);
+            assert!(rel(loose.surface_m2, tight.surface_m2) <= 1e-6);
+            assert!(rel(trace(&loose), trace(&tight)) <= 1e-6);
+        }
     }
 }
