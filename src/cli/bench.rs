@@ -33,7 +33,9 @@
 //! 2 mm poured and settled in the thesis cylinder (40 mm across), made taller
 //! than the thesis' 40 mm by `N / 5000` for more than 5 000 spheres (the same
 //! fill), or `1mm`, the thesis cylinder filled with 44 740 spheres of 1 mm
-//! (the thesis' fill). A bed comes from the bed cache when it holds it (see
+//! (the thesis' fill), or `prolate`, the thesis' bed of 90 prolates of
+//! aspect ratio 1.5 with 51 sub-spheres (Section 8.2), counted in
+//! sub-sphere-steps. A bed comes from the bed cache when it holds it (see
 //! `vlab::experiment::bed_cache`; `--no-cache` settles anew), and its settling
 //! is reported apart from its steps.
 
@@ -81,8 +83,11 @@ pub struct BenchArgs {
     beds: BedSizes,
     /// Poured beds to time, comma-separated: a number N of 2 mm spheres poured
     /// in the thesis cylinder (taller by N/5000 above 5 000 spheres), or "1mm"
-    /// for its 44 740 spheres of 1 mm; "none": no poured beds. Each is settled
-    /// once, or read from the bed cache.
+    /// for its 44 740 spheres of 1 mm, or "prolate" for the thesis' 90
+    /// prolates of aspect ratio 1.5 with 51 sub-spheres each (rates count
+    /// sub-spheres; timed against a poured bed of as many spheres when that
+    /// is asked too, e.g. `--poured 4590,prolate`); "none": no poured beds.
+    /// Each is settled once, or read from the bed cache.
     #[arg(long, default_value = "none", value_parser = parse_poured)]
     poured: PouredBeds,
     /// Steps timed per run of a lattice or poured bed.
@@ -142,12 +147,19 @@ const POURED_PER_THESIS_LENGTH: usize = 5000;
 #[derive(Debug, Clone)]
 pub struct PouredBeds(Vec<PouredBed>);
 
-/// One poured bed: spheres and their diameter.
+/// One poured bed: spheres and their diameter, or (`prolate`) the thesis'
+/// bed of prolates: 90 of aspect ratio 1.5 and 51 sub-spheres (Section 8.2),
+/// `spheres` their sub-spheres.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct PouredBed {
     spheres: usize,
     diameter_m: f64,
+    prolate: bool,
 }
+
+/// The thesis' prolate bed (Section 8.2): bodies, their volume-equivalent
+/// diameter, aspect ratio and sub-spheres.
+const PROLATE_BED: (usize, f64, f64, usize) = (90, 0.0076, 1.5, 51);
 
 impl PouredBed {
     /// The thesis scene holding this bed, settled for at most 0.1 s once
@@ -156,6 +168,16 @@ impl PouredBed {
     /// fill it to 0.42 and more fill it to the same; the 1 mm bed in the
     /// thesis cylinder itself.
     fn scene(&self) -> Result<Scene> {
+        if self.prolate {
+            let (count, d, alpha, subs) = PROLATE_BED;
+            let text = format!(
+                "name = \"prolates\"\n[particles]\ncount = {count}\nshape = \"prolate\"\n\
+                 aspect_ratio = {alpha}\nsub_spheres = {subs}\nequivalent_diameter_m = {d}\n\
+                 [simulation]\nsettle_s = 0.1\n"
+            );
+            return Scene::merge_over_preset(&text, "prolate bed")
+                .context("building the prolate bed's scene");
+        }
         let thesis = Scene::thesis();
         let length_m = match self.diameter_m < 0.002 {
             true => thesis.enclosure.inner_length_m,
@@ -185,15 +207,22 @@ fn parse_poured(s: &str) -> Result<PouredBeds, String> {
             t if t.eq_ignore_ascii_case("1mm") => Ok(PouredBed {
                 spheres: ONE_MM_SPHERES,
                 diameter_m: 0.001,
+                prolate: false,
+            }),
+            t if t.eq_ignore_ascii_case("prolate") => Ok(PouredBed {
+                spheres: PROLATE_BED.0 * PROLATE_BED.3,
+                diameter_m: PROLATE_BED.1,
+                prolate: true,
             }),
             t => match t.parse::<usize>() {
                 Ok(n) if n >= 2 => Ok(PouredBed {
                     spheres: n,
                     diameter_m: 0.002,
+                    prolate: false,
                 }),
                 _ => Err(format!(
                     "'{x}' is not a poured bed: a number of 2 mm spheres of at least 2, \
-                     \"1mm\" (or \"none\")"
+                     \"1mm\", \"prolate\" (or \"none\")"
                 )),
             },
         })
@@ -377,6 +406,9 @@ impl Clock {
 #[derive(Debug, Serialize)]
 struct PouredReport {
     particles: usize,
+    /// Bodies the particles are sub-spheres of (the prolate bed), or none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    bodies: Option<usize>,
     diameter_m: f64,
     /// Inner length of the cylinder it was poured in (m); 40 mm across.
     inner_length_m: f64,
@@ -465,7 +497,11 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
         for p in &a.poured.0 {
             let (world, made) = poured_bed(p, &source, &configs, &mut progress)?;
             poured_beds.push(made);
-            bed_rows(&Bed::Poured(world), &a, &configs, &mut rows)?;
+            let bed = match p.prolate {
+                true => Bed::Prolates(world),
+                false => Bed::Poured(world),
+            };
+            bed_rows(&bed, &a, &configs, &mut rows)?;
         }
     }
     progress.finish();
@@ -570,10 +606,16 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
             (None, Some(r)) => format!("read from the bed cache in {r:.2} s"),
             (None, None) => String::new(),
         };
+        let what = match p.bodies {
+            Some(n) => format!(
+                "{n} prolates of {} sub-spheres (volume of a {} mm sphere each)",
+                p.particles / n.max(1),
+                p.diameter_m * 1e3
+            ),
+            None => format!("{} spheres of {} mm", p.particles, p.diameter_m * 1e3),
+        };
         println!(
-            "  poured bed: {} spheres of {} mm in a cylinder 40 mm across, {} mm long, packing {:.3} ({} settling steps, {:.3} s simulated); {}",
-            p.particles,
-            p.diameter_m * 1e3,
+            "  poured bed: {what} in a cylinder 40 mm across, {} mm long, packing {:.3} ({} settling steps, {:.3} s simulated); {}",
             p.inner_length_m * 1e3,
             p.packing_fraction,
             p.settle_steps,
@@ -655,7 +697,7 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
                 other,
             ));
         }
-        let Some(kind) = [Bed::LATTICE, Bed::POURED]
+        let Some(kind) = [Bed::LATTICE, Bed::POURED, Bed::PROLATES]
             .into_iter()
             .find(|k| k.steps == base.case)
         else {
@@ -688,6 +730,27 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
                     split,
                 ));
             }
+        }
+    }
+    // The prolate bed against spheres of as many (sub-)spheres, 1 thread:
+    // what a body costs beyond its spheres.
+    let one_bed = |case: &str, n: usize| {
+        rows.iter()
+            .find(|r| r.threads == 1 && r.copies == 1 && r.case == case && r.particles == n)
+    };
+    for prolates in rows
+        .iter()
+        .filter(|r| r.threads == 1 && r.copies == 1 && r.case == Bed::PROLATES.steps)
+    {
+        if let Some(spheres) = one_bed(Bed::POURED.steps, prolates.particles) {
+            out.push(Speedup::between(
+                format!(
+                    "prolates over a poured bed of as many spheres ({}), 1 thread",
+                    prolates.particles
+                ),
+                spheres,
+                prolates,
+            ));
         }
     }
     let one = |case: &str| rows.iter().find(|r| r.threads == 1 && r.case == case);
@@ -791,6 +854,9 @@ fn drive_once(
 enum Bed {
     Lattice(usize),
     Poured(Box<World>),
+    /// The thesis' prolate bed, poured and settled (its sub-spheres are the
+    /// particles the rates count).
+    Prolates(Box<World>),
 }
 
 impl Bed {
@@ -802,18 +868,23 @@ impl Bed {
         steps: "poured bed, thesis contacts: steps",
         copies: "poured bed, thesis contacts: copies at once",
     };
+    const PROLATES: BedCases = BedCases {
+        steps: "prolate bed (90 x 51 sub-spheres), thesis contacts: steps",
+        copies: "prolate bed (90 x 51 sub-spheres), thesis contacts: copies at once",
+    };
 
     fn cases(&self) -> (&'static BedCases, &'static str) {
         match self {
             Bed::Lattice(_) => (&Self::LATTICE, LATTICE),
             Bed::Poured(_) => (&Self::POURED, POURED),
+            Bed::Prolates(_) => (&Self::PROLATES, PROLATES),
         }
     }
 
     fn spheres(&self) -> usize {
         match self {
             Bed::Lattice(n) => *n,
-            Bed::Poured(w) => w.particles.len(),
+            Bed::Poured(w) | Bed::Prolates(w) => w.particles.len(),
         }
     }
 
@@ -824,7 +895,7 @@ impl Bed {
     fn warm(&self) -> Result<World> {
         let mut world = match self {
             Bed::Lattice(n) => lattice_bed(*n, 0.52, 1).context("building the lattice bed")?,
-            Bed::Poured(w) => (**w).clone(),
+            Bed::Poured(w) | Bed::Prolates(w) => (**w).clone(),
         };
         world.retime_threads();
         for _ in 0..20 + TRIAL_STEPS {
@@ -838,6 +909,8 @@ impl Bed {
 const LATTICE: &str = "lattice";
 /// The row's `bed` of a poured bed (the thesis scene's included).
 const POURED: &str = "poured";
+/// The row's `bed` of the prolate bed.
+const PROLATES: &str = "prolates";
 
 /// The poured bed `p`, from the cache or settled here on all the threads
 /// (the settled bed does not depend on them), ready to step with the
@@ -862,8 +935,10 @@ fn poured_bed(
     let drive = scene.drive(40.0, 20.0)?;
     let world = prepare_drive(&bed, &scene, scene.drive_dt_s(&drive))?;
     let work = bed.settle_steps as f64 * bed.world.particles.len() as f64;
+    let bodies = bed.world.particles.clumps.len();
     let made = PouredReport {
         particles: bed.world.particles.len(),
+        bodies: (bodies > 0).then_some(bodies),
         diameter_m: p.diameter_m,
         inner_length_m: scene.enclosure.inner_length_m,
         from_cache: bed.from_cache,

@@ -257,6 +257,7 @@ fn pour(
     );
     let mut numerics = Numerics::with_dt(dt_soft);
     numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
+    numerics.skin_ratio = scene.skin_ratio();
     let mut world = World::new(
         particles,
         Walls::closed_cylinder(cyl_r, column),
@@ -355,6 +356,7 @@ pub fn rebuild_settled_world(
     let (pp, pw) = settling_laws(scene, 1.0);
     let mut numerics = Numerics::with_dt(dt_s);
     numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
+    numerics.skin_ratio = scene.skin_ratio();
     let world = World::new(
         particles,
         Walls::closed_cylinder(
@@ -517,11 +519,30 @@ pub struct Packing {
 
 /// Packing fraction of the bulk of a bed poured along the axis (z), and the
 /// height its particles' volume fills at that packing.
+///
+/// A body's volume is its union's (its mass over the density), shared
+/// between heights as its sub-spheres' volumes are: their sum counts the
+/// overlaps several times over.
 pub fn packing(world: &World, scene: &Scene) -> Packing {
     let p = &world.particles;
     let area = PI * (0.5 * scene.enclosure.inner_diameter_m).powi(2);
+    let density = scene.particle_material().density_kgm3;
+    let c = &p.clumps;
+    // Each sphere's share of its particle's volume: 1 for a free sphere,
+    // the body's union over its sub-spheres' sum for a sub-sphere.
+    let mut share = vec![1.0; p.len()];
+    for b in 0..c.len() {
+        let slots = c.slots(b);
+        let summed: f64 = slots
+            .clone()
+            .map(|s| 4.0 / 3.0 * PI * p.radius[c.index[s] as usize].powi(3))
+            .sum();
+        for s in slots {
+            share[c.index[s] as usize] = c.mass[b] / density / summed;
+        }
+    }
     let v_p: f64 = (0..p.len())
-        .map(|i| 4.0 / 3.0 * PI * p.radius[i].powi(3))
+        .map(|i| share[i] * 4.0 / 3.0 * PI * p.radius[i].powi(3))
         .sum();
     let d = 2.0 * scene.radius_m();
     let top = top_of_bed(world);
@@ -535,7 +556,7 @@ pub fn packing(world: &World, scene: &Scene) -> Packing {
         };
     }
     let inside: f64 = (0..p.len())
-        .map(|i| sphere_volume_between(p.position[i].z, p.radius[i], lo, hi))
+        .map(|i| share[i] * sphere_volume_between(p.position[i].z, p.radius[i], lo, hi))
         .sum();
     let phi = inside / (area * (hi - lo));
     Packing {
