@@ -173,3 +173,64 @@ fn a_bed_of_prolates_settles_shakes_and_comes_back_from_the_cache() {
     assert!(one == two, "the cached bed drove otherwise");
     assert_eq!(s2["bed_from_cache"], true, "{s2:#}");
 }
+
+/// `vlab press` of the thesis' toroid of Section 5.4.4 (a 3 mm, b 1.15 mm:
+/// hole ratio 0.4458, the volume of a 5.31 mm sphere; 50 sub-spheres)
+/// lying flat: the normal curve has every sub-sphere touching from the
+/// first point on, rises monotonically, and the ripple depth it prints and
+/// writes is eq. 5.19's 15.5 µm (within 0.2 µm); a deformation beyond half
+/// the body is refused and writes nothing.
+#[test]
+fn press_writes_the_curves_of_a_flat_toroid_and_its_ripple() {
+    let dir = Scratch::new("shape-press");
+    let name = scene_file(
+        &dir,
+        "toroid.toml",
+        "[particles]\nshape = \"toroid\"\nhole_ratio = 0.44578\nequivalent_diameter_m = 0.0053086\n",
+    );
+    let out = vlab(
+        &dir.0,
+        &[
+            "press",
+            "--scene",
+            &name,
+            "--config",
+            "horizontal",
+            "--points",
+            "50",
+            "--out",
+            "p",
+        ],
+    );
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(text.contains("ripples"), "{text}");
+    let json = common::json(&dir.path("p/press.json"));
+    let ripple = json["ripple_m"].as_f64().expect("ripple");
+    assert!((ripple - 15.5e-6).abs() < 0.2e-6, "{ripple}");
+    let csv = std::fs::read_to_string(dir.path("p/normal.csv")).expect("normal.csv");
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().expect("number")).collect())
+        .collect();
+    assert_eq!(rows.len(), 51);
+    for w in rows[1..].windows(2) {
+        assert_eq!(w[0][3], 50.0, "{w:?}");
+        assert!(w[1][2] > w[0][2], "{w:?}");
+    }
+    assert!(dir.path("p/tangential.csv").exists());
+    refuses_in(
+        &dir,
+        &[
+            "press",
+            "--scene",
+            &name,
+            "--max-deformation",
+            "0.8",
+            "--out",
+            "q",
+        ],
+        &["--max-deformation", "0.5"],
+    );
+}

@@ -16,6 +16,7 @@ mod hints;
 mod impact;
 mod plot;
 mod predict;
+mod press;
 mod progress;
 mod replay;
 mod rig_cmd;
@@ -55,6 +56,9 @@ enum Command {
     Analyze(analyze::AnalyzeArgs),
     /// One collision, sphere against a wall or a sphere, against Hertz theory.
     Impact(impact::ImpactArgs),
+    /// A scene's particle (a sphere or a multi-sphere body) pressed onto a
+    /// plate: normal and tangential force-deformation curves (thesis 5.4).
+    Press(press::PressArgs),
     /// Show the built-in scene (or a scene file merged over it).
     Scene(scene_cmd::SceneArgs),
     /// List the built-in rigs, or show one (--print: its TOML file).
@@ -139,6 +143,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Calibrate(a) => calibrate::run(a),
         Command::Analyze(a) => analyze::run(a),
         Command::Impact(a) => impact::run(a),
+        Command::Press(a) => press::run(a),
         Command::Scene(a) => scene_cmd::run(a),
         Command::Rig(a) => rig_cmd::run(a),
         Command::Sweep(a) => sweep::run(a, quiet),

@@ -3,7 +3,8 @@
 //! `bed_cache`), the bed-to-bed part of a shake's error (`bed_spread`), the DEM
 //! truth recorder (`record`), the shake through the rig and
 //! its measurement by Yang's method (`shake`, `measurement`), the drop test
-//! (`drop`), the single collision (`impact`) and the replay of another code's
+//! (`drop`), the single collision (`impact`), a body pressed onto a plate
+//! (`press`) and the replay of another code's
 //! record (`replay`). Each builds only what it needs: a single collision has no
 //! enclosure; a drop test has one sphere, a plate and the drop rig.
 
@@ -14,6 +15,7 @@ pub mod drop;
 pub mod fill;
 pub mod impact;
 pub mod measurement;
+pub mod press;
 pub mod record;
 pub mod replay;
 pub mod settle;
