@@ -262,9 +262,9 @@ impl EventLines {
 fn outcome(row: &SweepRow) -> String {
     match row.status {
         RowStatus::Ok => format!(
-            "efficiency {:.3} +- {:.3}, measured {:.3}, {} ({} cycles{}, {:.0} s)",
+            "efficiency {:.3} +- {}, measured {:.3}, {} ({} cycles{}, {:.0} s)",
             row.efficiency,
-            row.efficiency_se,
+            plus_minus(row.efficiency_se),
             row.efficiency_measured,
             phase_name(row.phase),
             row.cycles,
@@ -277,6 +277,16 @@ fn outcome(row: &SweepRow) -> String {
         ),
         RowStatus::Unreachable => "beyond the rig".into(),
         RowStatus::Failed => format!("FAILED: {}", row.note),
+    }
+}
+
+/// A one-sigma error as printed: "n/a" when there is none (a window of
+/// fewer than 16 cycles has no error estimate; JSON and CSV keep it empty).
+fn plus_minus(se: f64) -> String {
+    if se.is_finite() {
+        format!("{se:.3}")
+    } else {
+        "n/a  ".into()
     }
 }
 
@@ -327,13 +337,13 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
     for s in &summary {
         if s.status == RowStatus::Ok {
             println!(
-                "  {:.3}  {:<11}  {:>5}  {:>6}   {:.3} +- {:.3}          {:.3}     {}",
+                "  {:.3}  {:<11}  {:>5}  {:>6}   {:.3} +- {}          {:.3}     {}",
                 s.fill_ratio,
                 s.orientation.as_str(),
                 s.freq_hz,
                 s.gamma,
                 s.efficiency,
-                s.efficiency_se,
+                plus_minus(s.efficiency_se),
                 s.efficiency_measured,
                 phase_name(s.phase)
             );
