@@ -405,3 +405,16 @@ fn merge(m: MergeArgs) -> Result<()> {
     let plots = plot_sweep(&merged, &m.out).context("drawing the sweep's plots")?;
     report(&merged, &m.out, &plots, false)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An efficiency without an error estimate (one seed, a window under 16
+    /// cycles) prints "n/a", never "NaN"; one with an estimate prints it.
+    #[test]
+    fn an_error_that_is_not_known_prints_as_n_a() {
+        assert_eq!(plus_minus(f64::NAN).trim(), "n/a");
+        assert_eq!(plus_minus(0.0123), "0.012");
+    }
+}
