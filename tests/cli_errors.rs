@@ -59,6 +59,24 @@ fn steady_window_too_short_for_yangs_method() {
         None,
         &["--steady-cycles = 1: must be at least 2", "Yang's method"],
     );
+    // Every cycle kept: the record from the drive's start lacks its first
+    // sample, so 2 periods hold 1999 samples, one whole period at 40 Hz:
+    // refused before the run (it used to fail after the whole drive).
+    refuses(
+        &[
+            "shake",
+            "--freq",
+            "40",
+            "--gamma",
+            "20",
+            "--cycles",
+            "2",
+            "--steady-cycles",
+            "2",
+        ],
+        None,
+        &["--steady-cycles = 2: must be at least 3", "first sample"],
+    );
 }
 
 #[test]

@@ -70,7 +70,10 @@ fn sweep_marks_resumes_shards_and_merges() {
     assert!(a.status.success(), "{}", stderr(&a));
     // Two seeds give an error from their spread; never a NaN in the table.
     let table = String::from_utf8_lossy(&a.stdout);
-    assert!(table.contains(" +- 0.") && !table.contains("NaN"), "{table}");
+    assert!(
+        table.contains(" +- 0.") && !table.contains("NaN"),
+        "{table}"
+    );
     let all = dir.path("all/sweep.csv");
     let rows = rows_without_wall_time(&all);
     assert_eq!(rows.len(), 12, "{rows:#?}");

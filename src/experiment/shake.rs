@@ -41,7 +41,7 @@ use crate::experiment::measurement::{
 use crate::experiment::record::TruthSamples;
 use crate::experiment::settle::{SettledBed, prepare_drive};
 use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
-use crate::scene::{Scene, SceneError};
+use crate::scene::{CyclesSpec, Scene, SceneError};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};
 use crate::validation::{InvalidParameter, require};
 use crate::warning::{FileKey, RunWarning};
@@ -99,8 +99,21 @@ pub const MIN_RECORD_PERIODS: u32 = 2;
 /// sampled at `sample_rate_hz`: a record keeps whole samples, so at 1024 Hz
 /// and 40 kHz two periods (78.1 samples) are 78 samples, 1.997 periods.
 pub fn sampled_whole_periods(n: u32, freq_hz: f64, sample_rate_hz: f64) -> u32 {
-    let samples = (f64::from(n) * sample_rate_hz / freq_hz + 1e-9).floor();
-    (samples * freq_hz / sample_rate_hz + 1e-9).floor() as u32
+    whole_periods_of(
+        record_samples(n, freq_hz, sample_rate_hz),
+        freq_hz,
+        sample_rate_hz,
+    )
+}
+
+/// Samples a record of `n` periods holds.
+fn record_samples(n: u32, freq_hz: f64, sample_rate_hz: f64) -> f64 {
+    (f64::from(n) * sample_rate_hz / freq_hz + 1e-9).floor()
+}
+
+/// Whole periods `samples` samples hold.
+fn whole_periods_of(samples: f64, freq_hz: f64, sample_rate_hz: f64) -> u32 {
+    (samples * freq_hz / sample_rate_hz + 1e-9).floor().max(0.0) as u32
 }
 
 /// Checks that the scene's steady window, `drive.steady_cycles`, holds the
@@ -112,7 +125,18 @@ pub fn check_record_window(
     sample_rate_hz: f64,
 ) -> Result<(), InvalidParameter> {
     let n = scene.drive.steady_cycles;
-    let held = |k| sampled_whole_periods(k, freq_hz, sample_rate_hz);
+    // A window that starts with the drive (every cycle kept) lacks the
+    // sample at its start: the DAQ reads the steps, the first at the end of
+    // the first step.
+    let from_start = matches!(scene.drive.cycles, CyclesSpec::Count(c) if c == n);
+    let lost = if from_start { 1.0 } else { 0.0 };
+    let held = |k| {
+        whole_periods_of(
+            record_samples(k, freq_hz, sample_rate_hz) - lost,
+            freq_hz,
+            sample_rate_hz,
+        )
+    };
     if n >= MIN_RECORD_PERIODS && held(n) >= MIN_RECORD_PERIODS {
         return Ok(());
     }
@@ -123,9 +147,14 @@ pub fn check_record_window(
     let why = if least == MIN_RECORD_PERIODS {
         String::new()
     } else {
-        let samples = (f64::from(n) * sample_rate_hz / freq_hz + 1e-9).floor();
+        let samples = record_samples(n, freq_hz, sample_rate_hz) - lost;
+        let start = if from_start {
+            " (a window from the drive's start lacks its first sample: keep a cycle before it, or one more)"
+        } else {
+            ""
+        };
         format!(
-            " at {freq_hz} Hz: sampled at {sample_rate_hz} Hz, {n} periods are {samples} samples, {} whole period{}",
+            " at {freq_hz} Hz: sampled at {sample_rate_hz} Hz, {n} periods are {samples} samples, {} whole period{}{start}",
             held(n),
             if held(n) == 1 { "" } else { "s" }
         )
