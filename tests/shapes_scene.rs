@@ -60,6 +60,19 @@ fn wrong_shape_keys_are_refused_with_the_key_and_its_range() {
         }
         assert_eq!(common::files_below(&dir.0), before);
     }
+    // Too many bodies for the enclosure: said of the bodies, with the
+    // numbers.
+    let full = scene_file(
+        &dir,
+        "full.toml",
+        "[particles]\ncount = 200\nshape = \"prolate\"\naspect_ratio = 1.5\nequivalent_diameter_m = 0.0076\n",
+    );
+    let err = common::stderr(&vlab(&dir.0, &["scene", "--scene", &full]));
+    assert!(
+        err.contains("200 prolates with the volume of spheres of 0.0076 m")
+            && err.contains("at most"),
+        "{err}"
+    );
     // Both names of the size in one file contradict each other.
     let both = scene_file(
         &dir,

@@ -38,10 +38,12 @@ pub enum SceneError {
     Invalid(#[from] InvalidParameter),
     /// More particles than the enclosure can hold.
     #[error(
-        "particles.count = {count} spheres of {diameter_m} m fill {fill:.3} of the enclosure, above random close packing ({MAX_FILL}): the enclosure cannot hold them (at most {max_count} fit)"
+        "particles.count = {count} {what} of {diameter_m} m fill {fill:.3} of the enclosure, above random close packing ({MAX_FILL}): the enclosure cannot hold them (at most {max_count} fit)"
     )]
     Overfull {
         count: usize,
+        /// "spheres", or the shape's plural with "the volume of spheres".
+        what: String,
         diameter_m: f64,
         fill: f64,
         max_count: usize,

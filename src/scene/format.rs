@@ -499,6 +499,10 @@ impl Scene {
         if fill > MAX_FILL {
             return Err(SceneError::Overfull {
                 count: p.count,
+                what: match p.shape {
+                    ShapeKind::Sphere => "spheres".into(),
+                    other => format!("{}s with the volume of spheres", other.as_str()),
+                },
                 diameter_m: p.diameter_m,
                 fill,
                 max_count: self.max_particles(),
