@@ -70,6 +70,13 @@ fn sweep_marks_resumes_shards_and_merges() {
     assert!(a.status.success(), "{}", stderr(&a));
     // Two seeds give an error from their spread; never a NaN in the table.
     let table = String::from_utf8_lossy(&a.stdout);
+    // Each frequency's curve has its peak read off (a log-parabola, or at
+    // the grid's end).
+    assert_eq!(
+        table.matches("  peak at fill 0.208, vertical, ").count(),
+        2,
+        "{table}"
+    );
     assert!(
         table.contains(" +- 0.") && !table.contains("NaN"),
         "{table}"

@@ -18,6 +18,7 @@ use vlab::study::sweep::{
     RowStatus, Shard, Steady, SweepEvent, SweepFile, SweepPlan, SweepRow, merge_shards, phase_name,
     run_sweep, summarise,
 };
+use vlab::study::sweep_peak::{SeriesPeak, series_peaks};
 use vlab::study::sweep_plot::plot_sweep;
 
 use super::args;
@@ -312,6 +313,7 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
                 "shard": file.header.shard.to_string(),
                 "rows": file.rows,
                 "by_condition": summary,
+                "peaks": series_peaks(file),
             }))?
         );
         return Ok(());
@@ -358,11 +360,45 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
             );
         }
     }
+    print_peaks(&series_peaks(file));
     println!("  wrote {}", dir.join("sweep.csv").display());
     for p in plots {
         println!("  wrote {}", p.display());
     }
     Ok(())
+}
+
+/// Where each series' DEM efficiency peaks against Gamma (a parabola in
+/// ln Gamma through the largest value and its neighbours), with the spread
+/// of the seeds' own peaks.
+fn print_peaks(peaks: &[SeriesPeak]) {
+    for p in peaks {
+        let Some(m) = p.of_mean else { continue };
+        let series = format!(
+            "  peak at fill {:.3}, {}, {} Hz:",
+            p.fill_ratio,
+            p.orientation.as_str(),
+            p.freq_hz
+        );
+        if m.at_edge {
+            println!(
+                "{series} at the grid's end, Gamma {} (efficiency {:.3}): the peak lies beyond the grid",
+                m.gamma, m.efficiency
+            );
+            continue;
+        }
+        let spread = match (p.gamma_mean, p.gamma_stderr) {
+            (Some(mean), Some(se)) => format!(
+                "; the seeds' own peaks {mean:.2} +- {se:.2} (from {} seeds)",
+                p.per_seed.iter().flatten().filter(|q| !q.at_edge).count()
+            ),
+            _ => "; +- n/a (fewer than 2 seeds peak inside the grid)".into(),
+        };
+        println!(
+            "{series} Gamma {:.2}, efficiency {:.3} (parabola in ln Gamma through the largest and its neighbours){spread}",
+            m.gamma, m.efficiency
+        );
+    }
 }
 
 fn relabel(r: RelabelArgs) -> Result<()> {

@@ -1,5 +1,6 @@
 //! Studies: many experiments and what they say together. Sweeps of frequency,
-//! Gamma, fill and orientation with their maps (`sweep`, `sweep_plot`), the
+//! Gamma, fill and orientation with their maps (`sweep`, `sweep_plot`) and
+//! where each series peaks (`sweep_peak`), the
 //! motional phases read from DEM truth (`phases`), accuracy against run time
 //! (`accuracy`) and the bouncing-bed onset predicted from the scene alone
 //! (`predict`, thesis eq. 6.11-6.13).
@@ -8,5 +9,6 @@ pub mod accuracy;
 pub mod phases;
 pub mod predict;
 pub mod sweep;
+pub mod sweep_peak;
 #[cfg(feature = "plot")]
 pub mod sweep_plot;
