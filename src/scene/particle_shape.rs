@@ -379,12 +379,20 @@ impl ParticleBody {
     }
 }
 
-/// The farthest reach (m) of a generated particle from its union's centre
-/// of mass, measured quickly (a coarse union, 1e-3): for the checks that a
-/// particle fits the enclosure.
+/// The farthest reach (m) of a generated particle from the volume-weighted
+/// mean of its sub-spheres' centres (near its centre of mass, without
+/// measuring the union): for the check that a particle fits the enclosure.
 pub fn quick_reach_m(generated: &Generated) -> Result<f64, SceneError> {
-    let u = shape::union::union_properties(&generated.body, 1e-3)?;
-    Ok(generated.reach_m(u.centre_of_mass_m))
+    let subs = &generated.body.subs;
+    let weight: f64 = subs.iter().map(|s| s.radius_m.powi(3)).sum();
+    if subs.is_empty() || !(weight > 0.0) {
+        return Err(shape::ShapeError::EmptyBody.into());
+    }
+    let centre = subs
+        .iter()
+        .fold(DVec3::ZERO, |c, s| c + s.centre_m * s.radius_m.powi(3))
+        / weight;
+    Ok(generated.reach_m(centre))
 }
 
 /// `n` directions spread evenly over the unit sphere (a Fibonacci lattice).
