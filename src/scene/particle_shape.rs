@@ -385,7 +385,7 @@ impl ParticleBody {
 pub fn quick_reach_m(generated: &Generated) -> Result<f64, SceneError> {
     let subs = &generated.body.subs;
     let weight: f64 = subs.iter().map(|s| s.radius_m.powi(3)).sum();
-    if subs.is_empty() || !(weight > 0.0) {
+    if subs.is_empty() || !weight.is_finite() || weight <= 0.0 {
         return Err(shape::ShapeError::EmptyBody.into());
     }
     let centre = subs
