@@ -1,6 +1,7 @@
 //! Side views of the bed at eight phases of one steady cycle, coloured by
 //! particle speed, the way the thesis shows its motional phases (Fig. 6.6,
-//! 6.14, 6.19–6.21).
+//! 6.14, 6.19–6.21). A rigid body of sub-spheres is drawn as its
+//! sub-spheres, all in its centre's colour.
 //!
 //! [`PhaseSnapshots`] is a [`StepObserver`] that keeps the particles at the
 //! steps nearest to `(n + k / 8) T`, k = 0..7, of the last whole drive cycle n
@@ -17,6 +18,7 @@ use std::path::Path;
 use glam::DVec3;
 
 use crate::dem::World;
+use crate::dem::clumps::NOT_IN_CLUMP;
 use crate::experiment::damper::{Kinematics, StepObserver};
 #[cfg(feature = "plot")]
 use crate::scene::Orientation;
@@ -205,11 +207,87 @@ impl StepObserver for PhaseSnapshots {
             enclosure_displacement_m: enclosure.displacement_m,
             enclosure_velocity_mps: enclosure.velocity_mps,
             position: p.position.clone(),
-            speed_mps: p.velocity.iter().map(|v| v.length()).collect(),
+            // A body's sub-spheres take its centre's speed: one colour a
+            // body, so that the strip shows bodies, not their spheres.
+            speed_mps: (0..p.len())
+                .map(|k| match p.clump[k] {
+                    NOT_IN_CLUMP => p.velocity[k].length(),
+                    b => p.clumps.velocity[b as usize].length(),
+                })
+                .collect(),
             radius_m: p.radius.clone(),
         });
         if k == PHASES - 1 && self.current.len() == PHASES {
             std::mem::swap(&mut self.snapshots, &mut self.current);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::clumps::ClumpTemplate;
+    use crate::dem::{ContactLaw, Material, Numerics, Particles, RestitutionMode, Walls};
+    use glam::DQuat;
+
+    /// A spinning body of two spheres and a free sphere, captured at phase
+    /// 0: the body's sub-spheres (whose own speeds differ, one on each side
+    /// of the spin) are drawn in the speed of its centre, the free sphere in
+    /// its own. A capture that kept the sub-spheres' speeds would colour the
+    /// body in two colours.
+    #[test]
+    fn a_body_is_drawn_in_its_centre_speed() {
+        let mut p = Particles::default();
+        let t = ClumpTemplate {
+            offsets_m: vec![DVec3::new(-0.002, 0.0, 0.0), DVec3::new(0.002, 0.0, 0.0)],
+            radii_m: vec![0.0015; 2],
+            mass_kg: 1e-4,
+            inertia_kgm2: DVec3::new(1.0, 3.0, 3.0) * 1e-10,
+        };
+        let v = DVec3::new(0.0, 0.3, 0.0);
+        p.push_clump(
+            &t,
+            (DVec3::new(0.0, 0.0, 0.01), DQuat::IDENTITY),
+            (v, DVec3::Z * 50.0),
+        );
+        p.push(
+            DVec3::new(0.0, 0.0, 0.03),
+            DVec3::Y * 0.7,
+            DVec3::ZERO,
+            0.002,
+            1000.0,
+        );
+        let m = Material::ACRYLIC;
+        let law = ContactLaw::new(&m, &m, 0.8, 0.3, RestitutionMode::Exact);
+        let world = World::new(
+            p,
+            Walls::none(),
+            law,
+            law,
+            DVec3::ZERO,
+            Numerics::with_dt(1e-6),
+        )
+        .expect("world");
+        let mut snaps = PhaseSnapshots::new(40.0, 0.0);
+        let still = Kinematics {
+            displacement_m: 0.0,
+            velocity_mps: 0.0,
+            acceleration_mps2: 0.0,
+        };
+        snaps.observe(0.0, &world, &still);
+        let s = &snaps.current[0];
+        let sub = |k: usize| world.particles.velocity[k].length();
+        assert!((sub(0) - sub(1)).abs() > 0.1, "the sub-spheres move alike");
+        assert!(
+            (s.speed_mps[0] - v.length()).abs() < 1e-12,
+            "{:?}",
+            s.speed_mps
+        );
+        assert!(
+            (s.speed_mps[1] - v.length()).abs() < 1e-12,
+            "{:?}",
+            s.speed_mps
+        );
+        assert!((s.speed_mps[2] - 0.7).abs() < 1e-12, "{:?}", s.speed_mps);
     }
 }
