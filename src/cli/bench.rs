@@ -1131,3 +1131,30 @@ fn median(xs: &[f64]) -> f64 {
         _ => 0.5 * (v[n / 2 - 1] + v[n / 2]),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `--poured prolate` is the thesis' prolate bed (90 bodies of 51
+    /// sub-spheres, counted as 4 590), whose scene is a valid scene of
+    /// prolates of aspect ratio 1.5 in the thesis cylinder; it mixes with
+    /// sphere counts, and a word that is neither is refused naming it.
+    #[test]
+    fn the_prolate_bed_is_parsed_and_is_the_thesis_one() {
+        let beds = parse_poured("4590, prolate").expect("parsed").0;
+        assert_eq!(beds.len(), 2);
+        assert!(!beds[0].prolate && beds[0].spheres == 4590);
+        assert!(beds[1].prolate && beds[1].spheres == 90 * 51);
+        let scene = beds[1].scene().expect("scene");
+        assert_eq!(scene.particles.count, 90);
+        assert_eq!(scene.particles.shape, vlab::scene::ShapeKind::Prolate);
+        assert_eq!(scene.particles.aspect_ratio, Some(1.5));
+        assert_eq!(scene.particles.diameter_m, 0.0076);
+        let err = parse_poured("oblate").expect_err("refused");
+        assert!(
+            err.contains("'oblate'") && err.contains("\"prolate\""),
+            "{err}"
+        );
+    }
+}
