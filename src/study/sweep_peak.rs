@@ -9,7 +9,11 @@
 //! the per-seed peaks (their spread over √n), so it says how far the peak
 //! moves from bed to bed, not how finely the grid resolves it. A largest
 //! value at either end of the grid has no neighbour beyond it: the peak lies
-//! beyond the grid, and is reported so, not extrapolated.
+//! beyond the grid, and is reported so, not extrapolated. Where the curve
+//! jumps between two grid points (a sharp bouncing-bed onset: 0.23 at Γ 25,
+//! 0.89 at Γ 30) the parabola overshoots the values it was fitted to, and
+//! the peak is marked so: its Γ lies between the neighbours, not at the
+//! vertex.
 
 use serde::Serialize;
 
@@ -25,7 +29,16 @@ pub struct Peak {
     pub efficiency: f64,
     /// The largest value is at an end of the grid: the peak lies beyond.
     pub at_edge: bool,
+    /// The parabola's peak stands more than [`OVERSHOOT_REL`] above the
+    /// largest value it was fitted to: the curve jumps (a bouncing-bed
+    /// onset between two grid points) rather than rounds, and the peak's Γ
+    /// is known only to lie between the largest point's neighbours.
+    pub overshoots: bool,
 }
+
+/// How far (relative) a fitted peak may stand above the largest value
+/// before the fit is said to overshoot.
+pub const OVERSHOOT_REL: f64 = 0.01;
 
 /// The peak of `(Γ, efficiency)` points (any order; Γ > 0, distinct): the
 /// vertex of the parabola in ln Γ through the largest and its neighbours.
@@ -43,6 +56,7 @@ pub fn log_parabola_peak(points: &[(f64, f64)]) -> Option<Peak> {
             gamma: p[k].0,
             efficiency: p[k].1,
             at_edge: true,
+            overshoots: false,
         });
     }
     let (x0, x1, x2) = (p[k - 1].0.ln(), p[k].0.ln(), p[k + 1].0.ln());
@@ -57,6 +71,7 @@ pub fn log_parabola_peak(points: &[(f64, f64)]) -> Option<Peak> {
             gamma: p[k].0,
             efficiency: y1,
             at_edge: false,
+            overshoots: false,
         });
     }
     // y = y0 + d01 (x - x0) + c (x - x0)(x - x1); dy/dx = 0 at
@@ -67,6 +82,7 @@ pub fn log_parabola_peak(points: &[(f64, f64)]) -> Option<Peak> {
         gamma: x.exp(),
         efficiency: y,
         at_edge: false,
+        overshoots: y > y1 * (1.0 + OVERSHOOT_REL),
     })
 }
 
@@ -186,6 +202,17 @@ mod tests {
         assert!(!p.at_edge);
         assert!((p.gamma / g0 - 1.0).abs() < 1e-9, "{p:?}");
         assert!((p.efficiency - e0).abs() < 1e-9, "{p:?}");
+    }
+
+    /// A jump at the onset (the toroids of hole ratio 0.05 at 40 Hz: 0.227
+    /// at Γ 25, 0.891 at 30, 0.851 at 35) makes the parabola stand above
+    /// every point: marked as overshooting; a rounded peak is not.
+    #[test]
+    fn a_jump_at_the_onset_is_marked_as_overshooting() {
+        let jump = log_parabola_peak(&[(25.0, 0.227), (30.0, 0.891), (35.0, 0.851)]);
+        assert!(jump.expect("peak").overshoots, "{jump:?}");
+        let round = log_parabola_peak(&[(20.0, 0.803), (25.0, 0.834), (30.0, 0.750)]);
+        assert!(!round.expect("peak").overshoots, "{round:?}");
     }
 
     /// A curve still rising at the grid's last Γ peaks beyond it: reported
