@@ -8,7 +8,7 @@ use common::{Scratch, refuses_in, vlab};
 
 /// Writes `text` as `name` in `dir`; returns the name.
 fn scene_file(dir: &Scratch, name: &str, text: &str) -> String {
-    std::fs::write(dir.path(name), text).expect("scene written");
+    dir.write(name, text);
     name.to_string()
 }
 

@@ -141,14 +141,15 @@ impl Clumps {
 
     /// Adds a body at `position` with `orientation`, `velocity` and angular
     /// velocity `spin` (space frame, rad/s), whose first sub-sphere will
-    /// have id `first_id` and array index `first_index` (the others follow
-    /// in order); returns its number.
+    /// have id and array index `first` (the others follow in order; the
+    /// particles are renumbered later, [`Clumps::reindex`]); returns its
+    /// number.
     pub fn push(
         &mut self,
         template: &ClumpTemplate,
         (position, orientation): (DVec3, DQuat),
         (velocity, spin): (DVec3, DVec3),
-        (first_id, first_index): (u32, u32),
+        first: u32,
     ) -> usize {
         if self.first_slot.is_empty() {
             self.first_slot.push(0);
@@ -162,10 +163,10 @@ impl Clumps {
         self.inertia.push(template.inertia_kgm2);
         self.force.push(DVec3::ZERO);
         self.torque.push(DVec3::ZERO);
-        self.first_id.push(first_id);
+        self.first_id.push(first);
         for (k, o) in template.offsets_m.iter().enumerate() {
             self.offsets_m.push(*o);
-            self.index.push(first_index + k as u32);
+            self.index.push(first + k as u32);
         }
         self.first_slot.push(self.offsets_m.len() as u32);
         self.len() - 1
@@ -252,7 +253,7 @@ mod tests {
         let mut c = Clumps::default();
         let q = DQuat::from_rotation_y(0.7);
         let spin = DVec3::new(3.0, -1.0, 2.0);
-        c.push(&t, (DVec3::ONE, q), (DVec3::ZERO, spin), (0, 0));
+        c.push(&t, (DVec3::ONE, q), (DVec3::ZERO, spin), 0);
         assert!((c.angular_velocity(0) - spin).length() < 1e-12 * spin.length());
         let (kt, kr) = c.kinetic_energy_j();
         assert_eq!(kt, 0.0);
@@ -274,7 +275,7 @@ mod tests {
             &t,
             (DVec3::ZERO, DQuat::IDENTITY),
             (DVec3::ZERO, DVec3::ZERO),
-            (0, 0),
+            0,
         );
         t.offsets_m.pop();
         t.radii_m.pop();
@@ -282,7 +283,7 @@ mod tests {
             &t,
             (DVec3::ZERO, DQuat::IDENTITY),
             (DVec3::ZERO, DVec3::ZERO),
-            (3, 3),
+            3,
         );
         // Array order after a renumbering: ids 5, 4, 0, 2, 3, 1.
         let id = [5, 4, 0, 2, 3, 1];

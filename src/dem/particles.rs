@@ -92,12 +92,9 @@ impl Particles {
         (velocity, spin): (DVec3, DVec3),
     ) -> usize {
         let first = self.len() as u32;
-        let b = self.clumps.push(
-            template,
-            (position, orientation),
-            (velocity, spin),
-            (first, first),
-        );
+        let b = self
+            .clumps
+            .push(template, (position, orientation), (velocity, spin), first);
         for &r in &template.radii_m {
             self.position.push(position);
             self.velocity.push(velocity);

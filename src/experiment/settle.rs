@@ -257,7 +257,9 @@ fn pour(
     );
     let mut numerics = Numerics::with_dt(dt_soft);
     numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
-    numerics.skin_ratio = scene.skin_ratio();
+    if let Some(skin) = scene.body_skin_ratio() {
+        numerics.skin_ratio = skin;
+    }
     let mut world = World::new(
         particles,
         Walls::closed_cylinder(cyl_r, column),
@@ -356,7 +358,9 @@ pub fn rebuild_settled_world(
     let (pp, pw) = settling_laws(scene, 1.0);
     let mut numerics = Numerics::with_dt(dt_s);
     numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
-    numerics.skin_ratio = scene.skin_ratio();
+    if let Some(skin) = scene.body_skin_ratio() {
+        numerics.skin_ratio = skin;
+    }
     let world = World::new(
         particles,
         Walls::closed_cylinder(

@@ -681,16 +681,12 @@ impl Scene {
         }
     }
 
-    /// The Verlet skin as a fraction of the largest sphere's radius: 0.5
-    /// for spheres (Section 3.4's cells of 2.5 R); [`BODY_SKIN_RATIO`] for
-    /// bodies, whose overlapping sub-spheres put many pairs within a wide
-    /// skin.
-    pub fn skin_ratio(&self) -> f64 {
-        if self.particles.shape.is_sphere() {
-            0.5
-        } else {
-            BODY_SKIN_RATIO
-        }
+    /// The Verlet skin a bed of bodies needs instead of the spheres'
+    /// default ([`crate::dem::Numerics::with_dt`]): [`BODY_SKIN_RATIO`],
+    /// as their overlapping sub-spheres put many pairs within a wide skin;
+    /// `None` for spheres.
+    pub fn body_skin_ratio(&self) -> Option<f64> {
+        (!self.particles.shape.is_sphere()).then_some(BODY_SKIN_RATIO)
     }
 
     /// Rayleigh time step, the stability limit (s), eq. 3.31, of the

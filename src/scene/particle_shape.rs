@@ -181,7 +181,7 @@ impl ShapeKeys<'_> {
     }
 
     /// The number of sub-spheres a generated body gets.
-    fn sub_spheres(&self) -> Option<usize> {
+    fn sub_sphere_count(&self) -> Option<usize> {
         self.sub_spheres.or(self.kind.default_sub_spheres())
     }
 
@@ -189,7 +189,7 @@ impl ShapeKeys<'_> {
     /// in its generator's frame, and the exact shape's volume and surface
     /// (none for a clump file); `None` for spheres.
     pub fn sub_spheres_of(&self, r_eq_m: f64) -> Result<Option<Generated>, SceneError> {
-        let n = self.sub_spheres().unwrap_or(0);
+        let n = self.sub_sphere_count().unwrap_or(0);
         let generated = match self.kind {
             ShapeKind::Sphere => return Ok(None),
             ShapeKind::Prolate | ShapeKind::Oblate => {
