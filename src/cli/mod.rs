@@ -22,6 +22,7 @@ mod replay;
 mod rig_cmd;
 mod scene_cmd;
 mod shake;
+mod shear_box;
 mod sweep;
 
 use std::process::ExitCode;
@@ -59,6 +60,10 @@ enum Command {
     /// A scene's particle (a sphere or a multi-sphere body) pressed onto a
     /// plate: normal and tangential force-deformation curves (thesis 5.4).
     Press(press::PressArgs),
+    /// The quasi-static compression and shear test of 100 particles between
+    /// two containers (thesis Fig. 8.15): normal and shear force-displacement
+    /// curves of one scene's particles or several, ordered by stiffness.
+    ShearBox(shear_box::ShearBoxArgs),
     /// Show the built-in scene (or a scene file merged over it).
     Scene(scene_cmd::SceneArgs),
     /// List the built-in rigs, or show one (--print: its TOML file).
@@ -144,6 +149,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analyze(a) => analyze::run(a),
         Command::Impact(a) => impact::run(a),
         Command::Press(a) => press::run(a),
+        Command::ShearBox(a) => shear_box::run(a, quiet),
         Command::Scene(a) => scene_cmd::run(a),
         Command::Rig(a) => rig_cmd::run(a),
         Command::Sweep(a) => sweep::run(a, quiet),

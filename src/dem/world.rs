@@ -148,6 +148,8 @@ pub struct World {
     threads: ThreadChoice,
     /// Total force of the walls on the particles at the current step (N).
     wall_force: DVec3,
+    /// The same, wall by wall.
+    wall_force_by_wall: Vec<DVec3>,
     /// Ledger reading the energy check compares against.
     baseline: LedgerSnapshot,
     /// Largest normal approach speed at contact onset since the last reset (m/s).
@@ -211,6 +213,7 @@ impl World {
             scratch: StepScratch::default(),
             threads: ThreadChoice::default(),
             wall_force: DVec3::ZERO,
+            wall_force_by_wall: Vec::new(),
             baseline: LedgerSnapshot::default(),
             impact_speeds: ImpactSpeeds::default(),
             particle_dissipation_j: None,
@@ -250,11 +253,11 @@ impl World {
         self.neighbours = NeighbourList::new(self.neighbours.skin_m());
         self.update_neighbours(true);
         let n_walls = self.walls.len();
-        let offset = self.walls.offset();
         self.wall_states.clear();
         self.wall_gaps.clear();
         for i in 0..self.particles.len() {
             for w in 0..n_walls {
+                let offset = self.walls.offset_of(w);
                 let dist = self.walls.shapes[w].distance_m(self.particles.position[i], offset);
                 let overlap = self.particles.radius[i] - dist;
                 self.wall_states.push(ContactState::apart(overlap));
@@ -273,6 +276,17 @@ impl World {
     ) -> Result<(), DemError> {
         self.pp_law = pp_law;
         self.pw_law = pw_law;
+        self.reset_contacts();
+        self.compute_forces(0.0, false, false)?;
+        self.rebaseline();
+        Ok(())
+    }
+
+    /// Replaces the walls (the closed enclosure a bed settled in by a shear
+    /// box, say): every contact history is dropped and the forces are
+    /// evaluated anew; the energy check restarts from here.
+    pub fn set_walls(&mut self, walls: Walls) -> Result<(), DemError> {
+        self.walls = walls;
         self.reset_contacts();
         self.compute_forces(0.0, false, false)?;
         self.rebaseline();
@@ -345,13 +359,13 @@ impl World {
     /// moved by hand (closing the lid); contacts in progress keep their history.
     pub fn refresh_wall_gaps(&mut self) {
         let n_walls = self.walls.len();
-        let offset = self.walls.offset();
         for (k, gap) in self.wall_gaps.iter_mut().enumerate() {
             if *gap > 0.0 {
                 continue;
             }
             let (i, w) = (k / n_walls, k % n_walls);
-            let dist = self.walls.shapes[w].distance_m(self.particles.position[i], offset);
+            let dist = self.walls.shapes[w]
+                .distance_m(self.particles.position[i], self.walls.offset_of(w));
             *gap = self.particles.radius[i] - dist;
         }
     }
@@ -365,6 +379,14 @@ impl World {
     /// enclosure with the opposite force.
     pub fn wall_force(&self) -> DVec3 {
         self.wall_force
+    }
+
+    /// Force wall `w` exerts on the particles now (N).
+    pub fn wall_force_of(&self, w: usize) -> DVec3 {
+        self.wall_force_by_wall
+            .get(w)
+            .copied()
+            .unwrap_or(DVec3::ZERO)
     }
 
     /// Pairs in the neighbour list now (touching or within the skin).
@@ -545,7 +567,13 @@ impl World {
             return Err(self.diagnosis().nonfinite(i, dt));
         }
         // 2. The walls' stroke.
-        let stroke = drive::move_walls(&mut self.walls, wall_displacement_m, dt, self.wall_force);
+        let stroke = drive::move_walls(
+            &mut self.walls,
+            wall_displacement_m,
+            dt,
+            self.wall_force,
+            &self.wall_force_by_wall,
+        );
         // 3. Neighbour update.
         self.update_neighbours(drift.moved_far);
         // 4. Contact forces, each contact checked and booked.
@@ -570,7 +598,7 @@ impl World {
             &booked_before,
             self.step_stored_change_j,
             kick.work * (0.5 * dt),
-            stroke.work_in_j(&self.walls, self.wall_force),
+            stroke.work_in_j(&self.walls, self.wall_force, &self.wall_force_by_wall),
         );
         self.time_s += dt;
         self.steps += 1;
@@ -616,6 +644,9 @@ impl World {
         defer_cross: bool,
         parallel: bool,
     ) -> Result<(), DemError> {
+        self.wall_force_by_wall.clear();
+        self.wall_force_by_wall
+            .resize(self.walls.len(), DVec3::ZERO);
         let stage = ForceStage {
             parallel,
             defer_cross,
@@ -641,6 +672,7 @@ impl World {
                 fewest_counted_steps_per_contact: &mut self.fewest_counted_steps_per_contact,
                 fastest_collision: &mut self.fastest_collision,
                 wall_force: &mut self.wall_force,
+                wall_force_by_wall: &mut self.wall_force_by_wall,
                 per_particle_j: self.particle_dissipation_j.as_deref_mut(),
             },
         };

@@ -20,3 +20,4 @@ pub mod record;
 pub mod replay;
 pub mod settle;
 pub mod shake;
+pub mod shear_box;

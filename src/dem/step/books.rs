@@ -60,9 +60,10 @@ pub struct BlockBooks {
     /// Of the collisions that ended, the one planned the fewest steps (the
     /// fastest): (planned, counted); the fewest counted among equals.
     pub fastest_counted: (f32, u32),
-    /// Walls: each touching contact's force on its particle, in order (their
-    /// sum, the force of the walls, is taken contact by contact).
-    pub wall_forces: Vec<DVec3>,
+    /// Walls: each touching contact's wall and force on its particle, in
+    /// order (their sum, the force of the walls, is taken contact by
+    /// contact).
+    pub wall_forces: Vec<(u32, DVec3)>,
     /// While dissipation is booked per particle: each contact's particles
     /// (the second unused for a wall) and dissipation (J), in order.
     pub dissipation: Vec<(u32, u32, f64)>,
@@ -178,6 +179,8 @@ pub struct Books<'a> {
     pub fastest_collision: &'a mut Option<CollisionSteps>,
     /// Force of the walls on the particles this step (N).
     pub wall_force: &'a mut DVec3,
+    /// The same, wall by wall, in the order of the walls.
+    pub wall_force_by_wall: &'a mut [DVec3],
     /// Energy each particle's contacts dissipated (J), while tracked.
     pub per_particle_j: Option<&'a mut [f64]>,
 }
@@ -224,8 +227,9 @@ impl Books<'_> {
                 });
             }
             if kind == Kind::Wall {
-                for &f in &b.wall_forces {
+                for &(w, f) in &b.wall_forces {
                     *self.wall_force += f;
+                    self.wall_force_by_wall[w as usize] += f;
                 }
             }
             if let (Some(per), true) = (self.per_particle_j.as_deref_mut(), dt > 0.0) {

@@ -154,6 +154,7 @@ impl ForceStage<'_> {
             shapes: &walls.shapes,
             offset: walls.offset(),
             v_wall: walls.velocity(),
+            own: &walls.own,
         };
         let bodies = bodies!(p);
         let StepView {
@@ -305,7 +306,8 @@ fn wall_block<const D: bool, const F: bool>(
         let x = bodies.position[i];
         for (w, shape) in walls.shapes.iter().enumerate() {
             let gap = &mut gaps[m * n_walls + w];
-            let dist = shape.distance_m(x, walls.offset);
+            let (offset, v_wall) = walls.at(w);
+            let dist = shape.distance_m(x, offset);
             if r - dist <= 0.0 && *gap <= 0.0 {
                 *gap = r - dist;
                 continue;
@@ -315,18 +317,18 @@ fn wall_block<const D: bool, const F: bool>(
                 // Opening: the contact's books start from the gap.
                 st.delta_prev = *gap;
             }
-            let normal = shape.normal_from(x);
+            let normal = shape.normal_from(x, offset);
             let at = ContactAt::Wall(i, w);
             if dist <= 0.0 {
                 books.refused = Some((at, ContactResult::default(), Refusal::Escaped));
                 return;
             }
-            let out = wall_contact::<D, F>(law, bodies, i, dist, normal, walls.v_wall, dt, st);
+            let out = wall_contact::<D, F>(law, bodies, i, dist, normal, v_wall, dt, st);
             *gap = st.delta_prev;
             if !books.add(&limits, at, &out, dt) {
                 return;
             }
-            books.wall_forces.push(out.force_i);
+            books.wall_forces.push((w as u32, out.force_i));
             *f += out.force_i;
             if F {
                 *t += out.torque_i;
