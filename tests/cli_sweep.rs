@@ -100,6 +100,29 @@ fn sweep_marks_resumes_shards_and_merges() {
         assert!(dir.path("all").join(plot).is_file(), "{plot}");
     }
 
+    // `sweep optimum` reads one series' optimum off each sweep given: a
+    // sweep of two frequencies needs --freq, and says which it has.
+    let opt = |extra: &[&str]| {
+        let mut args = vec!["sweep", "optimum", "--point", "tiny@1=all", "--out", "opt"];
+        args.extend_from_slice(extra);
+        vlab(&dir.0, &args)
+    };
+    let two = opt(&[]);
+    assert!(!two.status.success());
+    assert!(
+        stderr(&two).contains("2 series (20 Hz, 40 Hz)") && stderr(&two).contains("--freq"),
+        "{}",
+        stderr(&two)
+    );
+    assert!(!dir.path("opt").exists());
+    let one = opt(&["--freq", "40"]);
+    assert!(one.status.success(), "{}", stderr(&one));
+    let csv = std::fs::read_to_string(dir.path("opt/optimum.csv")).expect("optimum.csv");
+    let row = csv.lines().nth(1).expect("a row");
+    assert!(row.starts_with("tiny,1,"), "{csv}");
+    assert!(row.contains(",2,"), "two seeds: {csv}");
+    assert!(dir.path("opt/optimum.svg").is_file());
+
     // A second run into the same folder is refused without --resume, and a
     // resume with other lists is refused.
     let again = run(&dir.0, &["--out", "all"]);

@@ -24,6 +24,7 @@ mod scene_cmd;
 mod shake;
 mod shear_box;
 mod sweep;
+mod sweep_optimum;
 
 use std::process::ExitCode;
 

@@ -98,6 +98,10 @@ enum SweepAction {
     /// this vlab's heuristic (after it was tuned), rewrite the file and redraw
     /// its plots.
     Relabel(RelabelArgs),
+    /// The optimum Gamma of several sweeps (one point each, with its +- from
+    /// seeds) against a number that tells them apart, such as a shape's
+    /// aspect ratio: a table, optimum.csv and a plot (thesis Fig. 8.11-8.12).
+    Optimum(super::sweep_optimum::OptimumArgs),
 }
 
 #[derive(Debug, Clone, Args)]
@@ -126,6 +130,7 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
     match a.action {
         Some(SweepAction::Merge(m)) => return merge(m),
         Some(SweepAction::Relabel(r)) => return relabel(r),
+        Some(SweepAction::Optimum(o)) => return super::sweep_optimum::run(o),
         None => {}
     }
     let plan = sweep_plan(&a)?;
