@@ -188,3 +188,37 @@ fn a_record_cut_short_says_what_was_left_out() {
         "{human}"
     );
 }
+
+/// The per-harmonic table gives each harmonic's phase, and its power is
+/// `1/2 |F| |V| cos(phase)` to the printed digits; a negative power is
+/// explained under the table (the reference record's harmonics 2-5 are).
+#[test]
+fn the_harmonic_table_gives_the_phase_that_signs_the_power() {
+    let dir = Scratch::new("checks-harmonics");
+    let (trace, cal) = (reference("trace.csv"), reference("calibration.json"));
+    let out = vlab(&dir.0, &["analyze", &trace, "--calibration", &cal]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let header = text
+        .lines()
+        .position(|l| l.contains("phase [deg]") && l.contains("power [W]"))
+        .expect("a phase column");
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(header + 1)
+        .take(5)
+        .map(|l| l.split_whitespace().map(|c| c.parse().expect(l)).collect())
+        .collect();
+    assert_eq!(rows.len(), 5, "{text}");
+    for r in &rows {
+        let (f, v, phase_deg, p) = (r[2], r[3], r[4], r[5]);
+        let expect = 0.5 * f * v * phase_deg.to_radians().cos();
+        assert!(
+            (p - expect).abs() <= 2e-3 * expect.abs() + 1e-6,
+            "harmonic {}: {p} W printed, 1/2 |F||V| cos(phase) = {expect} W",
+            r[0]
+        );
+    }
+    assert!(rows.iter().any(|r| r[5] < 0.0), "{text}");
+    assert!(text.contains("gave energy back to the shaker"), "{text}");
+}

@@ -25,6 +25,14 @@ use vlab::signals::{
 use super::args;
 
 /// How to read a lab record: the CSV dialect, when detection is not wanted.
+/// Said under the per-harmonic table when a harmonic's power is negative.
+const NEGATIVE_HARMONIC_POWER: &str =
+    "  phase: the force's against the velocity's at that harmonic, after the phase correction;
+  power = 1/2 |F| |V| cos(phase) (eq. 7.12). A negative power (|phase| > 90 deg): at that
+  frequency the damper gave energy back to the shaker over the record; only the sum over
+  all the harmonics is the dissipation. Where a harmonic's velocity is tiny (a prescribed
+  sine), its phase and its sign are noise.";
+
 #[derive(Debug, Clone, Default, Args)]
 pub struct LabFileArgs {
     /// Field separator of a CSV record: ',', ';' or tab [default: detected from the header line].
@@ -224,12 +232,20 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
     if r.force_polarity.reversed {
         println!("  force polarity reversed: corrected");
     }
-    println!("  harmonic   freq [Hz]   force [N]   velocity [m/s]   power [W]");
+    println!("  harmonic   freq [Hz]   force [N]   velocity [m/s]   phase [deg]   power [W]");
     for h in r.per_harmonic.iter().take(5) {
         println!(
-            "  {:8}   {:9.1}   {:9.4}   {:14.5}   {:10.3e}",
-            h.harmonic, h.freq_hz, h.force_amp_n, h.velocity_amp_mps, h.power_w
+            "  {:8}   {:9.1}   {:9.4}   {:14.5}   {:11.2}   {:10.3e}",
+            h.harmonic,
+            h.freq_hz,
+            h.force_amp_n,
+            h.velocity_amp_mps,
+            h.phase_rad.to_degrees(),
+            h.power_w
         );
+    }
+    if r.per_harmonic.iter().take(5).any(|h| h.power_w < 0.0) {
+        println!("{NEGATIVE_HARMONIC_POWER}");
     }
     Ok(())
 }
