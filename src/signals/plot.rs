@@ -16,7 +16,7 @@
 use std::path::Path;
 
 use plotters::coord::Shift;
-use plotters::coord::combinators::LogCoord;
+use plotters::coord::combinators::{BindKeyPoints, LogCoord, WithKeyPoints};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -352,6 +352,41 @@ pub fn plot_log_x(path: &Path, plot: &LogXPlot) -> Result<()> {
     )
 }
 
+/// A log axis over `range` labelled at round numbers: 1, 2, 3, 5 times
+/// the powers of ten, or, on a range too short for three of those (Γ 12 to
+/// 44), 1, 1.5, 2, 3, 4, 5, 7; a light grid line at the other whole
+/// numbers of each decade. (Left to itself a log axis inside one decade
+/// labels nothing.)
+fn log_axis(range: &Range) -> WithKeyPoints<LogCoord<f64>> {
+    let (bold, light) = log_ticks(range.start, range.end);
+    range
+        .clone()
+        .log_scale()
+        .with_key_points(bold)
+        .with_light_points(light)
+}
+
+/// The labelled and the light ticks of [`log_axis`] within `lo..hi`.
+pub fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
+    let within = |mantissas: &[f64]| -> Vec<f64> {
+        let (first, last) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+        (first..=last)
+            .flat_map(|e| mantissas.iter().map(move |m| m * 10f64.powi(e)))
+            .map(|x| (x * 1e9).round() / 1e9)
+            .filter(|&x| x >= lo && x <= hi)
+            .collect()
+    };
+    let mut bold = within(&[1.0, 2.0, 3.0, 5.0]);
+    if bold.len() < 3 {
+        bold = within(&[1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 7.0]);
+    }
+    let light = within(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+        .into_iter()
+        .filter(|x| !bold.contains(x))
+        .collect();
+    (bold, light)
+}
+
 struct LogXFigure<'a> {
     plot: &'a LogXPlot,
     x_range: Range,
@@ -388,7 +423,11 @@ where
             area.draw(&Circle::new(((x0 + x1) / 2, y), 3, c.filled()))?;
         }
         LegendSample::Triangle(c) => {
-            area.draw(&TriangleMarker::new(((x0 + x1) / 2, y), 5, c.filled()))?;
+            area.draw(&TriangleMarker::new(
+                ((x0 + x1) / 2, y),
+                8,
+                c.stroke_width(2),
+            ))?;
         }
         LegendSample::Dashed(c, dash, width) => {
             let (on, off) = dash.pattern();
@@ -415,7 +454,8 @@ const LEGEND_SAMPLE_PX: i32 = 30;
 const LEGEND_LINE_PX: i32 = 19;
 
 /// The chart of a [`LogXPlot`]: logarithmic x, linear y.
-type LogXChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, RangedCoordf64>>;
+type LogXChart<'a, DB> =
+    ChartContext<'a, DB, Cartesian2d<WithKeyPoints<LogCoord<f64>>, RangedCoordf64>>;
 
 /// A legend of a [`LogXPlot`]: each entry's name and sample, in drawing order.
 type LogXLegend = Vec<(String, LegendSample)>;
@@ -436,12 +476,13 @@ impl Figure for LogXFigure<'_> {
             .margin(12)
             .x_label_area_size(48)
             .y_label_area_size(64)
-            .build_cartesian_2d(self.x_range.clone().log_scale(), self.y_range.clone())?;
+            .build_cartesian_2d(log_axis(&self.x_range), self.y_range.clone())?;
         chart
             .configure_mesh()
             .x_desc(p.x_label.as_str())
             .y_desc(p.y_label.as_str())
             .x_label_formatter(&|x| format!("{x}"))
+            .max_light_lines(2)
             .draw()?;
         let mut legend = LogXLegend::new();
         for s in &p.series {
@@ -536,9 +577,11 @@ where
         )?;
         legend.push((s.name.clone(), LegendSample::LineWithPoints(color)));
     } else {
+        // Hollow and larger than the line's dots, so that a point on the
+        // line (a measurement that agrees with the DEM) still shows.
         chart.draw_series(
             ok.iter()
-                .map(|q| TriangleMarker::new((q.0, q.1), 5, color.filled())),
+                .map(|q| TriangleMarker::new((q.0, q.1), 8, color.stroke_width(2))),
         )?;
         legend.push((s.name.clone(), LegendSample::Triangle(color)));
     }
@@ -1344,5 +1387,19 @@ mod tests {
         // A single point still gets a usable range.
         assert_eq!(pad(2.0, 2.0), 1.9..2.1);
         assert_eq!(pad(0.0, 0.0), -1.0..1.0);
+    }
+
+    /// A log axis within one decade (the sweep's Γ 15-35, padded to 12-44)
+    /// is labelled at round numbers, not left bare; a wide one at 1-2-3-5.
+    #[test]
+    fn a_log_axis_is_labelled_at_round_numbers_even_inside_a_decade() {
+        let (bold, light) = log_ticks(12.0, 44.0);
+        assert_eq!(bold, vec![15.0, 20.0, 30.0, 40.0]);
+        assert!(!light.iter().any(|x| bold.contains(x)));
+        let (bold, _) = log_ticks(0.8, 120.0);
+        assert_eq!(
+            bold,
+            vec![1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 30.0, 50.0, 100.0]
+        );
     }
 }
