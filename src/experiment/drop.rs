@@ -944,7 +944,15 @@ pub fn summarise_drops(
     let realised: Vec<f64> = all_realised.iter().flatten().copied().collect();
     let realised_model_cor = (!realised.is_empty()).then(|| mean_std(&realised).mean);
     let mut files: Vec<String> = run_summaries.iter().flat_map(|r| r.files.clone()).collect();
-    files.extend(["results.csv", "cor-vs-speed.svg", "drop.json"].map(String::from));
+    files.extend(
+        [
+            "results.csv",
+            "cor-vs-speed.svg",
+            "cor-vs-speed.png",
+            "drop.json",
+        ]
+        .map(String::from),
+    );
     let mut min_sample_rate_hz = 0.0f64;
     for s in setups {
         min_sample_rate_hz = min_sample_rate_hz.max(s.min_sample_rate_hz()?.min_rate_hz);

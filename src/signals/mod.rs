@@ -69,7 +69,7 @@ pub use phase_point::estimate_phase_error;
 pub use plot::{
     CirclePanel, ErrorSeries, HeatCell, HeatMap, HeatOverlay, LineDash, LogXPlot, MarkerLine,
     PanelStrip, RgbColor, Series, SeriesStyle, plot_heat_map, plot_log_x, plot_panel_strip,
-    plot_xy_svg,
+    plot_xy_svg, plot_xy_svg_spanning,
 };
 pub use power::{
     BinSelection, ForcePolarity, HarmonicPower, PhaseCorrection, PolarityVerdict, PowerOptions,
