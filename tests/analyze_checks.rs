@@ -222,3 +222,35 @@ fn the_harmonic_table_gives_the_phase_that_signs_the_power() {
     assert!(rows.iter().any(|r| r[5] < 0.0), "{text}");
     assert!(text.contains("gave energy back to the shaker"), "{text}");
 }
+
+/// The force-displacement loop of the record (displacement from the
+/// acceleration's spectrum, integrated in the time domain as the area
+/// `∮ F dx`) encloses per cycle what Yang's method sums in the frequency
+/// domain, to 0.5 %, when neither corrects the phase; a loop drawn from the
+/// velocity or with the displacement's sign flipped encloses nothing like
+/// it. The plots are written as SVG and PNG.
+#[test]
+fn the_force_loop_encloses_the_energy_yangs_method_finds() {
+    let dir = Scratch::new("checks-loop");
+    let trace = reference("trace.csv");
+    let out = vlab(&dir.0, &["analyze", &trace, "--plots", "plots"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let number_after = |key: &str| -> f64 {
+        let at = text.find(key).unwrap_or_else(|| panic!("{key}: {text}")) + key.len();
+        text[at..]
+            .split_whitespace()
+            .next()
+            .and_then(|w| w.parse().ok())
+            .unwrap_or_else(|| panic!("a number after {key}: {text}"))
+    };
+    let yang = number_after("energy per cycle");
+    let enclosed = number_after("force-displacement loop:");
+    assert!(
+        (enclosed / yang - 1.0).abs() < 5e-3,
+        "loop {enclosed} J, Yang {yang} J per cycle"
+    );
+    for f in ["loop.svg", "loop.png", "phasor.svg", "phasor.png"] {
+        assert!(dir.path("plots").join(f).is_file(), "{f}");
+    }
+}

@@ -231,6 +231,8 @@ pub struct Analysis {
     pub force_polarity: PolarityVerdict,
     /// Whole drive periods analysed.
     pub n_periods: usize,
+    /// The analysed window: its first sample and its length.
+    pub window_start: usize,
     pub n_samples: usize,
     /// Drive periods the record holds (`record samples f / fs`).
     pub record_periods: f64,
@@ -427,6 +429,7 @@ pub fn analyse_trace(trace: &Trace, options: &AnalysisOptions) -> Result<Analysi
         harmonics_correction: harmonics_correction(table),
         force_polarity: r.force_polarity,
         n_periods: r.n_periods,
+        window_start: r.window_start,
         n_samples: r.n_samples,
         record_periods,
         dropped_samples,

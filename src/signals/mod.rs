@@ -32,6 +32,7 @@ pub mod calibration;
 pub mod column_names;
 pub mod csv;
 pub mod error;
+pub mod hysteresis;
 pub mod impacts;
 pub mod lammps;
 pub mod phase_model;
