@@ -891,11 +891,20 @@ impl HeatFigure<'_> {
         Ok(())
     }
 
-    /// Each cell's text, centred, white on dark cells.
+    /// Each cell's text, centred, white on dark cells, on a patch of the
+    /// cell's own colour, so that an overlay line crossing the cell stops
+    /// short of the text instead of striking through it.
     fn draw_cell_texts<DB: DrawingBackend>(&self, chart: &mut HeatChart<'_, DB>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
+        let (w_px, h_px) = chart.plotting_area().dim_in_pixel();
+        let cols = self.0.cells.iter().map(|c| c.col + 1).max().unwrap_or(1);
+        let rows = self.0.cells.iter().map(|c| c.row + 1).max().unwrap_or(1);
+        let (cell_w, cell_h) = (
+            f64::from(w_px.max(1)) / cols as f64,
+            f64::from(h_px.max(1)) / rows as f64,
+        );
         for c in &self.0.cells {
             let dark = c
                 .value
@@ -903,6 +912,17 @@ impl HeatFigure<'_> {
             let color = if dark { WHITE } else { BLACK };
             let lines: Vec<&str> = c.text.lines().collect();
             let n = lines.len() as f64;
+            if let Some(v) = c.value.filter(|v| v.is_finite()) {
+                // About 7.5 px a character and 16 px a line at 13 px.
+                let chars = lines.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+                let half_w = ((chars as f64 * 7.5 + 6.0) / cell_w).min(1.0) / 2.0;
+                let half_h = ((16.0 * n + 2.0) / cell_h).min(1.0) / 2.0;
+                let (cx, cy) = (c.col as f64 + 0.5, c.row as f64 + 0.5);
+                chart.draw_series(std::iter::once(Rectangle::new(
+                    [(cx - half_w, cy - half_h), (cx + half_w, cy + half_h)],
+                    viridis(self.scale(v)).filled(),
+                )))?;
+            }
             for (k, line) in lines.iter().enumerate() {
                 let dy = (k as f64 - (n - 1.0) / 2.0) * 0.22;
                 let style = ("sans-serif", 13)
@@ -1302,6 +1322,14 @@ mod tests {
                 assert!(svg.contains("CP onset") && svg.contains("DEM 40 Hz"));
             }
         }
+        // The cell's text sits on a patch of the cell's colour drawn after
+        // the overlay line, so the line stops short of the text.
+        let svg = std::fs::read_to_string(dir.join("map.svg")).expect("map.svg");
+        let c = viridis(0.1);
+        let cell_fill = format!("fill=\"#{:02X}{:02X}{:02X}\"", c.0, c.1, c.2);
+        let line_at = svg.find("stroke=\"#FF0000\"").expect("the overlay");
+        let patch_at = svg.rfind(&cell_fill).expect("the cell's colour");
+        assert!(patch_at > line_at, "no patch over the overlay");
         let leftovers: Vec<_> = std::fs::read_dir(&dir)
             .expect("list")
             .filter_map(|e| e.ok())
