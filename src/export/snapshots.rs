@@ -1,7 +1,12 @@
-//! Side views of the bed at eight phases of one steady cycle, coloured by
-//! particle speed, the way the thesis shows its motional phases (Fig. 6.6,
-//! 6.14, 6.19–6.21). A rigid body of sub-spheres is drawn as its
-//! sub-spheres, all in its centre's colour.
+//! Central slices of the bed at eight phases of one steady cycle, coloured
+//! by each particle's speed relative to the enclosure, the way the thesis
+//! shows its motional phases (Fig. 6.6, 6.14, 6.19–6.21). Relative to the
+//! enclosure, a bed riding on its floor is dark and a bed in flight or
+//! being struck lights up; in the lab frame the whole bed would share the
+//! enclosure's colour. The slice holds the particles the plane through the
+//! enclosure's axis cuts, so that the bed's inside shows, not its outer
+//! layer. A rigid body of sub-spheres is drawn as its sub-spheres, all in
+//! its centre's colour.
 //!
 //! [`PhaseSnapshots`] is a [`StepObserver`] that keeps the particles at the
 //! steps nearest to `(n + k / 8) T`, k = 0..7, of the last whole drive cycle n
@@ -99,10 +104,10 @@ impl PhaseSnapshots {
                 panels,
                 x_range,
                 y_range,
-                value_label: "speed (m/s)".into(),
+                value_label: "rel. speed (m/s)".into(),
                 value_range: (0.0, 2.0 * peak_speed_mps),
                 footnote: format!(
-                    "side views (mm) at 8 phases of the last drive cycle; phase 0: enclosure at mid-stroke moving {} at its peak speed {peak_speed_mps:.2} m/s",
+                    "central slices (mm; the particles the plane through the axis cuts) at 8 phases of the last drive cycle, coloured by speed relative to the enclosure;\nphase 0: enclosure at mid-stroke moving {} at its peak speed {peak_speed_mps:.2} m/s",
                     match orientation {
                         Orientation::Vertical => "up",
                         Orientation::Horizontal => "right",
@@ -170,7 +175,9 @@ fn phase_panel(
         ],
     };
     let depth = |i: usize| view(orientation, s.position[i]).2;
-    let mut order: Vec<usize> = (0..s.position.len()).collect();
+    let mut order: Vec<usize> = (0..s.position.len())
+        .filter(|&i| in_slice(depth(i), s.radius_m[i]))
+        .collect();
     order.sort_by(|&a, &b| depth(b).total_cmp(&depth(a)));
     CirclePanel {
         title: format!(
@@ -186,6 +193,13 @@ fn phase_panel(
             })
             .collect(),
     }
+}
+
+/// Whether a sphere of `radius_m` whose centre lies `depth_m` from the
+/// plane through the enclosure's axis is cut by it.
+#[cfg(feature = "plot")]
+fn in_slice(depth_m: f64, radius_m: f64) -> bool {
+    depth_m.abs() < radius_m
 }
 
 impl StepObserver for PhaseSnapshots {
@@ -207,12 +221,16 @@ impl StepObserver for PhaseSnapshots {
             enclosure_displacement_m: enclosure.displacement_m,
             enclosure_velocity_mps: enclosure.velocity_mps,
             position: p.position.clone(),
-            // A body's sub-spheres take its centre's speed: one colour a
-            // body, so that the strip shows bodies, not their spheres.
+            // Relative to the enclosure, which moves along z. A body's
+            // sub-spheres take its centre's speed: one colour a body, so
+            // that the strip shows bodies, not their spheres.
             speed_mps: (0..p.len())
-                .map(|k| match p.clump[k] {
-                    NOT_IN_CLUMP => p.velocity[k].length(),
-                    b => p.clumps.velocity[b as usize].length(),
+                .map(|k| {
+                    let v = match p.clump[k] {
+                        NOT_IN_CLUMP => p.velocity[k],
+                        b => p.clumps.velocity[b as usize],
+                    };
+                    (v - DVec3::Z * enclosure.velocity_mps).length()
                 })
                 .collect(),
             radius_m: p.radius.clone(),
@@ -289,5 +307,53 @@ mod tests {
             s.speed_mps
         );
         assert!((s.speed_mps[2] - 0.7).abs() < 1e-12, "{:?}", s.speed_mps);
+    }
+
+    /// A sphere moving with the enclosure is still in its frame; one
+    /// off the plane through the axis by more than its radius is not in
+    /// the slice.
+    #[test]
+    fn speeds_are_relative_to_the_enclosure_and_the_slice_is_central() {
+        let mut p = Particles::default();
+        p.push(
+            DVec3::new(0.0, 0.0, 0.01),
+            DVec3::Z * 0.5,
+            DVec3::ZERO,
+            0.002,
+            1000.0,
+        );
+        p.push(
+            DVec3::new(0.0, 0.0, 0.02),
+            DVec3::ZERO,
+            DVec3::ZERO,
+            0.002,
+            1000.0,
+        );
+        let m = Material::ACRYLIC;
+        let law = ContactLaw::new(&m, &m, 0.8, 0.3, RestitutionMode::Exact);
+        let world = World::new(
+            p,
+            Walls::none(),
+            law,
+            law,
+            DVec3::ZERO,
+            Numerics::with_dt(1e-6),
+        )
+        .expect("world");
+        let mut snaps = PhaseSnapshots::new(40.0, 0.0);
+        let moving = Kinematics {
+            displacement_m: 0.0,
+            velocity_mps: 0.5,
+            acceleration_mps2: 0.0,
+        };
+        snaps.observe(0.0, &world, &moving);
+        let s = &snaps.current[0];
+        assert!(s.speed_mps[0].abs() < 1e-12, "{:?}", s.speed_mps);
+        assert!((s.speed_mps[1] - 0.5).abs() < 1e-12, "{:?}", s.speed_mps);
+        #[cfg(feature = "plot")]
+        {
+            assert!(in_slice(0.0019, 0.002) && in_slice(-0.0019, 0.002));
+            assert!(!in_slice(0.0021, 0.002));
+        }
     }
 }

@@ -1083,9 +1083,21 @@ pub fn plot_panel_strip(path: &Path, strip: &PanelStrip) -> Result<()> {
             message: "a panel strip needs panels and positive ranges".into(),
         });
     }
-    let panel_w = 170u32;
+    // More than four panels go on two rows, each panel larger.
+    let (rows, cols) = strip_grid(n);
+    let panel_w = 260u32;
     let panel_h = ((panel_w - 20) as f64 * yh / xw) as u32 + 50;
-    write_figure(path, (n * panel_w + 110, panel_h + 90), &StripFigure(strip))
+    write_figure(
+        path,
+        (cols * panel_w + 110, rows * panel_h + 100),
+        &StripFigure(strip),
+    )
+}
+
+/// Rows and columns of a strip of `n` panels.
+fn strip_grid(n: u32) -> (u32, u32) {
+    let rows = if n > 4 { 2 } else { 1 };
+    (rows, n.div_ceil(rows))
 }
 
 struct StripFigure<'a>(&'a PanelStrip);
@@ -1103,7 +1115,8 @@ impl Figure for StripFigure<'_> {
         let titled = root.titled(s.title.as_str(), ("sans-serif", 20))?;
         let (body, foot) = titled.split_vertically(h as i32 - 70);
         let (panels_area, bar) = body.split_horizontally(w as i32 - 110);
-        let areas = panels_area.split_evenly((1, s.panels.len()));
+        let (rows, cols) = strip_grid(s.panels.len() as u32);
+        let areas = panels_area.split_evenly((rows as usize, cols as usize));
         for (area, panel) in areas.iter().zip(&s.panels) {
             self.draw_panel(area, panel)?;
         }
