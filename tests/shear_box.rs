@@ -145,4 +145,35 @@ fn the_command_writes_its_curves_summary_and_plots() {
     for f in ["shear_box.json", "normal.svg", "normal.png"] {
         assert!(dir.path("box").join(f).exists(), "{f}");
     }
+    // Over two beds: a folder per seed, and the mean force with its
+    // standard error.
+    let out = vlab(
+        dir.path("").as_path(),
+        &[
+            "-q",
+            "shear-box",
+            "--test",
+            "normal",
+            "--normal-travel-m",
+            "0.0001",
+            "--points",
+            "10",
+            "--seeds",
+            "1,2",
+            "--out",
+            "seeds",
+        ],
+    );
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains(" +- "), "{text}");
+    for seed in ["seed-1", "seed-2"] {
+        assert!(
+            dir.path("seeds/spheres-7.6mm")
+                .join(seed)
+                .join("normal.csv")
+                .is_file(),
+            "{seed}"
+        );
+    }
 }

@@ -41,9 +41,12 @@ pub struct ShearBoxArgs {
     /// Particles in the box (the thesis: 100).
     #[arg(long, default_value = "100")]
     count: usize,
-    /// Seed of the random fill [default: the scene's].
-    #[arg(long)]
-    seed: Option<u64>,
+    /// Seeds of the random fill, comma-separated: each scene's bed settled
+    /// once per seed, and the table's mean force given with its standard
+    /// error over them (a bed of 100 particles differs from the next by as
+    /// much as the shapes do) [default: the scene's seed].
+    #[arg(long, value_delimiter = ',')]
+    seeds: Vec<u64>,
     /// Loading speed of the table (normal) and the upper container (shear)
     /// (m/s); the table's force control moves it at up to 10 times this. At
     /// 0.01 m/s the thesis bed sheared under 50 N has an inertial number
@@ -74,11 +77,12 @@ pub struct ShearBoxArgs {
     cache: NoCacheArg,
 }
 
-/// One scene's tests, as the JSON summary gives them.
+/// One scene's tests on the bed of one seed, as the JSON summary gives them.
 #[derive(Debug, Serialize)]
 struct SceneRuns {
     scene: String,
     particles: String,
+    seed: u64,
     runs: Vec<BoxRun>,
 }
 
@@ -151,13 +155,10 @@ fn load_scenes(a: &ShearBoxArgs) -> Result<Vec<Scene>> {
     };
     let mut scenes: Vec<Scene> = Vec::new();
     for file in files {
-        let mut scene = match file {
+        let scene = match file {
             Some(_) => Scene::load_or_thesis(file)?,
             None => chapter_8_spheres(),
         };
-        if let Some(seed) = a.seed {
-            scene.simulation.seed = seed;
-        }
         let scene = ShearBox::THESIS.scene(&scene, a.count);
         scene
             .validate()
@@ -190,12 +191,28 @@ fn run_all(
     quiet: bool,
 ) -> Result<Vec<SceneRuns>> {
     let mut all = Vec::new();
-    for scene in scenes {
-        let mut progress = ProgressLine::new(&format!("shear-box {}", scene.name), quiet);
+    for (base, seed) in scenes.iter().flat_map(|s| {
+        let seeds = if a.seeds.is_empty() {
+            vec![s.simulation.seed]
+        } else {
+            a.seeds.clone()
+        };
+        seeds.into_iter().map(move |seed| (s, seed))
+    }) {
+        let mut scene = base.clone();
+        scene.simulation.seed = seed;
+        let scene = &scene;
+        let label = format!("shear-box {} seed {seed}", scene.name);
+        let mut progress = ProgressLine::new(&label, quiet);
         let beds = a.cache.source(&mut |n| progress.warn(n));
         let bed = beds
             .settle(scene, &mut |p| progress.update(p))
             .with_context(|| format!("settling {} in the box", scene.name))?;
+        let folder = if a.seeds.len() > 1 {
+            out_dir.join(&scene.name).join(format!("seed-{seed}"))
+        } else {
+            out_dir.join(&scene.name)
+        };
         let mut runs = Vec::new();
         for &test in tests {
             let loading = Loading {
@@ -214,13 +231,14 @@ fn run_all(
                 progress.update(p)
             })
             .with_context(|| format!("the {} test of {}", test.as_str(), scene.name))?;
-            write_curve(&out_dir.join(&scene.name), &run)?;
+            write_curve(&folder, &run)?;
             runs.push(run);
         }
         progress.finish();
         all.push(SceneRuns {
             scene: scene.name.clone(),
             particles: describe_particles(scene),
+            seed,
             runs,
         });
     }
@@ -274,19 +292,47 @@ fn write_summary(out_dir: &Path, all: &[SceneRuns]) -> Result<()> {
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// One plot of every scene's curve of `test`, in mm and N, as SVG and PNG.
+/// The scenes in the order given, each once.
+fn scene_names(all: &[SceneRuns]) -> Vec<&str> {
+    let mut names: Vec<&str> = Vec::new();
+    for s in all {
+        if !names.contains(&s.scene.as_str()) {
+            names.push(&s.scene);
+        }
+    }
+    names
+}
+
+/// The runs of `test` on every seed of scene `name`.
+fn runs_of<'a>(all: &'a [SceneRuns], name: &str, test: BoxTest) -> Vec<&'a BoxRun> {
+    all.iter()
+        .filter(|s| s.scene == name)
+        .filter_map(|s| s.runs.iter().find(|r| r.test == test))
+        .collect()
+}
+
+/// One plot of every scene's curve of `test` (over several seeds, their
+/// mean point by point), in mm and N, as SVG and PNG.
 fn plot_test(out_dir: &Path, all: &[SceneRuns], test: BoxTest) -> Result<()> {
-    let series: Vec<Series> = all
-        .iter()
-        .filter_map(|s| {
-            let run = s.runs.iter().find(|r| r.test == test)?;
+    let series: Vec<Series> = scene_names(all)
+        .into_iter()
+        .filter_map(|name| {
+            let runs = runs_of(all, name, test);
+            let first = runs.first()?;
+            let n = runs.len() as f64;
+            let points = (0..first.points.len())
+                .map(|k| {
+                    let f = runs.iter().map(|r| r.points[k].force_n).sum::<f64>() / n;
+                    (first.points[k].displacement_m * 1e3, f)
+                })
+                .collect();
             Some(Series {
-                name: s.scene.clone(),
-                points: run
-                    .points
-                    .iter()
-                    .map(|p| (p.displacement_m * 1e3, p.force_n))
-                    .collect(),
+                name: if runs.len() > 1 {
+                    format!("{name} (mean of {} beds)", runs.len())
+                } else {
+                    name.to_string()
+                },
+                points,
                 style: SeriesStyle::Line,
             })
         })
@@ -329,6 +375,25 @@ fn force_at_n(run: &BoxRun, displacement_m: f64) -> f64 {
         .map_or(f64::NAN, |p| p.force_n)
 }
 
+/// The mean and, over two or more beds, the standard error of a figure.
+fn mean_se(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    if values.len() < 2 {
+        return (mean, f64::NAN);
+    }
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+fn with_se(mean: f64, se: f64) -> String {
+    if se.is_finite() {
+        format!("{mean:.1} +- {se:.1}")
+    } else {
+        format!("{mean:.1}")
+    }
+}
+
 fn print_table(all: &[SceneRuns], tests: &[BoxTest], out_dir: &Path) {
     for &test in tests {
         println!(
@@ -340,40 +405,43 @@ fn print_table(all: &[SceneRuns], tests: &[BoxTest], out_dir: &Path) {
             }
         );
         println!(
-            "  {:<16} {:>11} {:>12} {:>12} {:>12} {:>11} {:>10}",
-            "scene",
-            "z_test,0 mm",
-            "F @ 1/4 (N)",
-            "F @ 1/2 (N)",
-            "F @ end (N)",
-            "mean F (N)",
-            "M steps/s"
+            "  {:<16} {:>5} {:>13} {:>16} {:>16}  per bed",
+            "scene", "beds", "z_test,0 (mm)", "F at 1/2 (N)", "mean F (N)"
         );
-        let mut order: Vec<(f64, &str)> = Vec::new();
-        for s in all {
-            let Some(run) = s.runs.iter().find(|r| r.test == test) else {
+        let mut order: Vec<(f64, f64, &str)> = Vec::new();
+        for name in scene_names(all) {
+            let runs = runs_of(all, name, test);
+            if runs.is_empty() {
                 continue;
-            };
-            let travel = run.loading.travel_m;
-            let mean = mean_force_n(run);
-            order.push((mean, &s.scene));
+            }
+            let pick =
+                |f: &dyn Fn(&BoxRun) -> f64| -> Vec<f64> { runs.iter().map(|r| f(r)).collect() };
+            let z0 = mean_se(&pick(&|r| r.preload_displacement_m * 1e3));
+            let half = mean_se(&pick(&|r| force_at_n(r, 0.5 * r.loading.travel_m)));
+            let means = pick(&|r| mean_force_n(r));
+            let mean = mean_se(&means);
+            order.push((mean.0, mean.1, name));
+            let per_bed: Vec<String> = means.iter().map(|m| format!("{m:.1}")).collect();
             println!(
-                "  {:<16} {:>11.4} {:>12.2} {:>12.2} {:>12.2} {:>11.2} {:>10.2}",
-                s.scene,
-                run.preload_displacement_m * 1e3,
-                force_at_n(run, 0.25 * travel),
-                force_at_n(run, 0.5 * travel),
-                force_at_n(run, travel),
-                mean,
-                run.particle_steps_per_s / 1e6
+                "  {:<16} {:>5} {:>13} {:>16} {:>16}  {}",
+                name,
+                runs.len(),
+                format!("{:.3}", z0.0),
+                with_se(half.0, half.1),
+                with_se(mean.0, mean.1),
+                per_bed.join(", ")
             );
         }
         if order.len() > 1 {
             order.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let names: Vec<&str> = order.iter().map(|o| o.1).collect();
+            let mut line = order[0].2.to_string();
+            for w in order.windows(2) {
+                let apart = (w[1].0 - w[0].0) > 2.0 * w[0].1.hypot(w[1].1);
+                line.push_str(if apart { " < " } else { " ~ " });
+                line.push_str(w[1].2);
+            }
             println!(
-                "  stiffness order, by the mean force (one bed each: compare seeds before trusting it): {}",
-                names.join(" < ")
+                "  order by the mean force: {line}  ('<': apart by more than twice their combined standard error; '~': not, or one bed each)"
             );
         }
     }
