@@ -114,25 +114,27 @@ fn a_bed_that_does_not_reach_the_upper_container_is_refused() {
     assert!(!dir.path("box").exists());
 }
 
+/// A short normal test of the default spheres in `dir`, with `more` flags.
+fn quick_normal_test(dir: &Scratch, more: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "-q",
+        "shear-box",
+        "--test",
+        "normal",
+        "--normal-travel-m",
+        "0.0001",
+        "--points",
+        "10",
+    ];
+    args.extend_from_slice(more);
+    vlab(dir.path("").as_path(), &args)
+}
+
 /// The command writes a curve per test, the summary and the plots.
 #[test]
 fn the_command_writes_its_curves_summary_and_plots() {
     let dir = Scratch::new("shear-box-cli");
-    let out = vlab(
-        dir.path("").as_path(),
-        &[
-            "-q",
-            "shear-box",
-            "--test",
-            "normal",
-            "--normal-travel-m",
-            "0.0001",
-            "--points",
-            "10",
-            "--out",
-            "box",
-        ],
-    );
+    let out = quick_normal_test(&dir, &["--out", "box"]);
     assert!(out.status.success(), "{}", common::stderr(&out));
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("normal test"), "{text}");
@@ -147,23 +149,7 @@ fn the_command_writes_its_curves_summary_and_plots() {
     }
     // Over two beds: a folder per seed, and the mean force with its
     // standard error.
-    let out = vlab(
-        dir.path("").as_path(),
-        &[
-            "-q",
-            "shear-box",
-            "--test",
-            "normal",
-            "--normal-travel-m",
-            "0.0001",
-            "--points",
-            "10",
-            "--seeds",
-            "1,2",
-            "--out",
-            "seeds",
-        ],
-    );
+    let out = quick_normal_test(&dir, &["--seeds", "1,2", "--out", "seeds"]);
     assert!(out.status.success(), "{}", common::stderr(&out));
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains(" +- "), "{text}");

@@ -248,6 +248,31 @@ mod tests {
     use crate::dem::{ContactLaw, Material, Numerics, Particles, RestitutionMode, Walls};
     use glam::DQuat;
 
+    /// A world of `p`, free of walls and gravity, and its snapshot at
+    /// phase 0 with the enclosure moving at `enclosure_mps`.
+    fn captured(p: Particles, enclosure_mps: f64) -> (World, Snapshot) {
+        let m = Material::ACRYLIC;
+        let law = ContactLaw::new(&m, &m, 0.8, 0.3, RestitutionMode::Exact);
+        let world = World::new(
+            p,
+            Walls::none(),
+            law,
+            law,
+            DVec3::ZERO,
+            Numerics::with_dt(1e-6),
+        )
+        .expect("world");
+        let mut snaps = PhaseSnapshots::new(40.0, 0.0);
+        let enclosure = Kinematics {
+            displacement_m: 0.0,
+            velocity_mps: enclosure_mps,
+            acceleration_mps2: 0.0,
+        };
+        snaps.observe(0.0, &world, &enclosure);
+        let s = snaps.current.remove(0);
+        (world, s)
+    }
+
     /// A spinning body of two spheres and a free sphere, captured at phase
     /// 0: the body's sub-spheres (whose own speeds differ, one on each side
     /// of the spin) are drawn in the speed of its centre, the free sphere in
@@ -275,25 +300,7 @@ mod tests {
             0.002,
             1000.0,
         );
-        let m = Material::ACRYLIC;
-        let law = ContactLaw::new(&m, &m, 0.8, 0.3, RestitutionMode::Exact);
-        let world = World::new(
-            p,
-            Walls::none(),
-            law,
-            law,
-            DVec3::ZERO,
-            Numerics::with_dt(1e-6),
-        )
-        .expect("world");
-        let mut snaps = PhaseSnapshots::new(40.0, 0.0);
-        let still = Kinematics {
-            displacement_m: 0.0,
-            velocity_mps: 0.0,
-            acceleration_mps2: 0.0,
-        };
-        snaps.observe(0.0, &world, &still);
-        let s = &snaps.current[0];
+        let (world, s) = captured(p, 0.0);
         let sub = |k: usize| world.particles.velocity[k].length();
         assert!((sub(0) - sub(1)).abs() > 0.1, "the sub-spheres move alike");
         assert!(
@@ -329,25 +336,7 @@ mod tests {
             0.002,
             1000.0,
         );
-        let m = Material::ACRYLIC;
-        let law = ContactLaw::new(&m, &m, 0.8, 0.3, RestitutionMode::Exact);
-        let world = World::new(
-            p,
-            Walls::none(),
-            law,
-            law,
-            DVec3::ZERO,
-            Numerics::with_dt(1e-6),
-        )
-        .expect("world");
-        let mut snaps = PhaseSnapshots::new(40.0, 0.0);
-        let moving = Kinematics {
-            displacement_m: 0.0,
-            velocity_mps: 0.5,
-            acceleration_mps2: 0.0,
-        };
-        snaps.observe(0.0, &world, &moving);
-        let s = &snaps.current[0];
+        let (_, s) = captured(p, 0.5);
         assert!(s.speed_mps[0].abs() < 1e-12, "{:?}", s.speed_mps);
         assert!((s.speed_mps[1] - 0.5).abs() < 1e-12, "{:?}", s.speed_mps);
         #[cfg(feature = "plot")]
