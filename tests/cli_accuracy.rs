@@ -45,6 +45,8 @@ fn quick_accuracy_writes_three_studies_and_the_collision_converges() {
         "accuracy.svg",
         "impact.svg",
         "yang.svg",
+        "accuracy.png",
+        "yang.png",
     ] {
         let p = dir.path("acc").join(f);
         assert!(p.is_file(), "{} missing", p.display());

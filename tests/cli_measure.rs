@@ -59,6 +59,7 @@ fn csv_and_wav_analysis_equal_the_run() {
         "kinematics.csv",
         "calibration.json",
         "trace.svg",
+        "trace.png",
     ] {
         assert!(dir.path(&format!("run/{file}")).is_file(), "{file} missing");
     }

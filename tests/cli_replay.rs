@@ -105,6 +105,7 @@ fn records_of_known_power_in_every_format() {
             "trace.wav.json",
             "calibration.json",
             "trace.svg",
+            "trace.png",
         ] {
             assert!(dir.path(&format!("{out}/{f}")).is_file(), "{out}/{f}");
         }

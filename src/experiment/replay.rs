@@ -1216,23 +1216,25 @@ impl ReplayRun {
         #[cfg(feature = "plot")]
         {
             let s = &self.summary;
-            crate::experiment::shake::plot_record(
-                &dir.join("trace.svg"),
-                &self.trace,
-                rig.enclosure.mass_kg + s.particle_mass_kg.unwrap_or(0.0),
-                &format!(
-                    "replay of {}, {} Hz, Gamma {:.3}: rig {} record (cf. thesis Fig. 7.12)",
-                    Path::new(&s.record)
-                        .file_name()
-                        .map(|n| n.to_string_lossy().into_owned())
-                        .unwrap_or_default(),
+            for ext in ["svg", "png"] {
+                crate::experiment::shake::plot_record(
+                    &dir.join(format!("trace.{ext}")),
+                    &self.trace,
+                    rig.enclosure.mass_kg + s.particle_mass_kg.unwrap_or(0.0),
+                    &format!(
+                        "replay of {}, {} Hz, Gamma {:.3}: rig {} record (cf. thesis Fig. 7.12)",
+                        Path::new(&s.record)
+                            .file_name()
+                            .map(|n| n.to_string_lossy().into_owned())
+                            .unwrap_or_default(),
+                        s.freq_hz,
+                        s.gamma,
+                        s.rig
+                    ),
                     s.freq_hz,
-                    s.gamma,
-                    s.rig
-                ),
-                s.freq_hz,
-            )?;
-            files.push("trace.svg");
+                )?;
+            }
+            files.extend(["trace.svg", "trace.png"]);
         }
         #[cfg(not(feature = "plot"))]
         let _ = rig;

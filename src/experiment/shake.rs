@@ -611,20 +611,22 @@ impl ShakeRun {
         ];
         #[cfg(feature = "plot")]
         {
-            plot_record(
-                &dir.join("trace.svg"),
-                &e.trace,
-                setup.rig.enclosure.mass_kg + scene.particle_mass_kg(),
-                &format!(
-                    "{} damper, {} Hz, Gamma {}: rig {} record (cf. thesis Fig. 7.12)",
-                    scene.name,
+            for ext in ["svg", "png"] {
+                plot_record(
+                    &dir.join(format!("trace.{ext}")),
+                    &e.trace,
+                    setup.rig.enclosure.mass_kg + scene.particle_mass_kg(),
+                    &format!(
+                        "{} damper, {} Hz, Gamma {}: rig {} record (cf. thesis Fig. 7.12)",
+                        scene.name,
+                        setup.drive.freq_hz(),
+                        setup.drive.gamma(),
+                        setup.rig.name
+                    ),
                     setup.drive.freq_hz(),
-                    setup.drive.gamma(),
-                    setup.rig.name
-                ),
-                setup.drive.freq_hz(),
-            )?;
-            files.push("trace.svg");
+                )?;
+            }
+            files.extend(["trace.svg", "trace.png"]);
         }
         #[cfg(not(feature = "plot"))]
         let _ = (scene, setup);

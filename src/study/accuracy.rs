@@ -1938,7 +1938,34 @@ mod plots {
         let mut files = vec![accuracy_plot(dir, rows, summary)?];
         files.extend(impact_plot(dir, rows, summary)?);
         files.extend(yang_plot(dir, rows, summary)?);
-        Ok(files)
+        Ok(files
+            .into_iter()
+            .flat_map(|svg| {
+                let png = svg.replace(".svg", ".png");
+                [svg, png]
+            })
+            .collect())
+    }
+
+    /// Draws `name.svg` and `name.png` in `dir`.
+    fn svg_and_png(
+        dir: &Path,
+        name: &str,
+        title: &str,
+        x_label: &str,
+        y_label: &str,
+        series: &[Series],
+    ) -> Result<(), crate::signals::SignalsError> {
+        for ext in ["svg", "png"] {
+            plot_xy_svg(
+                &dir.join(format!("{name}.{ext}")),
+                title,
+                x_label,
+                y_label,
+                series,
+            )?;
+        }
+        Ok(())
     }
 
     /// `accuracy.svg`: every study's error against its run time.
@@ -2030,8 +2057,9 @@ mod plots {
             "{} damper, {} Hz, Gamma {}: error against run time",
             summary.scene, summary.plan.freq_hz, summary.plan.gamma
         );
-        plot_xy_svg(
-            &dir.join("accuracy.svg"),
+        svg_and_png(
+            dir,
+            "accuracy",
             &title,
             "log10 wall-clock time (s)",
             "log10 relative error",
@@ -2070,8 +2098,9 @@ mod plots {
         .flatten()
         .collect();
         if !impact.is_empty() {
-            plot_xy_svg(
-                &dir.join("impact.svg"),
+            svg_and_png(
+                dir,
+                "impact",
                 &format!(
                     "one collision at {:.2} m/s against Hertz theory",
                     summary.impact.speed_mps
@@ -2120,8 +2149,9 @@ mod plots {
         .flatten()
         .collect();
         if !yang.is_empty() {
-            plot_xy_svg(
-                &dir.join("yang.svg"),
+            svg_and_png(
+                dir,
+                "yang",
                 &format!(
                     "Yang's estimate vs DEM truth, {} periods, chain settings",
                     summary.yang.baseline_record_periods
