@@ -200,6 +200,7 @@ fn optimum_plot(points: &[Point], x_label: &str) -> LogXPlot {
         series,
         markers: Vec::new(),
         reference_y: None,
+        y_from_zero: false,
     }
 }
 

@@ -357,6 +357,9 @@ pub struct LogXPlot {
     pub markers: Vec<MarkerLine>,
     /// Horizontal reference level drawn as a thin grey line (e.g. 0.3), if any.
     pub reference_y: Option<f64>,
+    /// The y axis starts at zero (an efficiency); else it spans the points
+    /// (an optimum amplitude between 20 and 30).
+    pub y_from_zero: bool,
 }
 
 /// Width of the legend panel right of a [`LogXPlot`]'s data area (px).
@@ -398,7 +401,11 @@ pub fn plot_log_x(path: &Path, plot: &LogXPlot) -> Result<()> {
         ymin = ymin.min(r);
         ymax = ymax.max(r);
     }
-    let y_range = pad(ymin.min(0.0), ymax);
+    let y_range = if plot.y_from_zero {
+        pad(ymin.min(0.0), ymax)
+    } else {
+        pad(ymin, ymax)
+    };
     let x_range = (xmin / 1.25)..(xmax * 1.25);
     write_figure(
         path,
@@ -413,7 +420,8 @@ pub fn plot_log_x(path: &Path, plot: &LogXPlot) -> Result<()> {
 
 /// A log axis over `range` labelled at round numbers: 1, 2, 3, 5 times
 /// the powers of ten, or, on a range too short for three of those (Γ 12 to
-/// 44), 1, 1.5, 2, 3, 4, 5, 7; a light grid line at the other whole
+/// 44), 1, 1.5, 2, 3, 4, 5, 7, or, shorter still (a sphericity of 0.7 to
+/// 1), every tenth; a light grid line at the other whole
 /// numbers of each decade. (Left to itself a log axis inside one decade
 /// labels nothing.)
 fn log_axis(range: &Range) -> WithKeyPoints<LogCoord<f64>> {
@@ -438,6 +446,9 @@ pub fn log_ticks(lo: f64, hi: f64) -> (Vec<f64>, Vec<f64>) {
     let mut bold = within(&[1.0, 2.0, 3.0, 5.0]);
     if bold.len() < 3 {
         bold = within(&[1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 7.0]);
+    }
+    if bold.len() < 3 {
+        bold = within(&[1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
     }
     let light = within(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
         .into_iter()
@@ -1291,6 +1302,7 @@ mod tests {
                 dash: LineDash::Long,
             }],
             reference_y: Some(0.3),
+            y_from_zero: true,
         };
         let map = HeatMap {
             title: "map".into(),
@@ -1410,6 +1422,7 @@ mod tests {
                 },
             ],
             reference_y: Some(0.3),
+            y_from_zero: true,
         };
         let path = dir.join("eff.svg");
         plot_log_x(&path, &plot).expect("log plot");
@@ -1496,6 +1509,8 @@ mod tests {
         let (bold, light) = log_ticks(12.0, 44.0);
         assert_eq!(bold, vec![15.0, 20.0, 30.0, 40.0]);
         assert!(!light.iter().any(|x| bold.contains(x)));
+        let (bold, _) = log_ticks(0.68, 1.25);
+        assert_eq!(bold, vec![0.7, 0.8, 0.9, 1.0, 1.2]);
         let (bold, _) = log_ticks(0.8, 120.0);
         assert_eq!(
             bold,

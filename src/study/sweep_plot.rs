@@ -131,6 +131,7 @@ fn efficiency_curves(
         series,
         markers,
         reference_y: Some(0.3),
+        y_from_zero: true,
     }
 }
 
