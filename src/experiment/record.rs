@@ -4,7 +4,8 @@
 //! of the impulsive particle force would alias. Each sample `k` at `t_k = k T_s`
 //! therefore carries the mean of the force over the DEM steps nearest to `t_k`,
 //! a window centred on `t_k` (a boxcar with no phase lag, a first zero at the
-//! sample rate), and the enclosure kinematics at the step nearest to `t_k`.
+//! sample rate), and the enclosure kinematics and the bed's centre of mass at
+//! the step nearest to `t_k`.
 
 use crate::dem::World;
 use crate::experiment::damper::{Kinematics, StepObserver};
@@ -21,6 +22,9 @@ pub struct TruthSamples {
     /// Transverse components (N), x and y of the simulation frame.
     pub force_x_n: Vec<f64>,
     pub force_y_n: Vec<f64>,
+    /// The bed's centre of mass along the enclosure's axis, from the
+    /// enclosure's floor (m): it rises in flight and turns at an impact.
+    pub bed_centre_rel_m: Vec<f64>,
 }
 
 impl TruthSamples {
@@ -44,6 +48,8 @@ pub struct TruthRecorder {
     force_sum: [f64; 3],
     count: u32,
     kinematics: Option<Kinematics>,
+    /// The bed's centre of mass along the axis at the same step (m).
+    bed_centre_m: f64,
     best_offset: f64,
     pub samples: TruthSamples,
 }
@@ -58,6 +64,7 @@ impl TruthRecorder {
             force_sum: [0.0; 3],
             count: 0,
             kinematics: None,
+            bed_centre_m: 0.0,
             best_offset: f64::INFINITY,
             samples: TruthSamples::default(),
         }
@@ -76,6 +83,8 @@ impl TruthRecorder {
                 s.force_axial_n.push(self.force_sum[2] / n);
                 s.force_x_n.push(self.force_sum[0] / n);
                 s.force_y_n.push(self.force_sum[1] / n);
+                s.bed_centre_rel_m
+                    .push(self.bed_centre_m - kin.displacement_m);
             }
         }
         self.force_sum = [0.0; 3];
@@ -107,6 +116,24 @@ impl StepObserver for TruthRecorder {
         if offset < self.best_offset {
             self.best_offset = offset;
             self.kinematics = Some(*enclosure);
+            // Only at the step nearest the sample: the one within half a
+            // step of it (the sum over the bed costs as much as a step's
+            // integration).
+            if offset <= 0.5 * world.dt_s() {
+                self.bed_centre_m = bed_centre_m(world);
+            }
         }
     }
+}
+
+/// The bed's centre of mass along the enclosure's axis, z (m): free spheres
+/// and bodies, each once.
+fn bed_centre_m(world: &World) -> f64 {
+    let (m, mz) = world
+        .particles
+        .movers()
+        .fold((0.0, 0.0), |(m, mz), (mass, x, _)| {
+            (m + mass, mz + mass * x.z)
+        });
+    if m > 0.0 { mz / m } else { 0.0 }
 }

@@ -627,6 +627,20 @@ impl ShakeRun {
                 )?;
             }
             files.extend(["trace.svg", "trace.png"]);
+            for ext in ["svg", "png"] {
+                plot_bed(
+                    &dir.join(format!("bed.{ext}")),
+                    &e.truth,
+                    &format!(
+                        "{} damper, {} Hz, Gamma {}: the bed over the last two cycles",
+                        scene.name,
+                        setup.drive.freq_hz(),
+                        setup.drive.gamma()
+                    ),
+                    setup.drive.freq_hz(),
+                )?;
+            }
+            files.extend(["bed.svg", "bed.png"]);
         }
         #[cfg(not(feature = "plot"))]
         let _ = (scene, setup);
@@ -695,7 +709,7 @@ pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Tra
         extra,
         ..Default::default()
     };
-    let columns: [(&str, &str, &Vec<f64>); 6] = [
+    let columns: [(&str, &str, &Vec<f64>); 7] = [
         ("enclosure_displacement", "m", &samples.displacement_m),
         ("enclosure_velocity", "m/s", &samples.velocity_mps),
         (
@@ -706,6 +720,7 @@ pub fn truth_trace(samples: &TruthSamples, summary: &ShakeSummary) -> Result<Tra
         ("particle_force_axial", "N", &samples.force_axial_n),
         ("particle_force_x", "N", &samples.force_x_n),
         ("particle_force_y", "N", &samples.force_y_n),
+        ("bed_centre_rel", "m", &samples.bed_centre_rel_m),
     ];
     for (name, unit, data) in columns {
         trace.add_channel(name, unit, data.clone())?;
@@ -749,6 +764,55 @@ pub fn plot_record(
         title,
         "time from the record start (ms)",
         "m/s^2",
+        &series,
+    )?;
+    Ok(())
+}
+
+/// The enclosure's floor and the bed's centre of mass along the axis over
+/// the last two cycles of the truth record, in mm in the lab frame: the
+/// bed's flights (parabolas under gravity, vertical), its impacts (where
+/// its centre turns sharply) and how long it rides on the floor.
+#[cfg(feature = "plot")]
+pub fn plot_bed(
+    path: &Path,
+    truth: &TruthSamples,
+    title: &str,
+    freq_hz: f64,
+) -> Result<(), SceneError> {
+    use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+    let len = truth.len();
+    let dt = match truth.time_s.as_slice() {
+        [a, b, ..] => b - a,
+        _ => return Ok(()),
+    };
+    let n = ((2.0 / (freq_hz * dt)).round() as usize).min(len);
+    let from = len - n;
+    let t = |i: usize| 1e3 * truth.time_s[i];
+    let series = [
+        Series {
+            name: "enclosure floor".into(),
+            points: (from..len)
+                .map(|i| (t(i), 1e3 * truth.displacement_m[i]))
+                .collect(),
+            style: SeriesStyle::Line,
+        },
+        Series {
+            name: "bed's centre of mass".into(),
+            points: (from..len)
+                .map(|i| {
+                    let z = truth.displacement_m[i] + truth.bed_centre_rel_m[i];
+                    (t(i), 1e3 * z)
+                })
+                .collect(),
+            style: SeriesStyle::Line,
+        },
+    ];
+    plot_xy_svg(
+        path,
+        title,
+        "time (ms)",
+        "position along the enclosure's axis (mm)",
         &series,
     )?;
     Ok(())
