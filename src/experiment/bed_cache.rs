@@ -502,6 +502,11 @@ impl BedCache {
                 particles.clumps.angular_momentum[b] = s.angular_momentum_kgm2ps;
                 particles.clumps.orientation[b] = s.orientation;
                 particles.place_clump(b);
+                // The sub-spheres' velocities as the step's half kick left
+                // them (the spin crossed with each one's offset from the
+                // centre), to the last bit: the first damping force reads
+                // them.
+                particles.set_clump_velocities(b);
             }
             if particles.len() != decoded.state.len() {
                 return Err(unusable(format!(
@@ -846,6 +851,36 @@ mod tests {
         assert_eq!(cache.list().expect("lists").len(), 1);
         assert_eq!(cache.clear().expect("clears"), 1);
         assert!(cache.list().expect("lists").is_empty());
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    /// A bed of bodies read back from the cache is the bed that settled, bit
+    /// for bit: the sub-spheres' positions, velocities and spins as well as
+    /// the bodies' state. A sub-sphere velocity rebuilt by another formula
+    /// than the step's (the spin crossed with the body-frame arm instead of
+    /// with the sub-sphere's offset from the centre) differs in the last
+    /// bit, enters the first damping force, and a long run from the cached
+    /// bed then ends elsewhere than one from the fresh bed (a shear test's
+    /// mean force 31.7 N against 31.6 N).
+    #[test]
+    fn a_cached_bed_of_bodies_is_the_settled_bed_bit_for_bit() {
+        let text = "name = \"prolates\"\n[particles]\ncount = 24\nshape = \"prolate\"\naspect_ratio = 2.0\nsub_spheres = 11\nequivalent_diameter_m = 0.004\n[enclosure]\ninner_diameter_m = 0.02\ninner_length_m = 0.03\n[simulation]\nsettle_s = 0.05\n";
+        let scene = Scene::merge_over_preset(text, "test").expect("scene");
+        let dir = std::env::temp_dir().join(format!("vlab-bed-bodies-test-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let cache = BedCache::new(&dir);
+        let fresh = settle_bed(&scene, &mut |_| {}).expect("settles");
+        cache.store(&scene, &fresh).expect("stores");
+        let read = cache.load(&scene).expect("reads").expect("a hit");
+        let (a, b) = (fresh.world.particles.by_id(), read.world.particles.by_id());
+        assert_eq!(a.len(), b.len());
+        for k in 0..a.len() {
+            assert_eq!(a.position[k], b.position[k], "position of {k}");
+            assert_eq!(a.velocity[k], b.velocity[k], "velocity of {k}");
+            assert_eq!(a.angular_velocity[k], b.angular_velocity[k], "spin of {k}");
+        }
+        assert_eq!(a.clumps.velocity, b.clumps.velocity);
+        assert_eq!(a.clumps.angular_momentum, b.clumps.angular_momentum);
         let _ = fs::remove_dir_all(&dir);
     }
 }
