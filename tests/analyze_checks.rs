@@ -254,3 +254,35 @@ fn the_force_loop_encloses_the_energy_yangs_method_finds() {
         assert!(dir.path("plots").join(f).is_file(), "{f}");
     }
 }
+
+/// A record whose force sign is flipped (a transducer mounted the other
+/// way): `analyze` detects it and gives the same energy as the record as
+/// it was; `--as-recorded` keeps the sign and finds the energy negative,
+/// what a student without the detection would see.
+#[test]
+fn a_flipped_force_is_caught_unless_kept_as_recorded() {
+    let dir = Scratch::new("checks-flipped");
+    let text = std::fs::read_to_string(reference("trace.csv")).expect("trace");
+    let mut flipped = String::new();
+    let mut seen_header = false;
+    for line in text.lines() {
+        if line.starts_with('#') || !seen_header {
+            seen_header |= !line.starts_with('#');
+            flipped.push_str(line);
+        } else {
+            let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+            let f: f64 = cells[2].parse().expect("force");
+            cells[2] = format!("{}", -f);
+            flipped.push_str(&cells.join(","));
+        }
+        flipped.push('\n');
+    }
+    dir.write("flipped.csv", &flipped);
+    let (original, _) = analyze(&dir, &[&reference("trace.csv")]);
+    let (caught, err) = analyze(&dir, &["flipped.csv"]);
+    let (kept, _) = analyze(&dir, &["flipped.csv", "--as-recorded"]);
+    let e = |v: &serde_json::Value| v["energy_per_cycle_j"].as_f64().expect("energy");
+    assert!(err.contains("polarity reversed"), "{err}");
+    assert!((e(&caught) / e(&original) - 1.0).abs() < 1e-9);
+    assert!((e(&kept) / e(&original) + 1.0).abs() < 1e-9, "{}", e(&kept));
+}

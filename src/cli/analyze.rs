@@ -111,6 +111,10 @@ pub struct AnalyzeArgs {
     /// Print the result as JSON.
     #[arg(long)]
     json: bool,
+    /// Use the force as recorded: do not detect and correct a reversed force
+    /// sign (to see what a flipped transducer does to the result).
+    #[arg(long)]
+    as_recorded: bool,
     /// Draw the record's force-displacement loop (its area is the energy
     /// per cycle) and the drive frequency's force and velocity phasors into
     /// this folder (loop.svg/png, phasor.svg/png).
@@ -141,6 +145,7 @@ pub fn analyse(a: &AnalyzeArgs) -> Result<(Trace, Analysis)> {
             .as_ref()
             .map_or("none".into(), |p| p.display().to_string()),
         force_calibration: a.force_calibration,
+        as_recorded: a.as_recorded,
     };
     let analysis = analyse_trace(&trace, &options)
         .map_err(refusal)

@@ -82,6 +82,9 @@ pub struct AnalysisOptions {
     /// Apply `calibration` even when it names another rig than the record
     /// (a warning then says so).
     pub force_calibration: bool,
+    /// Use the force as recorded, without detecting a reversed polarity
+    /// (a student's exercise: what a flipped sign does to the result).
+    pub as_recorded: bool,
 }
 
 impl Default for AnalysisOptions {
@@ -96,6 +99,7 @@ impl Default for AnalysisOptions {
             calibration: None,
             calibration_name: "none".into(),
             force_calibration: false,
+            as_recorded: false,
         }
     }
 }
@@ -380,7 +384,11 @@ pub fn analyse_trace(trace: &Trace, options: &AnalysisOptions) -> Result<Analysi
     let table = options.calibration.as_ref();
     let power_options = PowerOptions {
         phase_correction: table.map_or(PhaseCorrection::None, PhaseCorrection::Table),
-        force_polarity: ForcePolarity::Detect,
+        force_polarity: if options.as_recorded {
+            ForcePolarity::AsRecorded
+        } else {
+            ForcePolarity::Detect
+        },
         ..PowerOptions::default()
     };
     let r = yang_power_of_trace(
