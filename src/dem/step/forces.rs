@@ -278,13 +278,36 @@ impl ForceStage<'_> {
     }
 }
 
+/// The wall contacts of one block: [`wall_loop`] for walls that move
+/// together or apart.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn wall_block<const D: bool, const F: bool>(
+    law: &ContactLaw,
+    walls: &WallGeometry,
+    bodies: &Bodies,
+    g: DVec3,
+    start: usize,
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+    wall: (&mut [ContactState], &mut [f64]),
+    books: (Limits, &mut BlockBooks),
+    dt: f64,
+) {
+    if walls.own.is_empty() {
+        wall_loop::<D, F, false>(law, walls, bodies, g, start, force, torque, wall, books, dt)
+    } else {
+        wall_loop::<D, F, true>(law, walls, bodies, g, start, force, torque, wall, books, dt)
+    }
+}
+
 /// Gravity and the wall contacts of the particles `start..` of one block:
 /// their forces and torques are set, the wall states advanced, and the
 /// touching contacts booked in `books`, in (particle, wall) order; a
 /// contact that stops the run (an escaped particle, say) ends the block.
-#[allow(clippy::too_many_arguments)]
 #[inline]
-fn wall_block<const D: bool, const F: bool>(
+#[allow(clippy::too_many_arguments)]
+fn wall_loop<const D: bool, const F: bool, const OWN: bool>(
     law: &ContactLaw,
     walls: &WallGeometry,
     bodies: &Bodies,
@@ -306,7 +329,14 @@ fn wall_block<const D: bool, const F: bool>(
         let x = bodies.position[i];
         for (w, shape) in walls.shapes.iter().enumerate() {
             let gap = &mut gaps[m * n_walls + w];
-            let (offset, v_wall) = walls.at(w);
+            // Without walls of their own motion (the damper), the common
+            // offset as a field, as the loop read it before walls could
+            // move apart: reading it through `at` cost the thesis drive 5 %.
+            let (offset, v_wall) = if OWN {
+                walls.at(w)
+            } else {
+                (walls.offset, walls.v_wall)
+            };
             let dist = shape.distance_m(x, offset);
             if r - dist <= 0.0 && *gap <= 0.0 {
                 *gap = r - dist;
