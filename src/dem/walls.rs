@@ -27,7 +27,8 @@ pub enum WallShape {
     /// The inside of a ring: a cylinder of `radius_m` around the z axis from
     /// `z_min_m` to `z_max_m`, open at both ends. Beyond its ends a particle
     /// meets its rim, a circle, at the point of the rim nearest its centre
-    /// (a sphere poking into the gap between two rings).
+    /// (a sphere poking into the gap between two rings); the rim is taken as
+    /// flat for the contact law, as every wall is (eq. 3.12, 3.14).
     Ring {
         radius_m: f64,
         z_min_m: f64,

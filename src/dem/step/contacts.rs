@@ -21,7 +21,7 @@ use crate::dem::contact::{
 };
 use crate::dem::hertz_theory;
 use crate::dem::material::{effective_mass_kg, effective_radius_m};
-use crate::dem::walls::{WallMotion, WallShape};
+use crate::dem::walls::{WallShape, Walls};
 
 /// The particle state contacts read, borrowed field by field from `$p` so
 /// that its forces and torques stay free to write.
@@ -97,18 +97,16 @@ pub struct WallGeometry<'a> {
     pub shapes: &'a [WallShape],
     pub offset: DVec3,
     pub v_wall: DVec3,
-    /// The walls' own motions, when some wall moves on its own.
-    pub own: &'a [WallMotion],
+    /// The walls themselves, for the offset and velocity of a wall that
+    /// moves on its own ([`Walls::offset_of`], [`Walls::velocity_of`]).
+    pub walls: &'a Walls,
 }
 
 impl WallGeometry<'_> {
-    /// Offset and velocity of wall `w`: the common ones and its own.
-    #[inline(always)]
-    pub fn at(&self, w: usize) -> (DVec3, DVec3) {
-        match self.own.get(w) {
-            Some(own) => (self.offset + own.offset_m, self.v_wall + own.velocity_mps),
-            None => (self.offset, self.v_wall),
-        }
+    /// True when some wall moves on its own.
+    #[inline]
+    pub fn moves_apart(&self) -> bool {
+        !self.walls.own.is_empty()
     }
 }
 
