@@ -18,6 +18,7 @@
 //!   geometry and imports no other vlab module.
 
 pub mod atomic_write;
+pub mod clock;
 pub mod dem;
 pub mod drive;
 pub mod experiment;

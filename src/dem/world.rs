@@ -48,7 +48,7 @@
 //! [`books::close_step`]: super::step::books::close_step
 //! [`checks::energy_closes`]: super::step::checks::energy_closes
 
-use std::time::Instant;
+use crate::clock::Stopwatch;
 
 use glam::DVec3;
 
@@ -542,7 +542,7 @@ impl World {
     /// Advances one step; the wall body ends the step at `wall_displacement_m`.
     pub fn step(&mut self, wall_displacement_m: f64) -> Result<(), DemError> {
         let dt = self.numerics.dt_s;
-        let started = Instant::now();
+        let started = Stopwatch::start();
         let parallel = self.threads.pick(self.can_split(), self.forced_split());
         let verlet = self.integrator();
         // 1. Integration: half kick and drift; a position that is not finite stops.

@@ -55,10 +55,10 @@
 //! that is renamed into place, so two runs settling the same bed at once both
 //! leave a whole file.
 
+use crate::clock::Stopwatch;
 use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -456,7 +456,7 @@ impl BedCache {
     /// `Err` (a warning's text) when there is one that cannot be used.
     pub fn load(&self, scene: &Scene) -> Result<Option<SettledBed>, String> {
         let path = self.path_for(scene);
-        let started = Instant::now();
+        let started = Stopwatch::start();
         let bytes = match fs::read(&path) {
             Ok(b) => b,
             Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),

@@ -25,7 +25,7 @@
 //! `E(t_final) - E(t_initial)`): the energy dissipated per cycle, averaged over
 //! the steady cycles, divided by `E_max = 4 (Γ g / ω)² M`.
 
-use std::time::Instant;
+use crate::clock::Stopwatch;
 
 use glam::DVec3;
 
@@ -319,7 +319,7 @@ pub fn run_drive(
     observer: &mut dyn StepObserver,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<DriveOutcome, SceneError> {
-    let started = Instant::now();
+    let started = Stopwatch::start();
     let dt = world.dt_s();
     let period = plan.drive.period_s();
     let t0 = world.time_s;

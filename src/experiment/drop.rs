@@ -71,8 +71,8 @@
 //! into what `vlab drop` writes as `drop.json` ([`DropSummary`]): every
 //! triple's estimate beside the model's realised restitution.
 
+use crate::clock::Stopwatch;
 use crate::rig::{DROP_RIG, RigFile};
-use std::time::Instant;
 
 use glam::DVec3;
 use serde::Serialize;
@@ -587,7 +587,7 @@ struct OpenContact {
 /// Runs one drop: release, bounces, rest, to the end of the rig's record.
 pub fn run_drop(setup: &DropSetup) -> Result<DropOutcome, SceneError> {
     setup.validate()?;
-    let start = Instant::now();
+    let start = Stopwatch::start();
     let tick = setup.tick_s();
     let mut rig = DropRig::new(&setup.rig, tick, setup.seed)?;
     let length = setup.rig.record.length_s;

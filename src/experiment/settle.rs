@@ -53,8 +53,8 @@
 //! exactly). The bed height is the height that the particles' volume fills at
 //! that packing, `h = V_p / (φ A)`, not the top of the highest sphere.
 
+use crate::clock::Stopwatch;
 use std::f64::consts::PI;
-use std::time::Instant;
 
 use glam::DVec3;
 
@@ -186,7 +186,7 @@ pub fn settle_bed(
     scene: &Scene,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<SettledBed, SceneError> {
-    let started = Instant::now();
+    let started = Stopwatch::start();
     // 1. Pour under the soft law, resolving the fastest fall the column allows.
     let mut world = pour(scene, started, progress)?;
     let Packing {
@@ -221,7 +221,7 @@ pub fn settle_bed(
 /// until at rest.
 fn pour(
     scene: &Scene,
-    started: Instant,
+    started: Stopwatch,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<World, SceneError> {
     let radius = scene.radius_m();
@@ -294,7 +294,7 @@ fn pour(
 fn turn(
     world: &mut World,
     scene: &Scene,
-    started: Instant,
+    started: Stopwatch,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(), SceneError> {
     let g = scene.simulation.gravity_mps2;
@@ -319,7 +319,7 @@ fn turn(
 fn stiffen(
     world: &mut World,
     scene: &Scene,
-    started: Instant,
+    started: Stopwatch,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(), SceneError> {
     let (pp_full, pw_full) = settling_laws(scene, 1.0);
@@ -405,7 +405,7 @@ fn pour_column(
 fn close_lid(
     world: &mut World,
     scene: &Scene,
-    started: Instant,
+    started: Stopwatch,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(), SceneError> {
     const LID: usize = 2;
@@ -588,7 +588,7 @@ fn run_until_rest(
     min_s: f64,
     max_s: f64,
     phase: &'static str,
-    started: Instant,
+    started: Stopwatch,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(), SceneError> {
     let dt = world.dt_s();
@@ -640,7 +640,7 @@ fn run_steps(
     world: &mut World,
     duration_s: f64,
     phase: &'static str,
-    started: Instant,
+    started: Stopwatch,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(), SceneError> {
     let dt = world.dt_s();
@@ -662,7 +662,7 @@ fn settling_progress(
     phase: &'static str,
     k: u64,
     steps: u64,
-    started: Instant,
+    started: Stopwatch,
 ) -> Progress {
     Progress {
         phase,
@@ -754,7 +754,7 @@ mod tests {
             0.0,
             0.01,
             "pouring",
-            Instant::now(),
+            Stopwatch::start(),
             &mut |_| {},
         )
         .expect_err("elastic spheres never rest");

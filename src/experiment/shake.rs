@@ -23,9 +23,9 @@
 //! # Ok::<(), vlab::scene::SceneError>(())
 //! ```
 
+use crate::clock::Stopwatch;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use serde::Serialize;
 
@@ -509,7 +509,7 @@ pub fn run_shake_on_bed(
     observers: &mut [&mut dyn StepObserver],
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
-    let started = Instant::now();
+    let started = Stopwatch::start();
     let dt = scene.drive_dt_s(&setup.drive);
     let mut world = prepare_drive(bed, scene, dt)?;
     let mut observers = Observers(observers);
@@ -535,7 +535,7 @@ impl ShakeSummary {
         experiment: &ShakeExperiment,
         world: &crate::dem::World,
         dt_s: f64,
-        started: Instant,
+        started: Stopwatch,
     ) -> ShakeSummary {
         let outcome = &experiment.outcome;
         let n = world.particles.len();

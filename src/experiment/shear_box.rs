@@ -33,7 +33,7 @@
 //! booked by the world ([`crate::dem::walls::WallMotion`]), so the energy
 //! books close through the test and its energy check guards it.
 
-use std::time::Instant;
+use crate::clock::Stopwatch;
 
 use glam::DVec3;
 use serde::Serialize;
@@ -272,7 +272,7 @@ pub fn run_test(
     loading: Loading,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<BoxRun, ShearBoxError> {
-    let started = Instant::now();
+    let started = Stopwatch::start();
     let mut world = bed.world.clone();
     let p = &world.particles;
     let bed_top_m = (0..p.len())

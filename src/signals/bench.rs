@@ -2,8 +2,8 @@
 //! thesis-sized record (by default 5 s at 40 kHz, two channels). No timed
 //! assertions live in tests; this only measures and reports.
 
+use crate::clock::Stopwatch;
 use std::f64::consts::PI;
-use std::time::Instant;
 
 use super::error::{InvalidParameter, Result, SignalsError, positive_finite};
 use super::power::{PowerOptions, YangPower, yang_power};
@@ -65,7 +65,7 @@ pub fn bench_yang_power(
     let mut fresh = Vec::with_capacity(repeats);
     let mut power_w = 0.0;
     for _ in 0..repeats {
-        let start = Instant::now();
+        let start = Stopwatch::start();
         power_w = yang_power(&force, &accel, sample_rate_hz, drive_freq_hz, &opts)?.power_w;
         fresh.push(start.elapsed().as_secs_f64());
     }
@@ -73,7 +73,7 @@ pub fn bench_yang_power(
     estimator.compute(&force, &accel, sample_rate_hz, drive_freq_hz, &opts)?;
     let mut reused = Vec::with_capacity(repeats);
     for _ in 0..repeats {
-        let start = Instant::now();
+        let start = Stopwatch::start();
         estimator.compute(&force, &accel, sample_rate_hz, drive_freq_hz, &opts)?;
         reused.push(start.elapsed().as_secs_f64());
     }

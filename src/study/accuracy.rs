@@ -56,11 +56,11 @@
 //! shaker: the DEM study is about the DEM, and the chain is re-run on the
 //! recorded kinematics.
 
+use crate::clock::Stopwatch;
 use std::f64::consts::PI;
 use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Instant;
 
 use serde::Serialize;
 
@@ -409,7 +409,7 @@ pub enum AccuracyEvent<'a> {
 struct CycleClock {
     period_s: f64,
     half_dt_s: f64,
-    started: Instant,
+    started: Stopwatch,
     cycle_wall_s: Vec<f64>,
     truth: Option<TruthRecorder>,
 }
@@ -611,7 +611,7 @@ pub fn run_accuracy(
 ) -> Result<AccuracyReport, SceneError> {
     plan.validate()?;
     let checked = crate::experiment::shake::shake_drive(scene, plan.freq_hz, plan.gamma)?;
-    let started = Instant::now();
+    let started = Stopwatch::start();
 
     // Impact first: it takes milliseconds and fails fast on a bad scene.
     progress(AccuracyEvent::Stage("collision study (b)"));
@@ -693,7 +693,7 @@ fn settle_seeds(
     progress: &(dyn Fn(AccuracyEvent) + Sync),
 ) -> Result<Vec<(SettledBed, f64)>, SceneError> {
     let beds: Vec<Result<(SettledBed, f64), SceneError>> = run_queue(scenes, |s| {
-        let t = Instant::now();
+        let t = Stopwatch::start();
         let bed = settle_bed(s, &mut |_| {})?;
         let wall = t.elapsed().as_secs_f64();
         progress(AccuracyEvent::Stage(&format!(
@@ -781,7 +781,7 @@ fn drive(
     job: &DriveJob,
     progress: &(dyn Fn(AccuracyEvent) + Sync),
 ) -> DriveRun {
-    let started = Instant::now();
+    let started = Stopwatch::start();
     let period = 1.0 / plan.freq_hz;
     let cycles = plan.transient_cycles + job.steady_cycles;
     let mut clock = CycleClock {
@@ -1314,7 +1314,7 @@ fn impact_rows(
     rows: &mut Vec<AccuracyRow>,
 ) -> Result<(f64, f64, f64, f64), SceneError> {
     let speed = base.speed_mps;
-    let t0 = Instant::now();
+    let t0 = Stopwatch::start();
     let elastic = run_impact(&ImpactSetup {
         restitution: 1.0,
         friction: 0.0,
@@ -1322,7 +1322,7 @@ fn impact_rows(
         ..*base
     })?;
     let wall_elastic = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
+    let t1 = Stopwatch::start();
     let damped = run_impact(&ImpactSetup {
         dt_s: Some(dt),
         ..*base
@@ -1449,7 +1449,7 @@ impl YangBench<'_> {
     /// A chain setting `r`: the record, its calibration record (the empty
     /// enclosure) and the wall time both took (s).
     fn chain(&self, r: &RigSpec) -> Result<(Chained, Chained, f64), SceneError> {
-        let t0 = Instant::now();
+        let t0 = Stopwatch::start();
         let (feed, record, weight) = (self.feed_start_s, self.record_start_s, self.static_weight_n);
         let full = rechain(r, self.truth, feed, record, weight, self.seed, true)?;
         let empty = rechain(
@@ -1621,7 +1621,7 @@ fn residual_phase_rows(
     let mut rows = Vec::new();
     let mut phase_pts = Vec::new();
     for &mrad in &plan.residual_phase_mrad {
-        let t1 = Instant::now();
+        let t1 = Stopwatch::start();
         let e = bench.estimate(record, baseline, baseline_phi + 1e-3 * mrad)?;
         let row = residual_phase_row(
             mrad,
@@ -1717,7 +1717,7 @@ fn record_period_rows(
     let cycle_energies = run.cycle_energies(t);
     for &n in &plan.record_periods {
         let n = n as usize;
-        let t1 = Instant::now();
+        let t1 = Stopwatch::start();
         let (length_rows, phi) = record_length_rows(
             bench,
             chained,
@@ -1820,7 +1820,7 @@ fn chain_setting_rows(
                        r: &RigSpec,
                        note: String|
      -> Result<(), SceneError> {
-        let t1 = Instant::now();
+        let t1 = Stopwatch::start();
         let (full, empty_rec, _) = bench.chain(r)?;
         let phi = bench.calibrate(&empty_rec, baseline)?;
         let e = bench.estimate(&full, baseline, phi)?;

@@ -25,13 +25,13 @@
 //! the file the unsharded sweep writes, and refuses files of different sweeps,
 //! missing or repeated shards, and incomplete shards.
 
+use crate::clock::Stopwatch;
 use std::collections::{BTreeMap, HashMap};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::{Serialize, Serializer};
@@ -620,7 +620,7 @@ fn try_condition(
     bed: &SettledBed,
     c: &Condition,
 ) -> Result<SweepRow, SceneError> {
-    let started = Instant::now();
+    let started = Stopwatch::start();
     let scene = plan.scene_for(c)?;
     let drive = shake_drive(&scene, c.freq_hz, c.gamma)?;
     let rig = resolve_rig(&plan.rig, plan.shaker, &drive)?;
@@ -1313,7 +1313,7 @@ fn run_conditions(
 ) -> Result<SweepFile, SweepError> {
     jobs.sort_by(|a, b| b.cost().total_cmp(&a.cost()));
     let total_cost: f64 = jobs.iter().map(Condition::cost).sum();
-    let started = Instant::now();
+    let started = Stopwatch::start();
     struct Shared {
         file: SweepFile,
         done: usize,
