@@ -139,8 +139,8 @@ fn ci_runs_the_readme_test_command() {
     let ci_cargo: Vec<&str> = ci.lines().filter(|l| l.starts_with("cargo ")).collect();
     assert_eq!(
         readme_cargo,
-        vec!["cargo test"],
-        "the README gives one test command"
+        vec!["cargo test --workspace"],
+        "the README gives one test command, for vlab and the browser lab's crate"
     );
     assert_eq!(ci_cargo, readme_cargo, ".ci/run and the README disagree");
 }

@@ -25,7 +25,6 @@ use glam::DVec3;
 use crate::dem::World;
 use crate::dem::clumps::NOT_IN_CLUMP;
 use crate::experiment::damper::{Kinematics, StepObserver};
-#[cfg(feature = "plot")]
 use crate::scene::Orientation;
 #[cfg(feature = "plot")]
 use crate::signals::{CirclePanel, PanelStrip, SignalsError, plot_panel_strip};
@@ -123,9 +122,9 @@ impl PhaseSnapshots {
 const MM: f64 = 1e3;
 
 /// (across, along-the-view-up, depth) of a point in the side view of a
-/// damper of `orientation`.
-#[cfg(feature = "plot")]
-fn view(orientation: Orientation, p: DVec3) -> (f64, f64, f64) {
+/// damper of `orientation`: the axis is z; a vertical damper's up is z, a
+/// horizontal one's y (gravity −y). The browser lab draws the same view.
+pub fn side_view(orientation: Orientation, p: DVec3) -> (f64, f64, f64) {
     match orientation {
         Orientation::Vertical => (p.x, p.z, p.y),
         Orientation::Horizontal => (p.z, p.y, p.x),
@@ -174,7 +173,7 @@ fn phase_panel(
             ((u + length_m) * mm, radius_m * mm),
         ],
     };
-    let depth = |i: usize| view(orientation, s.position[i]).2;
+    let depth = |i: usize| side_view(orientation, s.position[i]).2;
     let mut order: Vec<usize> = (0..s.position.len())
         .filter(|&i| in_slice(depth(i), s.radius_m[i]))
         .collect();
@@ -188,7 +187,7 @@ fn phase_panel(
         circles: order
             .into_iter()
             .map(|i| {
-                let (x, y, _) = view(orientation, s.position[i]);
+                let (x, y, _) = side_view(orientation, s.position[i]);
                 (x * mm, y * mm, s.radius_m[i] * mm, s.speed_mps[i])
             })
             .collect(),
@@ -197,8 +196,7 @@ fn phase_panel(
 
 /// Whether a sphere of `radius_m` whose centre lies `depth_m` from the
 /// plane through the enclosure's axis is cut by it.
-#[cfg(feature = "plot")]
-fn in_slice(depth_m: f64, radius_m: f64) -> bool {
+pub fn in_slice(depth_m: f64, radius_m: f64) -> bool {
     depth_m.abs() < radius_m
 }
 
