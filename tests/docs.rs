@@ -105,6 +105,234 @@ fn tutorial_commands_run() {
         .expect("error");
     assert!(good.abs() < 0.01, "calibrated run off by {good}");
     assert!(wrong.abs() > 0.02, "mis-calibrated run only off by {wrong}");
+    tutorial_numbers_are_the_runs(&dir);
+}
+
+/// Runs `vlab args` in the tutorial's scratch folder and gives its standard
+/// output.
+fn vlab_output(dir: &Scratch, args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_vlab"))
+        .args(args)
+        .env("VLAB_CACHE_DIR", dir.path(".vlab-cache"))
+        .current_dir(&dir.0)
+        .output()
+        .expect("run vlab");
+    assert!(
+        out.status.success(),
+        "vlab {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn json_output(dir: &Scratch, args: &[&str]) -> serde_json::Value {
+    serde_json::from_str(&vlab_output(dir, args)).unwrap_or_else(|e| panic!("{args:?}: {e}"))
+}
+
+fn json_file(dir: &Scratch, name: &str) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.path(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn num(v: &serde_json::Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("{v} is not a number"))
+}
+
+/// The number after `label` on the line of `text` that holds it.
+fn number_after(text: &str, label: &str) -> f64 {
+    let line = text
+        .lines()
+        .find(|l| l.contains(label))
+        .unwrap_or_else(|| panic!("no line with {label:?} in\n{text}"));
+    let rest = &line[line.find(label).map_or(0, |i| i + label.len())..];
+    let word: String = rest
+        .trim_start_matches(|c: char| !(c.is_ascii_digit() || c == '-'))
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || matches!(c, '.' | '-' | 'e'))
+        .collect();
+    word.parse()
+        .unwrap_or_else(|e| panic!("{label:?} in {line:?}: {e}"))
+}
+
+/// Every number the tutorial's steps 1–7 quote, against the runs of its
+/// commands (and a few `--json` twins run in the same folder): the page
+/// must still hold each sentence with the number as the run gives it,
+/// rounded as the page rounds it. A change that moves a number fails here
+/// with the sentence to edit.
+fn tutorial_numbers_are_the_runs(dir: &Scratch) {
+    // The page's words, one space apart, quote marks of boxes taken out.
+    let page = read("docs/tutorial.md")
+        .lines()
+        .map(|l| l.trim_start().trim_start_matches('>'))
+        .flat_map(str::split_whitespace)
+        .collect::<Vec<_>>()
+        .join(" ");
+    let mut wrong = Vec::new();
+    let mut quote = |sentence: String| {
+        if !page.contains(&sentence) {
+            wrong.push(sentence);
+        }
+    };
+
+    // 1. The damper.
+    let scene = json_output(dir, &["scene", "--json"]);
+    let scene_text = vlab_output(dir, &["scene"]);
+    let drive = vlab::drive::Drive::new(40.0, 20.0, 9.81).expect("drive");
+    quote(format!(
+        "at 40 Hz Γ 20 is a stroke of ±{:.1} mm and a peak speed `Γ g / ω` of {:.2} m/s",
+        drive.displacement_amplitude_m() * 1e3,
+        drive.velocity_amplitude_mps()
+    ));
+    quote(format!("a volume fill of {:.3}", num(&scene["fill_ratio"])));
+    quote(format!(
+        "a time step of {:.1e} s at 40 Hz, Γ 20 (every collision resolved by {} steps",
+        num(&scene["dt_s_at_40hz_gamma20"]),
+        number_after(&scene_text, "Gamma 20 (")
+    ));
+    quote(format!(
+        "against a Rayleigh limit of {:.1e} s",
+        num(&scene["rayleigh_limit_s"])
+    ));
+    quote(format!(
+        "eq. 5.26, {:.1} m/s between spheres",
+        number_after(&scene_text, "yield velocity")
+    ));
+
+    // 2. One collision.
+    let hertz = json_output(dir, &["impact", "--speed-mps", "1", "--json"]);
+    let (d, h) = (
+        num(&hertz["contact_duration_s"]),
+        num(&hertz["hertz_contact_duration_s"]),
+    );
+    quote(format!(
+        "The first collision lasts {d:.2e} s, against {h:.2e} s for a purely elastic"
+    ));
+    quote(format!("stretches it by {:.1} %)", 100.0 * (d / h - 1.0)));
+    quote(format!(
+        "comes back at e = {:.3}",
+        num(&hertz["normal_restitution"])
+    ));
+    let thesis = json_output(
+        dir,
+        &[
+            "impact",
+            "--speed-mps",
+            "1",
+            "--cor",
+            "0.57",
+            "--restitution-mode",
+            "thesis",
+            "--json",
+        ],
+    );
+    quote(format!(
+        "the realised restitution is {:.2}, not the 0.57 asked for",
+        num(&thesis["normal_restitution"])
+    ));
+
+    // 3. The drop test.
+    let drop = json_file(dir, "drop/drop.json");
+    quote(format!(
+        "agrees with what the contact model realises to {:.3} % on average",
+        100.0 * num(&drop["cor_error_rel"])
+    ));
+
+    // 4. The phase error.
+    let cal = json_file(dir, "cal.json");
+    let at_40 = cal["points"]
+        .as_array()
+        .and_then(|p| p.iter().find(|p| p["freq_hz"].as_f64() == Some(40.0)))
+        .expect("cal.json has 40 Hz");
+    quote(format!(
+        "at 40 Hz, Γ 20 the {:.3}° error",
+        num(&at_40["phase_error_rad"]).to_degrees()
+    ));
+    let run = json_file(dir, "run/summary.json");
+    let dem_j = num(&run["dem"]["energy_per_cycle_j"]);
+    quote(format!(
+        "is worth about {:.0} % of the damper's dissipation",
+        -100.0 * num(&run["measured"]["predicted_leak_per_cycle_j"]) / dem_j
+    ));
+    let reference = json_output(
+        dir,
+        &[
+            "analyze",
+            "signals/reference/thesis-40Hz-G20/trace.csv",
+            "--json",
+        ],
+    );
+    let h1 = &reference["per_harmonic"][0];
+    let q_var =
+        0.5 * num(&h1["force_amp_n"]) * num(&h1["velocity_amp_mps"]) * num(&h1["phase_rad"]).sin();
+    let corrected = json_output(
+        dir,
+        &[
+            "analyze",
+            "signals/reference/thesis-40Hz-G20/trace.csv",
+            "--calibration",
+            "signals/reference/thesis-40Hz-G20/calibration.json",
+            "--json",
+        ],
+    );
+    let power_w = num(&corrected["power_w"]);
+    quote(format!(
+        "({q_var:.1} var with the bed, on the reference record)"
+    ));
+    quote(format!(
+        "0.005 rad × {q_var:.1} var ≈ {:.2} W, {:.1} % of the {power_w:.2} W the bed dissipates",
+        0.005 * q_var,
+        100.0 * 0.005 * q_var / power_w
+    ));
+    quote(format!(
+        "`vlab analyze`'s correction {:.4} W",
+        power_w - num(&reference["power_w"])
+    ));
+
+    // 5. Shake, record, measure.
+    let (m, dem) = (&run["measured"], &run["dem"]);
+    quote(format!("({} cycles here:", num(&run["cycles"])));
+    let (e, se) = (
+        num(&m["energy_per_cycle_j"]),
+        num(&m["energy_per_cycle_stderr_j"]),
+    );
+    quote(format!(
+        "Yang's method gives {:.2}e-2 ± {:.2}e-2 J per cycle, an efficiency of {:.2} ± {:.2}",
+        e * 1e2,
+        se * 1e2,
+        num(&m["efficiency"]),
+        num(&m["efficiency_stderr"])
+    ));
+    let error = num(&m["error_vs_dem_rel"]);
+    assert!(
+        error.abs() < 0.001,
+        "step 5 says within 0.1 % of the DEM; the run reads {:+.3} %",
+        100.0 * error
+    );
+    quote(format!(
+        "would dissipate: {:.3} J here, so {e:.3} J is {:.2}.",
+        num(&dem["e_max_j"]),
+        num(&m["efficiency"])
+    ));
+
+    // 6. Analyse the record yourself.
+    let raw = json_output(dir, &["analyze", "run/trace.csv", "--json"]);
+    quote(format!(
+        "Without the calibration the same record reads {:.1} % low",
+        -100.0 * (num(&raw["energy_per_cycle_j"]) / dem_j - 1.0)
+    ));
+
+    // 7. Break it on purpose.
+    let broken = json_file(dir, "wrong/summary.json");
+    quote(format!(
+        "the measurement reads about {:.0} % off",
+        100.0 * num(&broken["measured"]["error_vs_dem_rel"]).abs()
+    ));
+
+    assert!(
+        wrong.is_empty(),
+        "docs/tutorial.md no longer says what its commands give; it should say:\n{}",
+        wrong.join("\n")
+    );
 }
 
 #[test]
