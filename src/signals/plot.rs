@@ -153,6 +153,7 @@ pub fn plot_xy_svg_spanning(
         let mid = 0.5 * (y_range.start + y_range.end);
         y_range = (mid - 0.5 * min_y_span)..(mid + 0.5 * min_y_span);
     }
+    let y_range = with_legend_room(series, &x_range, y_range);
     let figure = XyFigure {
         title,
         x_label,
@@ -227,8 +228,12 @@ impl Figure for XyFigure<'_> {
         DB::ErrorType: 'static,
     {
         root.fill(&WHITE)?;
+        let (width_px, _) = root.dim_in_pixel();
         let mut chart = ChartBuilder::on(root)
-            .caption(self.title, ("sans-serif", 24))
+            .caption(
+                self.title,
+                ("sans-serif", title_font_px(self.title, width_px, 24)),
+            )
             .margin(12)
             .x_label_area_size(48)
             .y_label_area_size(72)
@@ -238,7 +243,20 @@ impl Figure for XyFigure<'_> {
             .x_desc(self.x_label)
             .y_desc(self.y_label)
             .draw()?;
-        for (i, s) in self.series.iter().enumerate() {
+        // Lines first, then points over them: a measured point on its line
+        // still shows. Each series keeps the colour of its place in the list.
+        let lines_then_points = self
+            .series
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.style == SeriesStyle::Line)
+            .chain(
+                self.series
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, s)| s.style == SeriesStyle::Points),
+            );
+        for (i, s) in lines_then_points {
             let color = Palette99::pick(i).to_rgba();
             let drawn = match s.style {
                 SeriesStyle::Line => chart.draw_series(LineSeries::new(
@@ -246,7 +264,7 @@ impl Figure for XyFigure<'_> {
                     color.stroke_width(2),
                 ))?,
                 SeriesStyle::Points => chart
-                    .draw_series(s.points.iter().map(|&p| Circle::new(p, 3, color.filled())))?,
+                    .draw_series(s.points.iter().map(|&p| Circle::new(p, 4, color.filled())))?,
             };
             drawn
                 .label(s.name.as_str())
@@ -255,7 +273,7 @@ impl Figure for XyFigure<'_> {
         if self.series.iter().any(|s| !s.name.is_empty()) {
             chart
                 .configure_series_labels()
-                .position(emptiest_corner(self.series, &self.x_range, &self.y_range))
+                .position(emptiest_corner(self.series, &self.x_range, &self.y_range).0)
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
                 .draw()?;
@@ -265,19 +283,44 @@ impl Figure for XyFigure<'_> {
     }
 }
 
-/// The corner of the plot where the legend hides the fewest points: each
-/// corner's box (the outer 40 % across, 30 % up or down) counts the points
-/// of the series in it, and the lines' points sampled along each segment.
-fn emptiest_corner(series: &[Series], x: &Range, y: &Range) -> SeriesLabelPosition {
+/// The caption's font size (px): `preferred`, or smaller so that `title`
+/// fits `width_px` (DejaVu Sans averages about 0.55 em a character; a PNG's
+/// text is wider than the SVG viewer's).
+fn title_font_px(title: &str, width_px: u32, preferred: u32) -> u32 {
+    let chars = title.chars().count().max(1) as f64;
+    let fits = (f64::from(width_px) - 24.0) / (0.55 * chars);
+    (fits.floor() as u32).clamp(12, preferred)
+}
+
+/// The legend box's share of the plot area (width, height) for the named
+/// series of `series`: about 20 px a row and 7 px a character, and the
+/// gap plotters leaves at the corner, of an 800 × 600 figure's plot area
+/// of about 700 × 500 px.
+fn legend_share(series: &[Series]) -> (f64, f64) {
+    let named = series.iter().filter(|s| !s.name.is_empty());
+    let rows = named.clone().count() as f64;
+    let chars = named.map(|s| s.name.chars().count()).max().unwrap_or(0) as f64;
+    (
+        ((chars * 7.0 + 70.0) / 700.0).min(0.9),
+        ((rows * 20.0 + 32.0) / 500.0).min(0.9),
+    )
+}
+
+/// The corner of the plot where the legend hides the fewest points, and how
+/// many it hides there: each corner's box (the legend's size,
+/// [`legend_share`]) counts the points of the series in it, and the lines'
+/// points sampled along each segment.
+fn emptiest_corner(series: &[Series], x: &Range, y: &Range) -> (SeriesLabelPosition, usize) {
     let (w, h) = (x.end - x.start, y.end - y.start);
+    let (across, up) = legend_share(series);
     let mut samples: Vec<(f64, f64)> = Vec::new();
     for s in series {
         samples.extend(&s.points);
         if s.style == SeriesStyle::Line {
             for seg in s.points.windows(2) {
                 let ((x0, y0), (x1, y1)) = (seg[0], seg[1]);
-                samples.extend((1..16).map(|k| {
-                    let t = k as f64 / 16.0;
+                samples.extend((1..64).map(|k| {
+                    let t = k as f64 / 64.0;
                     (x0 + t * (x1 - x0), y0 + t * (y1 - y0))
                 }));
             }
@@ -289,7 +332,8 @@ fn emptiest_corner(series: &[Series], x: &Range, y: &Range) -> SeriesLabelPositi
             .filter(|&&(px, py)| {
                 let u = (px - x.start) / w;
                 let v = (py - y.start) / h;
-                (if right { u > 0.6 } else { u < 0.4 }) && (if upper { v > 0.7 } else { v < 0.3 })
+                (if right { u > 1.0 - across } else { u < across })
+                    && (if upper { v > 1.0 - up } else { v < up })
             })
             .count()
     };
@@ -300,8 +344,21 @@ fn emptiest_corner(series: &[Series], x: &Range, y: &Range) -> SeriesLabelPositi
         (SeriesLabelPosition::LowerLeft, false, false),
     ]
     .into_iter()
-    .min_by_key(|&(_, right, upper)| count(right, upper))
-    .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+    .map(|(c, right, upper)| (c, count(right, upper)))
+    .min_by_key(|&(_, n)| n)
+    .unwrap_or((SeriesLabelPosition::UpperRight, 0))
+}
+
+/// `y` with room on top for the legend when every corner of the plot holds
+/// data: the range grows upwards until the legend's rows clear the highest
+/// point, so the legend lies over none.
+fn with_legend_room(series: &[Series], x: &Range, y: Range) -> Range {
+    if !series.iter().any(|s| !s.name.is_empty()) || emptiest_corner(series, x, &y).1 == 0 {
+        return y;
+    }
+    let (_, up) = legend_share(series);
+    let span = y.end - y.start;
+    y.start..y.end + span * up / (1.0 - up) * 1.1
 }
 
 /// Points with a symmetric error on y, drawn as a line through the points
@@ -1526,17 +1583,62 @@ mod tests {
         let (x, y) = (0.0..1.0, 0.0..1.0);
         let high_right = Series {
             name: "a".into(),
-            points: vec![(0.9, 0.9), (0.8, 0.85), (0.95, 0.8)],
+            points: vec![(0.98, 0.98), (0.95, 0.97), (0.99, 0.95)],
             style: SeriesStyle::Points,
         };
-        let c = emptiest_corner(std::slice::from_ref(&high_right), &x, &y);
+        let (c, _) = emptiest_corner(std::slice::from_ref(&high_right), &x, &y);
         assert!(!matches!(c, SeriesLabelPosition::UpperRight));
-        let flat = Series {
+        let (c, hidden) = emptiest_corner(&[flat_line(), high_right], &x, &y);
+        assert!(matches!(c, SeriesLabelPosition::UpperLeft), "{c:?}");
+        assert_eq!(hidden, 0);
+    }
+
+    /// Data in every corner (a sine over whole periods): the y axis grows
+    /// on top until the legend's corner is empty; a plot with a free
+    /// corner keeps its range.
+    #[test]
+    fn a_full_plot_makes_room_on_top_for_its_legend() {
+        let sine = Series {
+            name: "acceleration".into(),
+            points: (0..=200)
+                .map(|k| {
+                    let t = k as f64 / 100.0;
+                    (t, (2.0 * std::f64::consts::PI * 2.0 * t).sin())
+                })
+                .collect(),
+            style: SeriesStyle::Line,
+        };
+        let x = 0.0..2.0;
+        let y = -1.05..1.05;
+        assert!(emptiest_corner(std::slice::from_ref(&sine), &x, &y).1 > 0);
+        let roomy = with_legend_room(std::slice::from_ref(&sine), &x, y.clone());
+        assert_eq!(roomy.start, y.start);
+        assert!(roomy.end > y.end);
+        assert_eq!(
+            emptiest_corner(std::slice::from_ref(&sine), &x, &roomy).1,
+            0
+        );
+        let kept = with_legend_room(std::slice::from_ref(&flat_line()), &(0.0..1.0), 0.0..1.0);
+        assert_eq!(kept, 0.0..1.0);
+    }
+
+    fn flat_line() -> Series {
+        Series {
             name: "b".into(),
             points: vec![(0.0, 0.5), (1.0, 0.5)],
             style: SeriesStyle::Line,
-        };
-        let c = emptiest_corner(&[flat, high_right], &x, &y);
-        assert!(matches!(c, SeriesLabelPosition::UpperLeft), "{c:?}");
+        }
+    }
+
+    #[test]
+    fn a_long_title_gets_a_smaller_font() {
+        assert_eq!(title_font_px("short", 800, 24), 24);
+        let long =
+            "thesis damper, 40 Hz, Gamma 20: rig thesis-shaker record (cf. thesis Fig. 7.12)";
+        let px = title_font_px(long, 800, 24);
+        assert!(
+            px < 24 && 0.55 * px as f64 * long.chars().count() as f64 <= 776.0,
+            "{px}"
+        );
     }
 }
