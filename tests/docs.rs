@@ -154,7 +154,48 @@ fn number_after(text: &str, label: &str) -> f64 {
         .unwrap_or_else(|e| panic!("{label:?} in {line:?}: {e}"))
 }
 
-/// Every number the tutorial's steps 1–7 quote, against the runs of its
+/// (freq_hz, gamma, DEM efficiency, measured efficiency), each the mean
+/// over the seeds of one condition of the reference sweep `name`.
+fn seed_means(name: &str) -> Vec<(f64, f64, f64, f64)> {
+    let text = read(name);
+    let body: String = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let mut reader = csv::Reader::from_reader(body.as_bytes());
+    let headers = reader.headers().expect("header").clone();
+    let column = |key: &str| headers.iter().position(|h| h == key).expect(key);
+    let (f, g, st, e, m) = (
+        column("freq_hz"),
+        column("gamma"),
+        column("status"),
+        column("efficiency"),
+        column("efficiency_measured"),
+    );
+    let mut sums: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
+    for row in reader.records() {
+        let row = row.expect("row");
+        if &row[st] != "ok" {
+            continue;
+        }
+        let value = |i: usize| row[i].parse::<f64>().expect("number");
+        let (freq, gamma) = (value(f), value(g));
+        match sums.iter_mut().find(|c| c.0 == freq && c.1 == gamma) {
+            Some(c) => {
+                c.2 += value(e);
+                c.3 += value(m);
+                c.4 += 1.0;
+            }
+            None => sums.push((freq, gamma, value(e), value(m), 1.0)),
+        }
+    }
+    sums.into_iter()
+        .map(|(f, g, e, m, n)| (f, g, e / n, m / n))
+        .collect()
+}
+
+/// Every number the tutorial's steps 1–10 quote, against the runs of its
 /// commands (and a few `--json` twins run in the same folder): the page
 /// must still hold each sentence with the number as the run gives it,
 /// rounded as the page rounds it. A change that moves a number fails here
@@ -326,6 +367,93 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
     quote(format!(
         "the measurement reads about {:.0} % off",
         100.0 * num(&broken["measured"]["error_vs_dem_rel"]).abs()
+    ));
+
+    // 9. Records from your own lab.
+    let reference_dir = "signals/reference/thesis-40Hz-G20";
+    let tdms = json_output(
+        dir,
+        &[
+            "analyze",
+            &format!("{reference_dir}/trace.tdms"),
+            "--calibration",
+            &format!("{reference_dir}/calibration.json"),
+            "--json",
+        ],
+    );
+    quote(format!(
+        "all of them give the same {:.4} W, {:.4e} J per cycle",
+        num(&tdms["power_w"]),
+        num(&tdms["energy_per_cycle_j"])
+    ));
+    let cor = json_output(
+        dir,
+        &[
+            "cor",
+            "signals/reference/drop-acrylic-smooth/force-h2mm.csv",
+            "--json",
+        ],
+    );
+    let triples = cor["cor_per_triple"].as_array().map_or(0, Vec::len);
+    let words = [
+        "no", "one", "two", "three", "four", "five", "six", "seven", "eight",
+    ];
+    quote(format!(
+        "COR {:.5} over {} triples",
+        num(&cor["cor_mean"]),
+        words.get(triples).copied().unwrap_or("many")
+    ));
+
+    // 10. Reading an efficiency curve and a map.
+    let predict = json_output(dir, &["predict", "--freq", "20,40,80", "--json"]);
+    let gammas = |key: &str| -> Vec<String> {
+        predict[key]
+            .as_array()
+            .expect(key)
+            .iter()
+            .map(|g| format!("{:.1}", num(g)))
+            .collect()
+    };
+    let (close, loose) = (gammas("close_packing_gamma"), gammas("loose_packing_gamma"));
+    quote(format!(
+        "Γ {}, {} and {} with close packing, {}, {} and {} with loose packing",
+        close[0], close[1], close[2], loose[0], loose[1], loose[2]
+    ));
+    let steady = seed_means("signals/reference/sweep-steady/sweep.csv");
+    let at = |f: f64, g: f64| {
+        steady
+            .iter()
+            .find(|c| c.0 == f && c.1 == g)
+            .unwrap_or_else(|| panic!("sweep-steady has no {f} Hz, Gamma {g}"))
+            .2
+    };
+    quote(format!("fluidisation at Γ 3 ({:.2})", at(40.0, 3.0)));
+    quote(format!("bouncing bed at Γ 20 ({:.2})", at(40.0, 20.0)));
+    let (g5, g8) = (at(40.0, 5.0), at(40.0, 8.0));
+    quote(format!(
+        "the efficiency falls to {:.2}–{:.2}",
+        g5.min(g8),
+        g5.max(g8)
+    ));
+    let worst_dissipating = steady
+        .iter()
+        .filter(|c| c.2 > 0.1)
+        .map(|c| (c.3 / c.2 - 1.0).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst_dissipating < 0.01,
+        "step 10 says within 1 % wherever the damper dissipates; worst {:.2} %",
+        100.0 * worst_dissipating
+    );
+    let thesis_80: Vec<f64> = seed_means("signals/reference/sweep-thesis/sweep.csv")
+        .iter()
+        .filter(|c| c.0 == 80.0 && (1.5..=20.0).contains(&c.1))
+        .map(|c| 100.0 * (1.0 - c.3 / c.2))
+        .collect();
+    quote(format!(
+        "at 80 Hz by {:.0}–{:.0} % from Γ 1.5 to 20",
+        thesis_80.iter().copied().fold(f64::INFINITY, f64::min),
+        thesis_80.iter().copied().fold(0.0, f64::max)
     ));
 
     assert!(
