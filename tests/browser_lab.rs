@@ -35,6 +35,10 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
+mod common;
+
+use common::Scratch;
+
 const FREQ_HZ: &str = "40";
 const GAMMA: &str = "20";
 const SEED: &str = "2";
@@ -185,8 +189,8 @@ fn the_browser_lab_runs_a_shake_and_agrees_with_the_cli() {
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let wasm = build_wasm(root);
-    let tmp = tempfile_dir("browser-lab");
-    let site = tmp.join("site");
+    let tmp = Scratch::new("browser-lab");
+    let site = tmp.path("site");
     std::fs::create_dir_all(&site).expect("site folder");
     for f in ["index.html", "lab.js", "lab-worker.js", "lab.css"] {
         std::fs::copy(root.join("web/site").join(f), site.join(f)).expect("copy the page");
@@ -204,7 +208,7 @@ fn the_browser_lab_runs_a_shake_and_agrees_with_the_cli() {
     let _browser = Browser(
         Command::new(&chromium)
             .args(["--headless=new", "--no-sandbox", "--disable-gpu"])
-            .arg(format!("--user-data-dir={}", tmp.join("profile").display()))
+            .arg(format!("--user-data-dir={}", tmp.path("profile").display()))
             .arg(&url)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
@@ -219,7 +223,7 @@ fn the_browser_lab_runs_a_shake_and_agrees_with_the_cli() {
     assert_eq!(page["ok"], Value::Bool(true), "the page failed: {page}");
     let web = &page["result"];
 
-    let out_dir = tmp.join("cli");
+    let out_dir = tmp.path("cli");
     let out = Command::new(env!("CARGO_BIN_EXE_vlab"))
         .args([
             "-q", "shake", "--freq", FREQ_HZ, "--gamma", GAMMA, "--seed", SEED,
@@ -303,13 +307,4 @@ fn the_browser_lab_runs_a_shake_and_agrees_with_the_cli() {
         (area - uncorrected).abs() <= 1e-3 * uncorrected,
         "loop {area} vs Yang {uncorrected}"
     );
-    let _ = std::fs::remove_dir_all(&tmp);
-}
-
-/// A fresh folder under the system's temporary folder.
-fn tempfile_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vlab-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temporary folder");
-    dir
 }

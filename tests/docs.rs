@@ -154,9 +154,18 @@ fn number_after(text: &str, label: &str) -> f64 {
         .unwrap_or_else(|e| panic!("{label:?} in {line:?}: {e}"))
 }
 
-/// (freq_hz, gamma, DEM efficiency, measured efficiency), each the mean
-/// over the seeds of one condition of the reference sweep `name`.
-fn seed_means(name: &str) -> Vec<(f64, f64, f64, f64)> {
+/// One condition of a reference sweep, its efficiencies the mean over its
+/// seeds.
+struct Condition {
+    orientation: String,
+    freq_hz: f64,
+    gamma: f64,
+    dem: f64,
+    measured: f64,
+}
+
+/// The conditions of the reference sweep `name`.
+fn seed_means(name: &str) -> Vec<Condition> {
     let text = read(name);
     let body: String = text
         .lines()
@@ -166,33 +175,103 @@ fn seed_means(name: &str) -> Vec<(f64, f64, f64, f64)> {
     let mut reader = csv::Reader::from_reader(body.as_bytes());
     let headers = reader.headers().expect("header").clone();
     let column = |key: &str| headers.iter().position(|h| h == key).expect(key);
-    let (f, g, st, e, m) = (
+    let (o, f, g, st, e, m) = (
+        column("orientation"),
         column("freq_hz"),
         column("gamma"),
         column("status"),
         column("efficiency"),
         column("efficiency_measured"),
     );
-    let mut sums: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
+    let mut sums: Vec<(Condition, f64)> = Vec::new();
     for row in reader.records() {
         let row = row.expect("row");
         if &row[st] != "ok" {
             continue;
         }
         let value = |i: usize| row[i].parse::<f64>().expect("number");
-        let (freq, gamma) = (value(f), value(g));
-        match sums.iter_mut().find(|c| c.0 == freq && c.1 == gamma) {
-            Some(c) => {
-                c.2 += value(e);
-                c.3 += value(m);
-                c.4 += 1.0;
+        let (freq_hz, gamma) = (value(f), value(g));
+        let same =
+            |c: &Condition| c.orientation == row[o] && c.freq_hz == freq_hz && c.gamma == gamma;
+        match sums.iter_mut().find(|(c, _)| same(c)) {
+            Some((c, n)) => {
+                c.dem += value(e);
+                c.measured += value(m);
+                *n += 1.0;
             }
-            None => sums.push((freq, gamma, value(e), value(m), 1.0)),
+            None => sums.push((
+                Condition {
+                    orientation: row[o].to_string(),
+                    freq_hz,
+                    gamma,
+                    dem: value(e),
+                    measured: value(m),
+                },
+                1.0,
+            )),
         }
     }
     sums.into_iter()
-        .map(|(f, g, e, m, n)| (f, g, e / n, m / n))
+        .map(|(c, n)| Condition {
+            dem: c.dem / n,
+            measured: c.measured / n,
+            ..c
+        })
         .collect()
+}
+
+/// The DEM efficiency of one condition of `conditions`.
+fn efficiency_at(conditions: &[Condition], orientation: &str, freq_hz: f64, gamma: f64) -> f64 {
+    conditions
+        .iter()
+        .find(|c| c.orientation == orientation && c.freq_hz == freq_hz && c.gamma == gamma)
+        .unwrap_or_else(|| panic!("no {orientation} {freq_hz} Hz, Gamma {gamma}"))
+        .dem
+}
+
+/// The answer key's class map (exercise 3) quotes the reference class map.
+#[test]
+fn the_answers_quote_the_class_map() {
+    let page = read("docs/answers.md")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
+    let map = seed_means("signals/reference/class-map/sweep.csv");
+    let at = |o: &str, g: f64| efficiency_at(&map, o, 40.0, g);
+    for sentence in [
+        format!(
+            "at {:.3} (the vertical one there: {:.3})",
+            at("horizontal", 20.0),
+            at("vertical", 20.0)
+        ),
+        format!(
+            "still bounces at Γ 30 ({:.3}; vertical {:.3})",
+            at("horizontal", 30.0),
+            at("vertical", 30.0)
+        ),
+        format!(
+            "at Γ 5 the horizontal damper dissipates {:.3}, more than twice the vertical {:.3}",
+            at("horizontal", 5.0),
+            at("vertical", 5.0)
+        ),
+        format!(
+            "At Γ 10 both convect ({:.3} horizontal, {:.3} vertical)",
+            at("horizontal", 10.0),
+            at("vertical", 10.0)
+        ),
+    ] {
+        assert!(
+            page.contains(&sentence),
+            "docs/answers.md should say: {sentence}"
+        );
+    }
+    // Both halves peak on the grid at Gamma 20.
+    for o in ["vertical", "horizontal"] {
+        let best = [5.0, 10.0, 20.0, 30.0]
+            .into_iter()
+            .max_by(|a, b| at(o, *a).total_cmp(&at(o, *b)));
+        assert_eq!(best, Some(20.0), "{o}");
+    }
 }
 
 /// Every number the tutorial's steps 1–10 quote, against the runs of its
@@ -420,13 +499,7 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
         close[0], close[1], close[2], loose[0], loose[1], loose[2]
     ));
     let steady = seed_means("signals/reference/sweep-steady/sweep.csv");
-    let at = |f: f64, g: f64| {
-        steady
-            .iter()
-            .find(|c| c.0 == f && c.1 == g)
-            .unwrap_or_else(|| panic!("sweep-steady has no {f} Hz, Gamma {g}"))
-            .2
-    };
+    let at = |f: f64, g: f64| efficiency_at(&steady, "vertical", f, g);
     quote(format!("fluidisation at Γ 3 ({:.2})", at(40.0, 3.0)));
     quote(format!("bouncing bed at Γ 20 ({:.2})", at(40.0, 20.0)));
     let (g5, g8) = (at(40.0, 5.0), at(40.0, 8.0));
@@ -437,8 +510,8 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
     ));
     let worst_dissipating = steady
         .iter()
-        .filter(|c| c.2 > 0.1)
-        .map(|c| (c.3 / c.2 - 1.0).abs())
+        .filter(|c| c.dem > 0.1)
+        .map(|c| (c.measured / c.dem - 1.0).abs())
         .fold(0.0, f64::max);
     assert!(
         worst_dissipating < 0.01,
@@ -447,8 +520,8 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
     );
     let thesis_80: Vec<f64> = seed_means("signals/reference/sweep-thesis/sweep.csv")
         .iter()
-        .filter(|c| c.0 == 80.0 && (1.5..=20.0).contains(&c.1))
-        .map(|c| 100.0 * (1.0 - c.3 / c.2))
+        .filter(|c| c.freq_hz == 80.0 && (1.5..=20.0).contains(&c.gamma))
+        .map(|c| 100.0 * (1.0 - c.measured / c.dem))
         .collect();
     quote(format!(
         "at 80 Hz by {:.0}–{:.0} % from Γ 1.5 to 20",
