@@ -47,6 +47,8 @@ function run() {
   setup = null;
   trace = [];
   frames = [];
+  window.labResult = undefined;
+  window.labWallSeconds = undefined;
   stopReplay();
   $("play").disabled = true;
   $("scrub").disabled = true;
