@@ -367,6 +367,48 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
         "at 40 Hz, Γ 20 the {:.3}° error",
         num(&at_40["phase_error_rad"]).to_degrees()
     ));
+    // The drawing of the signal chain and the leak by hand, from the rig file.
+    let rig: toml::Table = toml::from_str(&vlab_output(dir, &["rig", "thesis-shaker", "--print"]))
+        .expect("the printed rig is TOML");
+    let key = |table: &str, name: &str| -> f64 {
+        let v = &rig[table][name];
+        v.as_float()
+            .or_else(|| v.as_integer().map(|i| i as f64))
+            .unwrap_or_else(|| panic!("{table}.{name} is not a number"))
+    };
+    let (force, accel) = (&rig["force"]["low_pass"], &rig["accelerometer"]["low_pass"]);
+    for (what, low_pass) in [("force", force), ("acceleration", accel)] {
+        let cutoff = low_pass["cutoff_hz"].as_float().expect("cutoff_hz");
+        let order = low_pass["order"].as_integer().expect("order");
+        assert_eq!(
+            (cutoff, order),
+            (10_000.0, 4),
+            "the drawing's {what} filter"
+        );
+    }
+    quote(format!("{} V/N", key("force", "sensitivity_v_per_n")));
+    quote(format!("corner {} Hz", key("force", "high_pass_hz")));
+    quote(format!(
+        "{} V/(m/s²)",
+        key("accelerometer", "sensitivity_v_per_mps2")
+    ));
+    quote(format!(
+        "corner {} Hz",
+        key("accelerometer", "high_pass_hz")
+    ));
+    assert_eq!(key("daq", "sample_rate_hz"), 40_000.0, "the drawing's ADC");
+    quote(format!(
+        "the ADC samples the force {:.0} µs late (the **inter-channel skew**",
+        key("force", "sample_skew_s") * 1e6
+    ));
+    quote(format!("ADC, {} bit", key("daq", "bits")));
+    let m_enc = key("enclosure", "mass_kg");
+    let a_peak = drive.acceleration_amplitude_mps2();
+    let v_peak = drive.velocity_amplitude_mps();
+    quote(format!(
+        "about ½ × {m_enc} kg × {a_peak:.0} m/s² × {v_peak:.2} m/s ≈ {:.0} var",
+        0.5 * m_enc * a_peak * v_peak
+    ));
     let run = json_file(dir, "run/summary.json");
     let dem_j = num(&run["dem"]["energy_per_cycle_j"]);
     quote(format!(
