@@ -223,28 +223,32 @@ fn the_browser_lab_runs_a_shake_and_agrees_with_the_cli() {
     assert_eq!(page["ok"], Value::Bool(true), "the page failed: {page}");
     let web = &page["result"];
 
-    let out_dir = tmp.path("cli");
-    let out = Command::new(env!("CARGO_BIN_EXE_vlab"))
-        .args([
-            "-q", "shake", "--freq", FREQ_HZ, "--gamma", GAMMA, "--seed", SEED,
-        ])
-        .args([
+    let out = common::vlab(
+        &tmp.0,
+        &[
+            "-q",
+            "shake",
+            "--freq",
+            FREQ_HZ,
+            "--gamma",
+            GAMMA,
+            "--seed",
+            SEED,
             "--cycles",
             CYCLES,
             "--steady-cycles",
             STEADY,
             "--orientation",
             "vertical",
-        ])
-        .args(["--rig", "thesis-shaker", "--no-cache", "--json", "--out"])
-        .arg(&out_dir)
-        .output()
-        .expect("run vlab shake");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+            "--rig",
+            "thesis-shaker",
+            "--no-cache",
+            "--json",
+            "--out",
+            "cli",
+        ],
     );
+    assert!(out.status.success(), "{}", common::stderr(&out));
     let cli: Value = serde_json::from_slice(&out.stdout).expect("summary JSON");
     eprintln!(
         "browser: {browser_s:.1} s to the result (page: {:.1} s); DEM efficiency browser {:.4}, CLI {:.4}",

@@ -108,19 +108,14 @@ fn tutorial_commands_run() {
     tutorial_numbers_are_the_runs(&dir);
 }
 
-/// Runs `vlab args` in the tutorial's scratch folder and gives its standard
-/// output.
+/// Runs `vlab args` in the tutorial's scratch folder (its bed cache) and
+/// gives its standard output.
 fn vlab_output(dir: &Scratch, args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_vlab"))
-        .args(args)
-        .env("VLAB_CACHE_DIR", dir.path(".vlab-cache"))
-        .current_dir(&dir.0)
-        .output()
-        .expect("run vlab");
+    let out = common::vlab(&dir.0, args);
     assert!(
         out.status.success(),
         "vlab {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
+        common::stderr(&out)
     );
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
@@ -130,8 +125,7 @@ fn json_output(dir: &Scratch, args: &[&str]) -> serde_json::Value {
 }
 
 fn json_file(dir: &Scratch, name: &str) -> serde_json::Value {
-    let text = std::fs::read_to_string(dir.path(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{name}: {e}"))
+    common::json(&dir.path(name))
 }
 
 fn num(v: &serde_json::Value) -> f64 {

@@ -273,7 +273,7 @@ function showResult(r) {
   $("steps").innerHTML = steps.map((t) => `<li>${t}</li>`).join("");
   $("harmonics").tBodies[0].innerHTML = y.per_harmonic.map((h) =>
     `<tr><td>${h.harmonic}</td><td>${h.freq_hz.toFixed(0)}</td><td>${h.force_amp_n.toFixed(4)}</td>` +
-    `<td>${h.velocity_amp_mps.toExponential(3)}</td><td>${h.phase_deg.toFixed(2)}</td><td>${h.power_w.toExponential(3)}</td></tr>`).join("") +
+    `<td>${h.velocity_amp_mps.toExponential(3)}</td><td>${(h.phase_rad * 180 / Math.PI).toFixed(2)}</td><td>${h.power_w.toExponential(3)}</td></tr>`).join("") +
     `<tr><td colspan="5">every other bin up to ${(y.sample_rate_hz / 2000).toFixed(0)} kHz (noise, leakage)</td><td>${y.other_bins_power_w.toExponential(3)}</td></tr>` +
     `<tr><td colspan="5"><b>P, the sum</b> (a negative entry: that harmonic gave energy back over the window)</td><td><b>${y.power_w.toExponential(4)}</b></td></tr>`;
   const rows = [

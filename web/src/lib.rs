@@ -22,6 +22,7 @@ use vlab::experiment::shake::{ShakeSummary, resolve_rig, run_shake_observed, sha
 use vlab::export::snapshots::{in_slice, side_view};
 use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::signals::hysteresis::force_loop;
+use vlab::signals::power::HarmonicPower;
 use vlab::signals::{Analysis, AnalysisOptions, Trace, analyse_trace};
 
 /// Frames of the bed sent to the page per drive cycle.
@@ -115,7 +116,7 @@ pub struct YangSteps {
     pub phase_correction_rad: f64,
     pub force_polarity_reversed: bool,
     /// The first harmonics (as many as `vlab analyze` lists).
-    pub per_harmonic: Vec<Harmonic>,
+    pub per_harmonic: Vec<HarmonicPower>,
     /// The power of every other bin of the spectrum up to the Nyquist
     /// frequency: `power_w` less the listed harmonics' (W).
     pub other_bins_power_w: f64,
@@ -129,17 +130,6 @@ pub struct YangSteps {
     /// The enclosed area of the force-displacement loop per cycle (J),
     /// before the phase correction.
     pub loop_energy_per_cycle_j: f64,
-}
-
-/// One harmonic of Yang's sum.
-#[derive(Debug, Clone, Serialize)]
-pub struct Harmonic {
-    pub harmonic: usize,
-    pub freq_hz: f64,
-    pub force_amp_n: f64,
-    pub velocity_amp_mps: f64,
-    pub phase_deg: f64,
-    pub power_w: f64,
 }
 
 /// The analysed window of the record, every `stride`-th sample.
@@ -259,18 +249,7 @@ fn yang_steps(
         sample_rate_hz: trace.sample_rate_hz,
         phase_correction_rad: analysis.phase_correction_rad,
         force_polarity_reversed: analysis.force_polarity.reversed,
-        per_harmonic: analysis
-            .per_harmonic
-            .iter()
-            .map(|h| Harmonic {
-                harmonic: h.harmonic,
-                freq_hz: h.freq_hz,
-                force_amp_n: h.force_amp_n,
-                velocity_amp_mps: h.velocity_amp_mps,
-                phase_deg: h.phase_rad.to_degrees(),
-                power_w: h.power_w,
-            })
-            .collect(),
+        per_harmonic: analysis.per_harmonic.clone(),
         other_bins_power_w: analysis.power_w
             - analysis.per_harmonic.iter().map(|h| h.power_w).sum::<f64>(),
         power_w: analysis.power_w,
