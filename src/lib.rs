@@ -14,6 +14,7 @@
 //! - `signals` imports neither `rig` nor `dem`: it works on real lab files alone;
 //! - `rig` does not import `dem`: it sees the damper only as a force;
 //! - `dem` knows nothing of rigs, sensors or files;
+//! - `host` (a structure carrying the damper) imports `rig` but not `dem`;
 //! - `shape` (multi-sphere grain geometry, thesis Chapter 4 and 8.2) is pure
 //!   geometry and imports no other vlab module.
 
@@ -23,6 +24,7 @@ pub mod dem;
 pub mod drive;
 pub mod experiment;
 pub mod export;
+pub mod host;
 pub mod rig;
 pub mod scene;
 pub mod shape;

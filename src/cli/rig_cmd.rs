@@ -1,9 +1,11 @@
-//! `vlab rig`: the built-in rigs (the shaker rigs and the drop-test rig), and
+//! `vlab rig`: the built-in rigs (the shaker rigs, the drop-test rig and the
+//! host structures), and
 //! their TOML, so a user can copy one, change it and pass it with `--rig FILE`.
 
 use anyhow::{Result, bail};
 use clap::Args;
 
+use vlab::host::HostSpec;
 use vlab::rig::{DropRigSpec, RigFile, RigKind, RigSpec, builtin_rigs, builtin_toml};
 
 #[derive(Debug, Clone, Args)]
@@ -33,6 +35,7 @@ pub fn run(a: RigArgs) -> Result<()> {
             let description = match kind {
                 RigKind::Shaker => RigSpec::builtin(name)?.description,
                 RigKind::DropTest => DropRigSpec::builtin(name)?.description,
+                RigKind::Host => HostSpec::builtin(name)?.description,
             };
             println!("{name:14} {kind:10} {description}");
         }
@@ -60,6 +63,22 @@ pub fn run(a: RigArgs) -> Result<()> {
                 d.plate_natural_freq_hz(),
                 d.daq.sample_rate_hz
             );
+        }
+        RigKind::Host => {
+            let h = HostSpec::builtin(&name)?;
+            println!("{} ({kind}): {}", h.name, h.description);
+            for (i, m) in h.modes.iter().enumerate() {
+                println!(
+                    "  mode {}: {:.2} Hz, modal mass {} kg, damping ratio {}, k {:.0} N/m, shape {} at the damper, {} at the drive",
+                    i + 1,
+                    m.natural_freq_hz(),
+                    m.modal_mass_kg,
+                    m.damping_ratio,
+                    m.stiffness(),
+                    m.shape_at_damper,
+                    m.shape_at_drive
+                );
+            }
         }
         RigKind::Shaker => {
             let r = RigSpec::builtin(&name)?;

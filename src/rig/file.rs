@@ -2,12 +2,13 @@
 //! strict keys and validation, whatever the kind of rig.
 //!
 //! A rig file is TOML with `version = 1` and `kind = "shaker"` (the damper
-//! rigs of [`super::spec`]) or `kind = "drop-test"` (the restitution rig of
-//! [`super::drop_spec`]). A file without `kind` is told by its sections
-//! (`[shaker]` or `[plate]`). A file of the wrong kind for what was asked is
+//! rigs of [`super::spec`]), `kind = "drop-test"` (the restitution rig of
+//! [`super::drop_spec`]) or `kind = "host"` (a structure carrying the damper,
+//! [`crate::host::HostSpec`]). A file without `kind` is told by its sections
+//! (`[shaker]`, `[plate]` or `[[mode]]`). A file of the wrong kind for what was asked is
 //! refused by its kind, not by the first key the other kind does not know.
-//! The built-in rigs are the files of the top-level `rig/` folder, embedded in
-//! the binary. Nothing is merged from a built-in: a rig file is complete.
+//! The built-in rigs are the files of the top-level `rig/` folder, and the
+//! built-in hosts those of `host/`, embedded in the binary. Nothing is merged from a built-in: a rig file is complete.
 
 use std::fmt;
 use std::path::Path;
@@ -27,6 +28,8 @@ pub enum RigKind {
     Shaker,
     /// A drop-test rig: a plate on a force transducer.
     DropTest,
+    /// A host structure that carries the damper (its modes).
+    Host,
 }
 
 impl RigKind {
@@ -35,6 +38,7 @@ impl RigKind {
         match self {
             RigKind::Shaker => "shaker",
             RigKind::DropTest => "drop-test",
+            RigKind::Host => "host",
         }
     }
 
@@ -44,6 +48,8 @@ impl RigKind {
             Some(RigKind::Shaker)
         } else if table.contains_key("plate") {
             Some(RigKind::DropTest)
+        } else if table.contains_key("mode") {
+            Some(RigKind::Host)
         } else {
             None
         }
@@ -57,7 +63,7 @@ impl fmt::Display for RigKind {
 }
 
 /// The built-in rigs: name, kind, file.
-const BUILTIN: [(&str, RigKind, &str); 3] = [
+const BUILTIN: [(&str, RigKind, &str); 5] = [
     (
         "thesis-shaker",
         RigKind::Shaker,
@@ -72,6 +78,16 @@ const BUILTIN: [(&str, RigKind, &str); 3] = [
         "drop-test",
         RigKind::DropTest,
         include_str!("../../rig/drop-test.toml"),
+    ),
+    (
+        "plate-40hz",
+        RigKind::Host,
+        include_str!("../../host/plate-40hz.toml"),
+    ),
+    (
+        "beam-2mode",
+        RigKind::Host,
+        include_str!("../../host/beam-2mode.toml"),
     ),
 ];
 
@@ -233,6 +249,11 @@ pub(crate) fn drop_test_kind() -> RigKind {
     RigKind::DropTest
 }
 
+/// Default `kind` of a host file that has no `kind` key.
+pub(crate) fn host_kind() -> RigKind {
+    RigKind::Host
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -240,9 +261,12 @@ mod tests {
 
     #[test]
     fn every_checked_in_rig_file_loads_as_its_kind() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("rig");
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let mut seen = 0;
-        for entry in std::fs::read_dir(&dir).expect("rig/ exists") {
+        let entries = std::fs::read_dir(root.join("rig"))
+            .expect("rig/ exists")
+            .chain(std::fs::read_dir(root.join("host")).expect("host/ exists"));
+        for entry in entries {
             let path = entry.expect("entry").path();
             if path.extension().is_none_or(|e| e != "toml") {
                 continue;
@@ -252,11 +276,16 @@ mod tests {
             match table.get("kind").and_then(toml::Value::as_str) {
                 Some("shaker") => drop(RigSpec::load(&path).expect("shaker rig")),
                 Some("drop-test") => drop(DropRigSpec::load(&path).expect("drop rig")),
+                Some("host") => drop(crate::host::HostSpec::load(&path).expect("host")),
                 other => panic!("{}: kind {other:?}", path.display()),
             }
             seen += 1;
         }
-        assert_eq!(seen, BUILTIN.len(), "every file in rig/ is built in");
+        assert_eq!(
+            seen,
+            BUILTIN.len(),
+            "every file in rig/ and host/ is built in"
+        );
         for (name, kind) in builtin_rigs() {
             let text = builtin_toml(name).expect("built in");
             assert!(text.contains(&format!("kind = \"{kind}\"")), "{name}");

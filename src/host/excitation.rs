@@ -1,0 +1,387 @@
+//! What drives the host: a force at its drive point, as a lab applies it with
+//! a shaker on a stinger or an instrumented hammer (thesis Section 2.3.1, and
+//! 9.4 v: multi-harmonic, random and transient loading).
+//!
+//! Each excitation is one documented key, as the command line writes it:
+//!
+//! | key | force at the drive point |
+//! |---|---|
+//! | `sine:F_HZ:FORCE_N` | `F sin 2π f t` |
+//! | `sweep:F0_HZ:F1_HZ:DURATION_S:FORCE_N` | linear chirp, `F sin 2π (f0 t + (f1 − f0) t² / 2T)`, then nothing |
+//! | `multisine:F1_HZ:N1,F2_HZ:N2,...` | `Σ F_k sin 2π f_k t` |
+//! | `random:LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED` | periodic random: every line `k / PERIOD` in the band at one amplitude, phases drawn from SEED, `RMS_N` in all |
+//! | `hammer:IMPULSE_N_S` | a half-sine pulse of 0.5 ms carrying the impulse, at t = 0 |
+//! | `release:X0_M` | nothing: the host starts deflected by `X0_M` at the damper and is let go |
+
+use std::f64::consts::{PI, TAU};
+
+use rand_core::Rng;
+use rand_core::SeedableRng;
+use rand_xoshiro::Xoshiro256PlusPlus;
+use serde::Serialize;
+
+use crate::validation::{Bound, InvalidParameter, in_range, positive};
+
+/// Width of the hammer's half-sine pulse, s: a steel tip on a steel host.
+pub const HAMMER_PULSE_S: f64 = 5e-4;
+
+/// One sine of a multi-sine, or a line of a periodic random force.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Line {
+    pub freq_hz: f64,
+    pub force_n: f64,
+    pub phase_rad: f64,
+}
+
+/// A force at the host's drive point.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Excitation {
+    /// `F sin 2π f t`.
+    Sine { freq_hz: f64, force_n: f64 },
+    /// Linear chirp from `start_hz` to `end_hz` over `duration_s`, then zero.
+    Sweep {
+        start_hz: f64,
+        end_hz: f64,
+        duration_s: f64,
+        force_n: f64,
+    },
+    /// A sum of sines (multi-harmonic loading), and a periodic random force
+    /// (its lines at random phases).
+    Lines { lines: Vec<Line>, random: bool },
+    /// Half-sine pulse of [`HAMMER_PULSE_S`] carrying `impulse_n_s`.
+    Hammer { impulse_n_s: f64 },
+    /// No force: the host is released from `x0_m` at the damper.
+    Release { x0_m: f64 },
+}
+
+impl Excitation {
+    /// The force at `t_s` from the start, N.
+    pub fn force_n(&self, t_s: f64) -> f64 {
+        match self {
+            Excitation::Sine { freq_hz, force_n } => force_n * (TAU * freq_hz * t_s).sin(),
+            Excitation::Sweep {
+                start_hz,
+                end_hz,
+                duration_s,
+                force_n,
+            } => {
+                if t_s > *duration_s || t_s < 0.0 {
+                    0.0
+                } else {
+                    let cycles =
+                        start_hz * t_s + (end_hz - start_hz) * t_s * t_s / (2.0 * duration_s);
+                    force_n * (TAU * cycles).sin()
+                }
+            }
+            Excitation::Lines { lines, .. } => lines
+                .iter()
+                .map(|l| l.force_n * (TAU * l.freq_hz * t_s + l.phase_rad).sin())
+                .sum(),
+            Excitation::Hammer { impulse_n_s } => {
+                if (0.0..=HAMMER_PULSE_S).contains(&t_s) {
+                    // Peak F0 with integral F0 2 w / pi = J.
+                    let peak = PI * impulse_n_s / (2.0 * HAMMER_PULSE_S);
+                    peak * (PI * t_s / HAMMER_PULSE_S).sin()
+                } else {
+                    0.0
+                }
+            }
+            Excitation::Release { .. } => 0.0,
+        }
+    }
+
+    /// The displacement at the damper the host starts from, m.
+    pub fn initial_displacement_m(&self) -> f64 {
+        match self {
+            Excitation::Release { x0_m } => *x0_m,
+            _ => 0.0,
+        }
+    }
+
+    /// The highest frequency the force holds, Hz (for the step and the record).
+    pub fn highest_freq_hz(&self) -> f64 {
+        match self {
+            Excitation::Sine { freq_hz, .. } => *freq_hz,
+            Excitation::Sweep {
+                start_hz, end_hz, ..
+            } => start_hz.max(*end_hz),
+            Excitation::Lines { lines, .. } => lines.iter().map(|l| l.freq_hz).fold(0.0, f64::max),
+            Excitation::Hammer { .. } => 1.0 / HAMMER_PULSE_S,
+            Excitation::Release { .. } => 0.0,
+        }
+    }
+
+    /// A periodic random force: every line `k / period_s` in
+    /// `[low_hz, high_hz]` at one amplitude and a phase drawn from `seed`,
+    /// `rms_n` in all. A whole period of it has no leakage in an FRF whose
+    /// block is the period.
+    pub fn periodic_random(
+        low_hz: f64,
+        high_hz: f64,
+        rms_n: f64,
+        period_s: f64,
+        seed: u64,
+    ) -> Result<Self, InvalidParameter> {
+        positive("period_s", period_s, "s")?;
+        positive("low_hz", low_hz, "Hz")?;
+        in_range(
+            "high_hz",
+            high_hz,
+            "Hz",
+            Bound::Open(low_hz),
+            Bound::Closed(5_000.0),
+        )?;
+        positive("rms_n", rms_n, "N")?;
+        let first = (low_hz * period_s).ceil() as u64;
+        let last = (high_hz * period_s).floor() as u64;
+        if last < first {
+            return Err(InvalidParameter::new(
+                "period_s",
+                period_s,
+                "s",
+                format!("long enough to put a line k / period_s in [{low_hz}, {high_hz}] Hz"),
+            ));
+        }
+        let count = (last - first + 1) as f64;
+        // Each line of amplitude A carries A^2 / 2 of the mean square.
+        let amplitude = rms_n * (2.0 / count).sqrt();
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let lines = (first..=last)
+            .map(|k| Line {
+                freq_hz: k as f64 / period_s,
+                force_n: amplitude,
+                phase_rad: TAU * (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64,
+            })
+            .collect();
+        Ok(Excitation::Lines {
+            lines,
+            random: true,
+        })
+    }
+
+    /// Parses a key of the table in the module docs.
+    pub fn parse(key: &str) -> Result<Self, InvalidParameter> {
+        let refuse =
+            |valid: &str| InvalidParameter::new("excitation", format!("'{key}'"), "", valid);
+        let (kind, rest) = key.split_once(':').ok_or_else(|| {
+            refuse("KIND:VALUES, KIND one of sine, sweep, multisine, random, hammer, release")
+        })?;
+        let numbers =
+            |text: &str, names: &[&str], units: &[&str]| -> Result<Vec<f64>, InvalidParameter> {
+                let parts: Vec<&str> = text.split(':').collect();
+                if parts.len() != names.len() {
+                    return Err(refuse(&format!("{kind}:{}", names.join(":"))));
+                }
+                parts
+                    .iter()
+                    .zip(names.iter().zip(units))
+                    .map(|(p, (name, unit))| {
+                        p.trim().parse::<f64>().map_err(|_| {
+                            InvalidParameter::new(*name, format!("'{p}'"), unit, "a number")
+                        })
+                    })
+                    .collect()
+            };
+        let excitation = match kind {
+            "sine" => {
+                let v = numbers(rest, &["freq_hz", "force_n"], &["Hz", "N"])?;
+                Excitation::Sine {
+                    freq_hz: v[0],
+                    force_n: v[1],
+                }
+            }
+            "sweep" => {
+                let v = numbers(
+                    rest,
+                    &["start_hz", "end_hz", "duration_s", "force_n"],
+                    &["Hz", "Hz", "s", "N"],
+                )?;
+                Excitation::Sweep {
+                    start_hz: v[0],
+                    end_hz: v[1],
+                    duration_s: v[2],
+                    force_n: v[3],
+                }
+            }
+            "multisine" => {
+                let lines = rest
+                    .split(',')
+                    .map(|pair| {
+                        let v = numbers(pair, &["freq_hz", "force_n"], &["Hz", "N"])?;
+                        Ok(Line {
+                            freq_hz: v[0],
+                            force_n: v[1],
+                            phase_rad: 0.0,
+                        })
+                    })
+                    .collect::<Result<Vec<_>, InvalidParameter>>()?;
+                Excitation::Lines {
+                    lines,
+                    random: false,
+                }
+            }
+            "random" => {
+                let v = numbers(
+                    rest,
+                    &["low_hz", "high_hz", "rms_n", "period_s", "seed"],
+                    &["Hz", "Hz", "N", "s", ""],
+                )?;
+                in_range(
+                    "seed",
+                    v[4],
+                    "",
+                    Bound::Closed(0.0),
+                    Bound::Closed(u32::MAX.into()),
+                )?;
+                Excitation::periodic_random(v[0], v[1], v[2], v[3], v[4] as u64)?
+            }
+            "hammer" => {
+                let v = numbers(rest, &["impulse_n_s"], &["N s"])?;
+                Excitation::Hammer { impulse_n_s: v[0] }
+            }
+            "release" => {
+                let v = numbers(rest, &["x0_m"], &["m"])?;
+                Excitation::Release { x0_m: v[0] }
+            }
+            _ => {
+                return Err(refuse(
+                    "KIND:VALUES, KIND one of sine, sweep, multisine, random, hammer, release",
+                ));
+            }
+        };
+        excitation.validate()?;
+        Ok(excitation)
+    }
+
+    /// Checks every value (frequencies positive and at most 5 kHz, forces
+    /// positive, a release within 50 mm).
+    pub fn validate(&self) -> Result<(), InvalidParameter> {
+        let freq =
+            |key: &str, f: f64| in_range(key, f, "Hz", Bound::Open(0.0), Bound::Closed(5_000.0));
+        match self {
+            Excitation::Sine { freq_hz, force_n } => {
+                freq("freq_hz", *freq_hz)?;
+                positive("force_n", *force_n, "N")?;
+            }
+            Excitation::Sweep {
+                start_hz,
+                end_hz,
+                duration_s,
+                force_n,
+            } => {
+                freq("start_hz", *start_hz)?;
+                freq("end_hz", *end_hz)?;
+                positive("duration_s", *duration_s, "s")?;
+                positive("force_n", *force_n, "N")?;
+            }
+            Excitation::Lines { lines, .. } => {
+                if lines.is_empty() {
+                    return Err(InvalidParameter::new("lines", "none", "", "at least one"));
+                }
+                for l in lines {
+                    freq("freq_hz", l.freq_hz)?;
+                    positive("force_n", l.force_n, "N")?;
+                }
+            }
+            Excitation::Hammer { impulse_n_s } => {
+                positive("impulse_n_s", *impulse_n_s, "N s")?;
+            }
+            Excitation::Release { x0_m } => {
+                in_range(
+                    "x0_m",
+                    *x0_m,
+                    "m",
+                    Bound::Closed(-0.05),
+                    Bound::Closed(0.05),
+                )
+                .map_err(|e| e.because("a release within the enclosure's stroke"))?;
+                if *x0_m == 0.0 {
+                    return Err(InvalidParameter::new(
+                        "x0_m",
+                        0,
+                        "m",
+                        "non-zero (a release from rest decays nothing)",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_key_parses_to_its_force() {
+        let sine = Excitation::parse("sine:40:5").expect("valid");
+        assert!((sine.force_n(1.0 / 160.0) - 5.0).abs() < 1e-12);
+        // The chirp's instantaneous frequency is f0 + (f1 - f0) t / T: its
+        // zero crossings at t where the phase is a whole half cycle.
+        let sweep = Excitation::parse("sweep:10:30:2:1").expect("valid");
+        let t_half = {
+            // phase(t) = 10 t + 5 t^2 = 0.5 -> t = (-10 + sqrt(100 + 10)) / 10.
+            (-10.0 + 110.0_f64.sqrt()) / 10.0
+        };
+        assert!(sweep.force_n(t_half).abs() < 1e-12);
+        assert_eq!(sweep.force_n(2.5), 0.0);
+        // The hammer's pulse carries its impulse (midpoint sum, 1e-6).
+        let hammer = Excitation::parse("hammer:0.02").expect("valid");
+        let dt = 1e-7;
+        let impulse: f64 = (0..10_000)
+            .map(|k| hammer.force_n((f64::from(k) + 0.5) * dt) * dt)
+            .sum();
+        assert!((impulse - 0.02).abs() < 1e-6 * 0.02 + 1e-12, "{impulse}");
+        let multi = Excitation::parse("multisine:40:5,120:2").expect("valid");
+        assert!((multi.force_n(1.0 / 160.0) - (5.0 + 2.0 * (TAU * 0.75).sin())).abs() < 1e-12);
+        assert_eq!(
+            Excitation::parse("release:0.003")
+                .expect("valid")
+                .initial_displacement_m(),
+            0.003
+        );
+    }
+
+    #[test]
+    fn the_periodic_random_force_has_its_rms_its_band_and_its_seed() {
+        let f = Excitation::parse("random:20:80:2:1:7").expect("valid");
+        let Excitation::Lines { lines, random } = &f else {
+            panic!("{f:?}")
+        };
+        assert!(random);
+        assert_eq!(lines.len(), 61, "lines 20..=80 Hz at 1 Hz");
+        // Mean square over one period, 1e-9.
+        let n = 40_000;
+        let ms: f64 = (0..n)
+            .map(|k| f.force_n(f64::from(k) / f64::from(n)).powi(2))
+            .sum::<f64>()
+            / f64::from(n);
+        assert!((ms.sqrt() - 2.0).abs() < 1e-9, "{}", ms.sqrt());
+        // Periodic, and another seed draws other phases.
+        assert!((f.force_n(0.123) - f.force_n(1.123)).abs() < 1e-9);
+        let other = Excitation::parse("random:20:80:2:1:8").expect("valid");
+        assert!((f.force_n(0.123) - other.force_n(0.123)).abs() > 1e-6);
+    }
+
+    #[test]
+    fn a_wrong_key_says_what_it_wanted() {
+        let msg = |k: &str| Excitation::parse(k).expect_err(k).to_string();
+        assert!(
+            msg("sine:40").contains("sine:freq_hz:force_n"),
+            "{}",
+            msg("sine:40")
+        );
+        assert_eq!(msg("sine:-40:5"), "freq_hz = -40 Hz: must be in (0, 5000]");
+        assert_eq!(msg("sine:40:x"), "force_n = 'x' N: must be a number");
+        assert!(msg("tap:1").contains("KIND one of"), "{}", msg("tap:1"));
+        assert!(msg("release:0.2").contains("x0_m = 0.2 m: must be in [-0.05, 0.05]"));
+        assert!(
+            msg("random:20.2:20.7:1:1:1").contains("period_s = 1 s"),
+            "{}",
+            msg("random:20.2:20.7:1:1:1")
+        );
+        assert!(msg("random:20:80:1:1:-1").contains("seed = -1"));
+    }
+}
