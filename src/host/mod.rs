@@ -20,10 +20,12 @@
 
 pub mod dynamics;
 pub mod excitation;
+pub mod map_model;
 pub mod motion;
 pub mod spec;
 
 pub use dynamics::{HostDynamics, HostEnergy, Payload, Point, receptance};
 pub use excitation::Excitation;
+pub use map_model::{DissipationMap, MapPoint};
 pub use motion::HostMotion;
 pub use spec::{DEFAULT_HOST, HostSpec, ModeSpec};

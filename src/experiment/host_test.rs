@@ -1,0 +1,420 @@
+//! The damper tested on a host structure, as most published granular-damping
+//! work tests it (thesis Section 2.3.1): the enclosure bolted to a host of a
+//! few modes, a force at the host's drive point, the host's response
+//! recorded through the rig's channels, and the DEM's own dissipation beside
+//! it.
+//!
+//! [`run_host_test`] steps the host ([`HostMotion`]) and the DEM together, the
+//! particles' force over a step moving the host over the next, and records at
+//! the rig's 40 kHz:
+//! - the lab's channels ([`Trace`]): the acceleration at the damper (the
+//!   rig's accelerometer chain) and the drive force (its force-transducer
+//!   chain: a stinger's or a hammer's load cell), with the chain's noise,
+//!   filters, skew and ADC;
+//! - the truth ([`HostRecord`]): the damper's displacement, velocity and
+//!   acceleration, both forces, the host's stored energy and every
+//!   dissipation so far (the DEM's ledger, the host's modal damping, a
+//!   dashpot payload) each integrated on its own.
+//!
+//! The damper in the enclosure is one of [`Damper`]: the DEM's particles, or
+//! the comparisons a lab makes (the empty enclosure, the particles' mass as
+//! a solid, a known linear dashpot).
+
+use crate::clock::Stopwatch;
+
+use serde::Serialize;
+
+use crate::dem::World;
+use crate::experiment::bed_cache::BedSource;
+use crate::experiment::damper::Progress;
+use crate::experiment::settle::prepare_drive;
+use crate::host::dynamics::sine_steady_state;
+use crate::host::{Excitation, HostDynamics, HostEnergy, HostMotion, HostSpec, Payload};
+use crate::rig::{Daq, EnclosureMotion, RigSpec};
+use crate::scene::{Scene, SceneError};
+use crate::signals::{Trace, TraceMetadata};
+use crate::validation::{Bound, InvalidParameter, in_range};
+
+/// What the enclosure holds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Damper {
+    /// The scene's particles, by the DEM.
+    Particles,
+    /// Nothing: the host as a modal test gives it.
+    Empty,
+    /// The particles' mass as a rigid solid (the "equivalent solid mass").
+    Solid,
+    /// A linear viscous damper between the enclosure and ground, N s/m: the
+    /// known loss factor the classical methods must recover.
+    Dashpot { n_s_per_m: f64 },
+}
+
+impl Damper {
+    /// Parses `particles`, `empty`, `solid` or `dashpot:C` (C in N s/m).
+    pub fn parse(key: &str) -> Result<Self, InvalidParameter> {
+        match key.split_once(':') {
+            None => match key {
+                "particles" => Ok(Damper::Particles),
+                "empty" => Ok(Damper::Empty),
+                "solid" => Ok(Damper::Solid),
+                _ => Err(InvalidParameter::new(
+                    "damper",
+                    format!("'{key}'"),
+                    "",
+                    "particles, empty, solid or dashpot:N_S_PER_M",
+                )),
+            },
+            Some(("dashpot", c)) => {
+                let c: f64 = c.trim().parse().map_err(|_| {
+                    InvalidParameter::new("damper dashpot", format!("'{c}'"), "N s/m", "a number")
+                })?;
+                in_range(
+                    "damper dashpot",
+                    c,
+                    "N s/m",
+                    Bound::Open(0.0),
+                    Bound::Closed(1e6),
+                )?;
+                Ok(Damper::Dashpot { n_s_per_m: c })
+            }
+            Some(_) => Err(InvalidParameter::new(
+                "damper",
+                format!("'{key}'"),
+                "",
+                "particles, empty, solid or dashpot:N_S_PER_M",
+            )),
+        }
+    }
+
+    /// The rigid mass and dashpot the host carries for this damper, with
+    /// `particle_mass_kg` the scene's particles.
+    pub fn payload(self, particle_mass_kg: f64) -> Payload {
+        match self {
+            Damper::Solid => Payload {
+                mass_kg: particle_mass_kg,
+                dashpot_n_s_per_m: 0.0,
+            },
+            Damper::Dashpot { n_s_per_m } => Payload {
+                mass_kg: 0.0,
+                dashpot_n_s_per_m: n_s_per_m,
+            },
+            Damper::Particles | Damper::Empty => Payload::default(),
+        }
+    }
+
+    /// A short name for files and legends.
+    pub fn label(self) -> String {
+        match self {
+            Damper::Particles => "particles".into(),
+            Damper::Empty => "empty".into(),
+            Damper::Solid => "solid mass".into(),
+            Damper::Dashpot { n_s_per_m } => format!("dashpot {n_s_per_m} N s/m"),
+        }
+    }
+}
+
+/// A test of a damper on a host.
+#[derive(Debug, Clone)]
+pub struct HostTest {
+    pub host: HostSpec,
+    pub damper: Damper,
+    pub excitation: Excitation,
+    /// Length of the test, s.
+    pub duration_s: f64,
+    /// Start a sine at the steady response of the host with the particles'
+    /// mass as a solid (a stepped-sine point then needs few cycles to settle).
+    pub start_steady: bool,
+    /// The rig whose channels record the test (its accelerometer at the
+    /// damper, its force transducer at the drive point).
+    pub rig: RigSpec,
+    /// Seed of the channels' noise.
+    pub noise_seed: u64,
+}
+
+/// Longest host test, s.
+pub const MAX_HOST_TEST_S: f64 = 600.0;
+
+/// Step of a host test without particles, s: eight steps a sample.
+fn linear_step_s(rig: &RigSpec) -> f64 {
+    1.0 / (8.0 * rig.daq.sample_rate_hz)
+}
+
+/// The truth of a host test, one entry per sample of the rig's clock.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct HostRecord {
+    pub time_s: Vec<f64>,
+    /// At the damper, from the loaded rest position.
+    pub displacement_m: Vec<f64>,
+    pub velocity_mps: Vec<f64>,
+    pub acceleration_mps2: Vec<f64>,
+    /// The excitation at the drive point (N).
+    pub drive_force_n: Vec<f64>,
+    /// Drive-point velocity (m/s).
+    pub drive_velocity_mps: Vec<f64>,
+    /// The damper's force on the host, mean over the sample's steps (N).
+    pub damper_force_n: Vec<f64>,
+    /// Kinetic and strain energy of the host and its payload (J).
+    pub host_energy_j: Vec<f64>,
+    /// Energy the DEM's bed dissipated since the start (J, its ledger).
+    pub damper_dissipated_j: Vec<f64>,
+    /// Energy the host's own modal damping dissipated since the start (J).
+    pub host_dissipated_j: Vec<f64>,
+    /// Energy a dashpot payload dissipated since the start (J).
+    pub dashpot_dissipated_j: Vec<f64>,
+    /// Work of the excitation since the start (J).
+    pub excitation_work_j: Vec<f64>,
+}
+
+/// A finished host test.
+#[derive(Debug, Clone)]
+pub struct HostRun {
+    pub record: HostRecord,
+    /// The lab's record: acceleration at the damper, force at the drive.
+    pub trace: Trace,
+    pub energy: HostEnergy,
+    /// What the bed dissipated over the test (J, its ledger; 0 without particles).
+    pub damper_dissipated_j: f64,
+    /// The particles' mass, kg.
+    pub particle_mass_kg: f64,
+    pub particles: usize,
+    pub dt_s: f64,
+    pub steps: u64,
+    pub wall_time_s: f64,
+}
+
+/// Samples the host and the bed at the rig's clock: the kinematics and the
+/// ledgers at the step nearest to each sample, the damper force averaged
+/// over the steps nearest to it (a contact is shorter than a sample), as
+/// [`crate::experiment::record::TruthRecorder`] samples the shaker's truth.
+struct Sampler {
+    interval_s: f64,
+    dt_s: f64,
+    current: i64,
+    force_sum: f64,
+    count: u32,
+    /// The sample `current`'s values but the force, taken at its nearest step.
+    pending: Option<[f64; 11]>,
+    record: HostRecord,
+}
+
+impl Sampler {
+    fn flush(&mut self) {
+        if let (Some(v), true) = (self.pending.take(), self.count > 0) {
+            let r = &mut self.record;
+            r.time_s.push(v[0]);
+            r.displacement_m.push(v[1]);
+            r.velocity_mps.push(v[2]);
+            r.acceleration_mps2.push(v[3]);
+            r.drive_force_n.push(v[4]);
+            r.drive_velocity_mps.push(v[5]);
+            r.host_energy_j.push(v[6]);
+            r.damper_dissipated_j.push(v[7]);
+            r.host_dissipated_j.push(v[8]);
+            r.dashpot_dissipated_j.push(v[9]);
+            r.excitation_work_j.push(v[10]);
+            r.damper_force_n
+                .push(self.force_sum / f64::from(self.count));
+        }
+        self.force_sum = 0.0;
+        self.count = 0;
+    }
+
+    fn observe(&mut self, t_s: f64, motion: &HostMotion, world: Option<&World>) {
+        let k = (t_s / self.interval_s).round() as i64;
+        if k != self.current {
+            self.flush();
+            self.current = k;
+        }
+        self.force_sum += motion.damper_force_n();
+        self.count += 1;
+        let at = k as f64 * self.interval_s;
+        if (t_s - at).abs() <= 0.5 * self.dt_s + 1e-15 && self.pending.is_none() {
+            let h: &HostDynamics = motion.dynamics();
+            let e = h.energy();
+            self.pending = Some([
+                at,
+                h.damper_displacement_m(),
+                h.damper_velocity_mps(),
+                h.damper_acceleration_mps2(),
+                motion.excitation_n(),
+                h.drive_velocity_mps(),
+                h.mechanical_energy_j(),
+                world.map_or(0.0, |w| w.snapshot().flows.dissipated.total()),
+                e.host_dissipated_j,
+                e.dashpot_dissipated_j,
+                e.excitation_work_j,
+            ]);
+        }
+    }
+}
+
+/// The peak acceleration at the damper of `test`'s host without particles
+/// (the particles' mass as a solid), / g: the Γ the DEM's time step is
+/// chosen for (the particles only lower it).
+pub fn linear_peak_gamma(test: &HostTest, particle_mass_kg: f64, g_mps2: f64) -> f64 {
+    let payload = Damper::Solid.payload(particle_mass_kg);
+    let mut motion = HostMotion::new(&test.host, payload, test.excitation.clone(), 0.0);
+    let dt = linear_step_s(&test.rig);
+    let steps = (test.duration_s / dt).ceil() as u64;
+    let mut peak: f64 = 0.0;
+    for k in 1..=steps {
+        let kin = motion.advance(k as f64 * dt, dt, 0.0);
+        peak = peak.max(kin.acceleration_mps2.abs());
+    }
+    peak / g_mps2
+}
+
+/// Runs `test` on the particles of `scene` (settled from `beds`), or without
+/// them for the other dampers, reporting progress.
+pub fn run_host_test(
+    scene: &Scene,
+    beds: &BedSource,
+    test: &HostTest,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<HostRun, SceneError> {
+    in_range(
+        "duration_s",
+        test.duration_s,
+        "s",
+        Bound::Open(0.0),
+        Bound::Closed(MAX_HOST_TEST_S),
+    )?;
+    test.excitation.validate()?;
+    let started = Stopwatch::start();
+    let particle_mass_kg = scene.particle_mass_kg();
+    let g = scene.simulation.gravity_mps2;
+    let (mut world, dt) = match test.damper {
+        Damper::Particles => {
+            let bed = beds.settle(scene, progress)?;
+            let gamma = linear_peak_gamma(test, particle_mass_kg, g).max(1.0);
+            let freq_hz = dominant_freq_hz(test);
+            let drive = scene.drive(freq_hz, gamma)?;
+            let dt = scene.drive_dt_s(&drive).min(linear_step_s(&test.rig) * 8.0);
+            (Some(prepare_drive(&bed, scene, dt)?), dt)
+        }
+        _ => (None, linear_step_s(&test.rig)),
+    };
+    let resting_n = world
+        .as_ref()
+        .map_or(0.0, |w| -w.wall_force().dot(w.walls.axis));
+    let payload = test.damper.payload(particle_mass_kg);
+    let mut motion = HostMotion::new(&test.host, payload, test.excitation.clone(), resting_n);
+    if let (true, Excitation::Sine { freq_hz, force_n }) = (test.start_steady, &test.excitation) {
+        let solid = Damper::Solid.payload(particle_mass_kg);
+        let with = if test.damper == Damper::Particles {
+            solid
+        } else {
+            payload
+        };
+        let omega = std::f64::consts::TAU * freq_hz;
+        // sin(w t) at t = 0: the state of the steady response there.
+        motion.start_at(&sine_steady_state(&test.host, with, omega, *force_n));
+    }
+    let mut daq = Daq::new(&test.rig, dt, 0.0, test.noise_seed)?;
+    daq.reserve(test.duration_s + 0.01);
+    daq.settle_at(0.0, 0.0);
+    let mut sampler = Sampler {
+        interval_s: 1.0 / test.rig.daq.sample_rate_hz,
+        dt_s: dt,
+        current: -1,
+        force_sum: 0.0,
+        count: 0,
+        pending: None,
+        record: HostRecord::default(),
+    };
+    let steps = (test.duration_s / dt).round().max(1.0) as u64;
+    let particles = world.as_ref().map_or(0, |w| w.particles.len());
+    let report_every = ((2e-3 / dt).round() as u64).max(1);
+    let dissipated_start = world
+        .as_ref()
+        .map_or(0.0, |w| w.snapshot().flows.dissipated.total());
+    for k in 1..=steps {
+        let t = k as f64 * dt;
+        let axial = world
+            .as_ref()
+            .map_or(0.0, |w| -w.wall_force().dot(w.walls.axis));
+        let kin = motion.advance(t, dt, axial);
+        if !(kin.displacement_m.is_finite() && kin.acceleration_mps2.is_finite()) {
+            return Err(InvalidParameter::new(
+                "host response",
+                kin.displacement_m,
+                "m",
+                format!("finite (the host went unstable at t = {t:.6} s: check the host's modes against the step {dt:.3e} s)"),
+            )
+            .into());
+        }
+        if let Some(w) = world.as_mut() {
+            w.step(kin.displacement_m)?;
+        }
+        daq.push(t, kin.acceleration_mps2, motion.excitation_n());
+        sampler.observe(t, &motion, world.as_ref());
+        if k % report_every == 0 {
+            progress(Progress {
+                phase: "host test",
+                fraction: k as f64 / steps as f64,
+                sim_time_s: t,
+                particle_steps: k * particles as u64,
+                wall_time_s: started.elapsed().as_secs_f64(),
+                cycle: 0,
+                steadiness: None,
+            });
+        }
+    }
+    sampler.flush();
+    let mut record = sampler.record;
+    for d in &mut record.damper_dissipated_j {
+        *d -= dissipated_start;
+    }
+    let metadata = TraceMetadata {
+        source: "vlab host".into(),
+        rig: test.rig.name.clone(),
+        drive_freq_hz: match test.excitation {
+            Excitation::Sine { freq_hz, .. } => Some(freq_hz),
+            _ => None,
+        },
+        extra: [
+            (
+                "host".to_string(),
+                serde_json::Value::from(test.host.name.clone()),
+            ),
+            (
+                "damper".to_string(),
+                serde_json::Value::from(test.damper.label()),
+            ),
+            (
+                "channels".to_string(),
+                serde_json::Value::from("acceleration at the damper; force at the drive point"),
+            ),
+        ]
+        .into_iter()
+        .collect(),
+        ..TraceMetadata::default()
+    };
+    let (trace, _) = daq.finish(metadata)?;
+    let damper_dissipated_j = record.damper_dissipated_j.last().copied().unwrap_or(0.0);
+    Ok(HostRun {
+        record,
+        trace,
+        energy: motion.energy(),
+        damper_dissipated_j,
+        particle_mass_kg,
+        particles,
+        dt_s: dt,
+        steps,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The frequency the test mostly shakes the damper at, Hz: a sine's, a
+/// sweep's top, otherwise the host's lowest mode.
+fn dominant_freq_hz(test: &HostTest) -> f64 {
+    match &test.excitation {
+        Excitation::Sine { freq_hz, .. } => *freq_hz,
+        Excitation::Sweep { .. } | Excitation::Lines { .. } => test
+            .excitation
+            .highest_freq_hz()
+            .min(test.host.highest_freq_hz().max(test.host.lowest_freq_hz())),
+        Excitation::Hammer { .. } | Excitation::Release { .. } => test.host.lowest_freq_hz(),
+    }
+}
