@@ -37,6 +37,28 @@ impl TruthSamples {
     pub fn is_empty(&self) -> bool {
         self.time_s.is_empty()
     }
+
+    /// The bed's apparent mass at `freq_hz` from `from_s` on (kg): the
+    /// particles' force on the enclosure in phase with its acceleration,
+    /// `−Re(F̂ / Â)` of the two fundamentals over whole periods
+    /// ([`crate::signals::structural::sine_component`]). A bed locked to
+    /// the floor gives its mass; one in flight less. NaN for a record shorter
+    /// than a period.
+    pub fn apparent_mass_kg(&self, from_s: f64, freq_hz: f64) -> f64 {
+        use crate::signals::structural::sine_component;
+        let first = self.time_s.partition_point(|t| *t < from_s - 1e-9);
+        if self.time_s.len() < first + 2 {
+            return f64::NAN;
+        }
+        let rate = 1.0 / (self.time_s[first + 1] - self.time_s[first]);
+        match (
+            sine_component(&self.force_axial_n[first..], rate, freq_hz),
+            sine_component(&self.acceleration_mps2[first..], rate, freq_hz),
+        ) {
+            (Ok(f), Ok(a)) if a.norm() > 0.0 => -(f / a).re,
+            _ => f64::NAN,
+        }
+    }
 }
 
 /// Records [`TruthSamples`] at a fixed sample rate from the start of the drive.

@@ -23,6 +23,10 @@ pub enum SignalsError {
     /// e.g. `sample_rate_hz`).
     #[error("{0}")]
     Invalid(#[from] InvalidParameter),
+    /// A structural-dynamics method could not run on its record
+    /// ([`super::structural`]).
+    #[error("{0}")]
+    Structural(#[from] super::structural::StructuralError),
     /// A sample is NaN or infinite.
     #[error("channel '{channel}' sample {index} is {value}: samples must be finite")]
     NonFiniteSample {

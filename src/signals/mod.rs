@@ -15,6 +15,9 @@
 //! - [`analysis`]: Yang's method on a whole record as `vlab analyze` runs
 //!   it, with the warnings a lab user must see (clipping, missing inputs);
 //! - [`impacts`]: drop-test impact detection and restitution, eq. 7.3-7.5;
+//! - [`structural`]: the classical methods on a host structure's records
+//!   (logarithmic decrement, Hilbert envelope, H1/H2 FRF with coherence,
+//!   half-power bandwidth, stepped-sine response, power input);
 //! - [`trace_file`]: any of these formats, told apart by the file's extension;
 //! - [`table`], [`table_file`], [`lammps`]: records of named columns from
 //!   other programs (a DEM code's enclosure motion and force): CSV, or the
@@ -41,6 +44,7 @@ pub mod phase_point;
 pub mod plot;
 pub mod power;
 pub mod spectrum;
+pub mod structural;
 pub mod table;
 pub mod table_file;
 pub mod tdms;

@@ -3,9 +3,11 @@
 //! where each series peaks (`sweep_peak`), the
 //! motional phases read from DEM truth (`phases`), accuracy against run time
 //! (`accuracy`) and the bouncing-bed onset predicted from the scene alone
-//! (`predict`, thesis eq. 6.11-6.13).
+//! (`predict`, thesis eq. 6.11-6.13); a sweep as the dissipation map a host
+//! model closes on (`dissipation_map`).
 
 pub mod accuracy;
+pub mod dissipation_map;
 pub mod phases;
 pub mod predict;
 pub mod sweep;

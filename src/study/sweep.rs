@@ -542,6 +542,11 @@ pub struct SweepRow {
     pub energy_per_cycle_j: f64,
     pub energy_per_cycle_se_j: f64,
     pub e_max_j: f64,
+    /// The bed's apparent mass: the particles' force on the enclosure in
+    /// phase with its acceleration, at the drive frequency, over the steady
+    /// cycles, `−Re(F̂ / Â)` (kg; the whole mass for a bed that moves with
+    /// the floor, less in flight). NaN in files written before the column.
+    pub apparent_mass_kg: f64,
     /// (work in − dissipated) / dissipated over the steady cycles.
     pub steadiness_rel: f64,
     /// Whether the window met the scene's steady criteria; none unless ok
@@ -578,6 +583,7 @@ impl SweepRow {
             energy_per_cycle_j: f64::NAN,
             energy_per_cycle_se_j: f64::NAN,
             e_max_j: f64::NAN,
+            apparent_mass_kg: f64::NAN,
             steadiness_rel: f64::NAN,
             steady: None,
             share_pp_normal: f64::NAN,
@@ -662,6 +668,10 @@ fn try_condition(
         energy_per_cycle_j: s.dem.energy_per_cycle_j,
         energy_per_cycle_se_j: s.dem.energy_per_cycle_stderr_j.unwrap_or(f64::NAN),
         e_max_j: s.dem.e_max_j,
+        apparent_mass_kg: run
+            .experiment
+            .truth
+            .apparent_mass_kg(s.steady_start_s, c.freq_hz),
         steadiness_rel: s.dem.steadiness_rel,
         steady: Some(if st.capped {
             Steady::Capped
@@ -847,10 +857,10 @@ fn parse_orientation(s: &str) -> Option<Orientation> {
 
 /// Columns a sweep file written before they existed may lack; they read as
 /// NaN or empty.
-const LATER_COLUMNS: [&str; 2] = ["efficiency_measured_se", "steady"];
+const LATER_COLUMNS: [&str; 3] = ["efficiency_measured_se", "steady", "apparent_mass_kg"];
 
 /// Column names of `sweep.csv`, units in the names.
-pub const COLUMNS: [&str; 35] = [
+pub const COLUMNS: [&str; 36] = [
     "fill_ratio",
     "orientation",
     "freq_hz",
@@ -864,6 +874,7 @@ pub const COLUMNS: [&str; 35] = [
     "energy_per_cycle_j",
     "energy_per_cycle_se_j",
     "e_max_j",
+    "apparent_mass_kg",
     "steadiness_rel",
     "steady",
     "share_pp_normal",
@@ -907,6 +918,7 @@ fn row_record(r: &SweepRow) -> Vec<String> {
         f(r.energy_per_cycle_j),
         f(r.energy_per_cycle_se_j),
         f(r.e_max_j),
+        f(r.apparent_mass_kg),
         f(r.steadiness_rel),
         r.steady.map_or("", Steady::as_str).into(),
         f(r.share_pp_normal),
@@ -1049,6 +1061,7 @@ fn parse_row(cells: &RowCells) -> Result<SweepRow, SweepError> {
         energy_per_cycle_j: f("energy_per_cycle_j")?,
         energy_per_cycle_se_j: f("energy_per_cycle_se_j")?,
         e_max_j: f("e_max_j")?,
+        apparent_mass_kg: f("apparent_mass_kg")?,
         steadiness_rel: f("steadiness_rel")?,
         steady: cells.word("steady", Steady::parse)?,
         share_pp_normal: f("share_pp_normal")?,
@@ -1460,6 +1473,8 @@ pub struct ConditionSummary {
     /// seed's own error when there is one.
     pub efficiency_se: f64,
     pub efficiency_measured: f64,
+    /// Mean apparent mass over seeds, kg (NaN where the file lacks it).
+    pub apparent_mass_kg: f64,
     /// The most common phase over seeds (none if none ok).
     #[serde(serialize_with = "word_or_empty")]
     pub phase: Option<MotionalPhase>,
@@ -1547,6 +1562,7 @@ pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
                         efficiency: eff,
                         efficiency_se: se,
                         efficiency_measured: mean(|r| r.efficiency_measured),
+                        apparent_mass_kg: mean(|r| r.apparent_mass_kg),
                         phase,
                         status: if n > 0 { RowStatus::Ok } else { rows[0].status },
                     });
