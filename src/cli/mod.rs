@@ -13,6 +13,7 @@ mod cor;
 mod drop;
 mod export;
 mod hints;
+mod host;
 mod impact;
 mod plot;
 mod predict;
@@ -93,6 +94,9 @@ enum Command {
     Export(export::ExportArgs),
     /// The settled beds kept between runs: list, clear, or show the folder.
     Cache(cache_cmd::CacheArgs),
+    /// The damper on a host structure: free decay, FRF, any excitation, and
+    /// the map-based model's prediction (thesis 2.3.1, 9.4 i and v).
+    Host(host::HostArgs),
 }
 
 /// Runs the command line and maps errors to an exit status.
@@ -156,6 +160,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Sweep(a) => sweep::run(a, quiet),
         Command::Predict(a) => predict::run(a),
         Command::Cache(a) => cache_cmd::run(a),
+        Command::Host(a) => host::run(a, quiet),
         Command::Plot(a) => plot::run(a),
         Command::Bench(a) => bench::run(a, quiet),
         Command::Drop(a) => drop::run(a),

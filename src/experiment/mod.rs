@@ -5,7 +5,8 @@
 //! its measurement by Yang's method (`shake`, `measurement`), the drop test
 //! (`drop`), the single collision (`impact`), a body pressed onto a plate
 //! (`press`), the replay of another code's
-//! record (`replay`) and the damper on a host structure (`host_test`), its free decay (`host_decay`). Each builds only what it needs: a single collision has no
+//! record (`replay`) and the damper on a host structure (`host_test`), its free decay
+//! (`host_decay`) and its frequency response (`host_frf`). Each builds only what it needs: a single collision has no
 //! enclosure; a drop test has one sphere, a plate and the drop rig.
 
 pub mod bed_cache;
@@ -14,6 +15,7 @@ pub mod damper;
 pub mod drop;
 pub mod fill;
 pub mod host_decay;
+pub mod host_frf;
 pub mod host_test;
 pub mod impact;
 pub mod measurement;

@@ -370,7 +370,7 @@ fn whole_period_len(
 // ---------------------------------------------------------------------------
 
 /// One damping estimate at one vibration amplitude.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct DecayPoint {
     /// Time the estimate belongs to, s from the first sample (midpoint of the
     /// peak pair, or centre of the fit window).
@@ -972,7 +972,7 @@ pub fn welch_frf(
 // ---------------------------------------------------------------------------
 
 /// Result of [`half_power`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct HalfPower {
     /// Frequency of the refined peak, Hz.
     pub peak_freq_hz: f64,

@@ -12,12 +12,22 @@ use crate::validation::InvalidParameter;
 
 use super::sweep::{RowStatus, SweepFile, summarise};
 
+/// Which efficiency of a sweep a map holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MapSource {
+    /// The DEM's own (its ledger).
+    Dem,
+    /// The rig's, by Yang's structure-independent method (thesis Ch. 7).
+    Yang,
+}
+
 /// The map of `file` at `orientation` and `fill_ratio` (each may be left
-/// out when the sweep has only one).
+/// out when the sweep has only one), of the DEM's efficiency or Yang's.
 pub fn dissipation_map(
     file: &SweepFile,
     orientation: Option<Orientation>,
     fill_ratio: Option<f64>,
+    source: MapSource,
 ) -> Result<DissipationMap, InvalidParameter> {
     let grid = &file.header.grid;
     let orientation = match (orientation, grid.orientations.as_slice()) {
@@ -79,7 +89,10 @@ pub fn dissipation_map(
         .map(|s| MapPoint {
             freq_hz: s.freq_hz,
             gamma: s.gamma,
-            efficiency: s.efficiency,
+            efficiency: match source {
+                MapSource::Dem => s.efficiency,
+                MapSource::Yang => s.efficiency_measured,
+            },
             efficiency_se: s.efficiency_se,
             apparent_mass_kg: s.apparent_mass_kg.is_finite().then_some(s.apparent_mass_kg),
         })

@@ -1,0 +1,311 @@
+//! `vlab host`: the damper on a host structure (thesis Section 2.3.1, 9.4 i
+//! and v). `run` records any excitation; `decay` and `frf` measure the host
+//! the classical ways and hold each estimate against the DEM's dissipation;
+//! `predict` answers from a sweep's map in milliseconds. The work is
+//! [`vlab::experiment::host_test`]'s and [`vlab::host`]'s; this is the
+//! command line.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+
+use vlab::atomic_write::{OutputDir, write_bytes_atomic};
+use vlab::experiment::host_test::{Damper, HostRun, HostTest, run_host_test};
+use vlab::host::{DEFAULT_HOST, Excitation, HostSpec};
+use vlab::rig::{RigFile, RigSpec};
+use vlab::scene::Scene;
+use vlab::signals::{Series, SeriesStyle, Trace, plot_xy_svg, write_csv};
+
+use super::args;
+use super::cache_cmd::NoCacheArg;
+use super::progress::ProgressLine;
+
+mod decay;
+mod frf;
+mod predict;
+
+#[derive(Debug, Clone, Args)]
+pub struct HostArgs {
+    #[command(subcommand)]
+    command: HostCommand,
+}
+
+#[derive(Debug, Clone, Subcommand)]
+enum HostCommand {
+    /// Drive the host with any excitation and record it (lab channels and truth).
+    Run(RunArgs),
+    /// Free decay (released, or struck by a hammer): loss factor against
+    /// amplitude by logarithmic decrement and by the Hilbert envelope, each
+    /// against the DEM's own dissipation per cycle.
+    Decay(decay::DecayArgs),
+    /// Frequency response: stepped sine (half-power loss factor, peak
+    /// reduction, power input) or periodic random (H1, H2, coherence).
+    Frf(frf::FrfArgs),
+    /// The host's steady response predicted from a sweep's dissipation map
+    /// (describing function and harmonic balance), in milliseconds.
+    Predict(predict::PredictArgs),
+}
+
+/// What every test of a damper on a host needs.
+#[derive(Debug, Clone, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct HostTestArgs {
+    /// The host: a built-in name (plate-40hz, beam-2mode) or a host file (TOML).
+    #[arg(long, value_name = "NAME|FILE", default_value = DEFAULT_HOST)]
+    pub host: String,
+    /// What the enclosure holds: particles (the DEM), empty, solid (the
+    /// particles' mass as a rigid solid) or dashpot:N_S_PER_M (a linear
+    /// viscous damper to ground).
+    #[arg(long, value_name = "KIND", default_value = "particles", value_parser = parse_damper)]
+    pub damper: Damper,
+    #[command(flatten)]
+    pub scene: args::SceneArgs,
+    /// The rig whose channels record the test: its accelerometer at the
+    /// damper, its force transducer at the drive point.
+    #[arg(long, value_name = "NAME|FILE", default_value = vlab::rig::DEFAULT_RIG)]
+    pub rig: String,
+    /// Seed of the channels' noise [default: the bed's seed].
+    #[arg(long = "noise-seed", value_name = "N")]
+    pub noise_seed: Option<u64>,
+    #[command(flatten)]
+    pub cache: NoCacheArg,
+}
+
+fn parse_damper(s: &str) -> Result<Damper, String> {
+    Damper::parse(s).map_err(|e| e.to_string())
+}
+
+fn parse_excitation(s: &str) -> Result<Excitation, String> {
+    Excitation::parse(s).map_err(|e| e.to_string())
+}
+
+impl HostTestArgs {
+    /// The scene, and the test of `excitation` for `duration_s`.
+    pub fn test(&self, excitation: Excitation, duration_s: f64) -> Result<(Scene, HostTest)> {
+        let scene = self.scene.resolve()?;
+        let host = HostSpec::from_name_or_path(&self.host)
+            .with_context(|| format!("--host {}", self.host))?;
+        let rig =
+            RigSpec::from_name_or_path(&self.rig).with_context(|| format!("--rig {}", self.rig))?;
+        Ok((
+            scene.clone(),
+            HostTest {
+                host,
+                damper: self.damper,
+                excitation,
+                duration_s,
+                start_steady: false,
+                rig,
+                noise_seed: self.noise_seed.unwrap_or(scene.simulation.seed),
+            },
+        ))
+    }
+}
+
+#[derive(Debug, Clone, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct RunArgs {
+    #[command(flatten)]
+    common: HostTestArgs,
+    /// The force at the drive point: sine:F_HZ:FORCE_N,
+    /// sweep:F0_HZ:F1_HZ:DURATION_S:FORCE_N, multisine:F1_HZ:N1,F2_HZ:N2,...,
+    /// random:LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED, hammer:IMPULSE_N_S or
+    /// release:X0_M (docs/host.md).
+    #[arg(long, value_name = "KEY", value_parser = parse_excitation)]
+    excitation: Excitation,
+    /// Length of the test (s).
+    #[arg(long = "duration-s", value_name = "S", default_value = "1", value_parser = args::seconds)]
+    duration_s: f64,
+    /// Output folder [default: signals/host-<host>-<damper>].
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+pub fn run(a: HostArgs, quiet: bool) -> Result<()> {
+    match a.command {
+        HostCommand::Run(r) => run_record(r, quiet),
+        HostCommand::Decay(d) => decay::run(d, quiet),
+        HostCommand::Frf(f) => frf::run(f, quiet),
+        HostCommand::Predict(p) => predict::run(p),
+    }
+}
+
+/// A folder name for a test's damper.
+fn damper_slug(d: Damper) -> String {
+    match d {
+        Damper::Dashpot { n_s_per_m } => format!("dashpot{n_s_per_m}"),
+        other => other.label().replace(' ', "-"),
+    }
+}
+
+/// Runs one host test with progress on standard error.
+pub fn run_test(scene: &Scene, test: &HostTest, cache: NoCacheArg, quiet: bool) -> Result<HostRun> {
+    let mut progress = ProgressLine::new("host", quiet);
+    let beds = cache.source(&mut |n| progress.warn(n));
+    let run = run_host_test(scene, &beds, test, &mut |p| progress.update(p))
+        .context("running the damper on its host");
+    progress.finish();
+    run
+}
+
+fn run_record(a: RunArgs, quiet: bool) -> Result<()> {
+    let (scene, test) = a.common.test(a.excitation.clone(), a.duration_s)?;
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from("signals").join(format!(
+            "host-{}-{}",
+            test.host.name,
+            damper_slug(test.damper)
+        ))
+    });
+    let made = OutputDir::prepare(&out)
+        .with_context(|| format!("cannot create output folder {}", out.display()))?;
+    let run = made.keep_if_ok(run_test(&scene, &test, a.common.cache, quiet))?;
+    write_records(&out, &run)?;
+    let e = &run.energy;
+    println!(
+        "{} on {} ({}), {:.3} s: {} steps of {:.3e} s, {:.1} s wall",
+        test.damper.label(),
+        test.host.name,
+        excitation_text(&test.excitation),
+        test.duration_s,
+        run.steps,
+        run.dt_s,
+        run.wall_time_s
+    );
+    println!(
+        "  excitation did {:.5} J; the host's damping took {:.5} J, the damper {:.5} J{}",
+        e.excitation_work_j,
+        e.host_dissipated_j,
+        run.damper_dissipated_j + e.dashpot_dissipated_j,
+        match run.bed {
+            Some(b) => format!(
+                " (the DEM's walls did {:.5} J on the bed; the host booked {:.5} J given)",
+                b.work_in_j, -e.damper_work_j
+            ),
+            None => String::new(),
+        }
+    );
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// One line for an excitation.
+pub fn excitation_text(e: &Excitation) -> String {
+    serde_json::to_string(e).unwrap_or_default()
+}
+
+/// Writes `trace.csv` and `trace.wav` (the lab's channels), `record.csv`
+/// (the truth) and `record.svg` (the damper's displacement).
+pub fn write_records(dir: &Path, run: &HostRun) -> Result<()> {
+    write_csv(&dir.join("trace.csv"), &run.trace)?;
+    vlab::signals::write_wav_with_full_scale(
+        &dir.join("trace.wav"),
+        &run.trace,
+        &Default::default(),
+    )?;
+    write_csv(&dir.join("record.csv"), &truth_trace(run)?)?;
+    let r = &run.record;
+    let every = (r.time_s.len() / 4000).max(1);
+    let points: Vec<(f64, f64)> = r
+        .time_s
+        .iter()
+        .zip(&r.displacement_m)
+        .step_by(every)
+        .map(|(t, x)| (*t, x * 1e3))
+        .collect();
+    if !points.is_empty() {
+        plot_xy_svg(
+            &dir.join("record.svg"),
+            "Damper displacement on the host",
+            "time (s)",
+            "displacement at the damper (mm)",
+            &[Series {
+                name: "displacement".into(),
+                points,
+                style: SeriesStyle::Line,
+            }],
+        )?;
+    }
+    Ok(())
+}
+
+/// The truth record as a trace (one channel per column, units named).
+fn truth_trace(run: &HostRun) -> Result<Trace> {
+    let r = &run.record;
+    let mut t = Trace::new(
+        run.trace.sample_rate_hz,
+        r.time_s.first().copied().unwrap_or(0.0),
+    )?;
+    t.metadata = run.trace.metadata.clone();
+    t.metadata.source = "vlab host: truth".into();
+    let columns: [(&str, &str, &Vec<f64>); 12] = [
+        ("damper_displacement", "m", &r.displacement_m),
+        ("damper_velocity", "m/s", &r.velocity_mps),
+        ("damper_acceleration", "m/s^2", &r.acceleration_mps2),
+        ("drive_force", "N", &r.drive_force_n),
+        ("drive_velocity", "m/s", &r.drive_velocity_mps),
+        ("damper_force", "N", &r.damper_force_n),
+        ("host_energy", "J", &r.host_energy_j),
+        ("damper_dissipated", "J", &r.damper_dissipated_j),
+        ("damper_work_in", "J", &r.damper_work_in_j),
+        ("host_dissipated", "J", &r.host_dissipated_j),
+        ("dashpot_dissipated", "J", &r.dashpot_dissipated_j),
+        ("excitation_work", "J", &r.excitation_work_j),
+    ];
+    for (name, unit, data) in columns {
+        t.add_channel(name, unit, data.clone())?;
+    }
+    Ok(t)
+}
+
+/// Writes `text` to `path` atomically.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    write_bytes_atomic(path, text.as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Frequencies in Hz, ascending.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FreqList(pub Vec<f64>);
+
+/// `FROM:TO:STEP` (both ends included) or a comma-separated list, in Hz,
+/// each positive and at most 5 kHz, ascending, at most 1000.
+pub fn parse_freqs(s: &str) -> Result<FreqList, String> {
+    let number = |t: &str| -> Result<f64, String> {
+        t.trim()
+            .parse::<f64>()
+            .map_err(|_| format!("'{t}' is not a number (Hz)"))
+    };
+    let freqs: Vec<f64> = if s.contains(':') {
+        let parts: Vec<&str> = s.split(':').collect();
+        let [from, to, step] = parts.as_slice() else {
+            return Err(format!(
+                "'{s}': give FROM:TO:STEP in Hz or a comma-separated list"
+            ));
+        };
+        let (from, to, step) = (number(from)?, number(to)?, number(step)?);
+        if step.is_nan() || step <= 0.0 || to < from {
+            return Err(format!("'{s}': STEP must be positive and TO at least FROM"));
+        }
+        let n = ((to - from) / step + 1e-9).floor() as usize;
+        if n >= 1000 {
+            return Err(format!("'{s}' gives {} frequencies: at most 1000", n + 1));
+        }
+        (0..=n).map(|k| from + step * k as f64).collect()
+    } else {
+        s.split(',').map(number).collect::<Result<_, _>>()?
+    };
+    if freqs.is_empty() || freqs.len() > 1000 {
+        return Err(format!("'{s}': between 1 and 1000 frequencies"));
+    }
+    for f in &freqs {
+        if !(*f > 0.0 && *f <= 5_000.0) {
+            return Err(format!("{f} Hz: each frequency must be in (0, 5000] Hz"));
+        }
+    }
+    if freqs.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(format!("'{s}': frequencies must ascend"));
+    }
+    Ok(FreqList(freqs))
+}

@@ -1,0 +1,242 @@
+//! `vlab host decay`: the host released from a displacement (or struck by a
+//! hammer) and left to ring down; the loss factor against amplitude by the
+//! logarithmic decrement and the Hilbert envelope
+//! ([`vlab::experiment::host_decay`]), each held against the DEM's energies,
+//! and, with `--map`, against Yang's structure-independent figure at the same
+//! frequency and Γ.
+
+use std::f64::consts::TAU;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+
+use vlab::atomic_write::OutputDir;
+use vlab::experiment::host_decay::{DecayEstimate, analyse_decay};
+use vlab::host::Excitation;
+use vlab::signals::{Series, SeriesStyle, plot_xy_svg};
+use vlab::study::dissipation_map::{MapSource, dissipation_map};
+use vlab::study::sweep::SweepFile;
+
+use super::{HostTestArgs, damper_slug, run_test, write_records, write_text};
+use crate::cli::args;
+
+#[derive(Debug, Clone, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct DecayArgs {
+    #[command(flatten)]
+    common: HostTestArgs,
+    /// Release the host from this displacement at the damper (m).
+    #[arg(long = "x0-m", value_name = "M", default_value = "0.003", conflicts_with = "hammer_n_s", value_parser = args::finite)]
+    x0_m: f64,
+    /// Strike the drive point with a hammer of this impulse (N s) instead.
+    #[arg(long = "hammer-n-s", value_name = "N_S", value_parser = args::newtons)]
+    hammer_n_s: Option<f64>,
+    /// Length of the record (s).
+    #[arg(long = "duration-s", value_name = "S", default_value = "1", value_parser = args::seconds)]
+    duration_s: f64,
+    /// A sweep (its sweep.csv) whose Yang-measured efficiency gives the
+    /// structure-independent energy per cycle at each point's frequency and Γ.
+    #[arg(long, value_name = "FILE")]
+    map: Option<PathBuf>,
+    /// Output folder [default: signals/host-decay-<host>-<damper>].
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
+    let excitation = match a.hammer_n_s {
+        Some(j) => Excitation::Hammer { impulse_n_s: j },
+        None => Excitation::Release { x0_m: a.x0_m },
+    };
+    excitation.validate().map_err(|e| {
+        anyhow::Error::from(e.renamed(if a.hammer_n_s.is_some() {
+            "--hammer-n-s"
+        } else {
+            "--x0-m"
+        }))
+    })?;
+    let (scene, test) = a.common.test(excitation, a.duration_s)?;
+    let map = match &a.map {
+        Some(path) => {
+            let file =
+                SweepFile::read(path).with_context(|| format!("--map {}", path.display()))?;
+            Some(
+                dissipation_map(
+                    &file,
+                    Some(scene.enclosure.orientation),
+                    None,
+                    MapSource::Yang,
+                )
+                .with_context(|| format!("--map {}", path.display()))?,
+            )
+        }
+        None => None,
+    };
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from("signals").join(format!(
+            "host-decay-{}-{}",
+            test.host.name,
+            damper_slug(test.damper)
+        ))
+    });
+    let made = OutputDir::prepare(&out)
+        .with_context(|| format!("cannot create output folder {}", out.display()))?;
+    let analysed = made.keep_if_ok((|| {
+        let run = run_test(&scene, &test, a.common.cache, quiet)?;
+        // A hammer's blow is over in 0.5 ms; the record starts after it.
+        let skip = if a.hammer_n_s.is_some() { 2e-3 } else { 0.0 };
+        let g = scene.simulation.gravity_mps2;
+        let analysis = analyse_decay(&run, &test.host, skip, g)?;
+        if analysis.log_decrement.is_empty() {
+            bail!("the decay has no two successive peaks to compare: lengthen --duration-s");
+        }
+        Ok((run, analysis))
+    })())?;
+    let (run, analysis) = analysed;
+    write_records(&out, &run)?;
+    let g = scene.simulation.gravity_mps2;
+    // Yang's structure-independent energy per cycle at a point's f and Γ.
+    let yang_energy = |e: &DecayEstimate| {
+        map.as_ref().map(|m| {
+            let d = m.damper_at(e.freq_hz, e.amplitude_m);
+            let v = d.gamma * g / (TAU * e.freq_hz);
+            d.efficiency * 4.0 * v * v * m.particle_mass_kg
+        })
+    };
+    println!(
+        "{} on {}, {}: {} steps of {:.3e} s, {:.1} s wall; the bare host's loss factor {:.4}",
+        test.damper.label(),
+        test.host.name,
+        super::excitation_text(&test.excitation),
+        run.steps,
+        run.dt_s,
+        run.wall_time_s,
+        analysis.host_loss_factor
+    );
+    println!(
+        "  method          t_s     Gamma   eta      eta_true  damper J/cycle: method  host's work  dissipated{}",
+        if map.is_some() { "  Yang's map" } else { "" }
+    );
+    let mut csv = String::from(
+        "method,time_s,freq_hz,amplitude_m,gamma,loss_factor,true_loss_factor,damper_energy_j,true_damper_energy_j,true_damper_dissipated_j,yang_map_energy_j\n",
+    );
+    for (name, points) in [
+        ("log-decrement", &analysis.log_decrement),
+        ("envelope", &analysis.envelope),
+    ] {
+        for e in points.iter() {
+            let yang = yang_energy(e);
+            println!(
+                "  {:14} {:6.3}  {:6.2}  {:.4}   {:.4}    {:12.5}  {:11.5}  {:10.5}{}",
+                name,
+                e.time_s,
+                e.gamma,
+                e.loss_factor,
+                e.true_loss_factor,
+                e.damper_energy_j,
+                e.true_damper_energy_j,
+                e.true_damper_dissipated_j,
+                yang.map_or(String::new(), |y| format!("  {y:10.5}"))
+            );
+            csv.push_str(&format!(
+                "{name},{},{},{},{},{},{},{},{},{},{}\n",
+                e.time_s,
+                e.freq_hz,
+                e.amplitude_m,
+                e.gamma,
+                e.loss_factor,
+                e.true_loss_factor,
+                e.damper_energy_j,
+                e.true_damper_energy_j,
+                e.true_damper_dissipated_j,
+                yang.map_or(f64::NAN, |y| y)
+            ));
+        }
+    }
+    println!(
+        "  over the decay the damper took {:.5} J by the log decrement; the host did {:.5} J of work on it and it dissipated {:.5} J",
+        analysis.damper_energy_sum_j,
+        analysis.true_damper_energy_sum_j,
+        analysis.true_damper_dissipated_sum_j
+    );
+    write_text(&out.join("decay.csv"), &csv)?;
+    let json = serde_json::json!({
+        "host": test.host,
+        "damper": test.damper,
+        "excitation": test.excitation,
+        "duration_s": test.duration_s,
+        "dt_s": run.dt_s,
+        "steps": run.steps,
+        "wall_time_s": run.wall_time_s,
+        "particles": run.particles,
+        "particle_mass_kg": run.particle_mass_kg,
+        "energy": run.energy,
+        "damper_dissipated_j": run.damper_dissipated_j,
+        "analysis": analysis,
+    });
+    write_text(
+        &out.join("decay.json"),
+        &serde_json::to_string_pretty(&json)?,
+    )?;
+    plot_loss_factor(
+        &out,
+        &analysis.log_decrement,
+        &analysis.envelope,
+        analysis.host_loss_factor,
+    )?;
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// `loss-factor.svg`: each method's loss factor and the truth's against Γ.
+fn plot_loss_factor(
+    dir: &std::path::Path,
+    log: &[DecayEstimate],
+    env: &[DecayEstimate],
+    host_eta: f64,
+) -> Result<()> {
+    let pts = |v: &[DecayEstimate], f: fn(&DecayEstimate) -> f64| -> Vec<(f64, f64)> {
+        v.iter()
+            .map(|e| (e.gamma, f(e)))
+            .filter(|p| p.1.is_finite())
+            .collect()
+    };
+    let mut series = vec![
+        Series {
+            name: "truth over the same cycle (energies)".into(),
+            points: pts(log, |e| e.true_loss_factor),
+            style: SeriesStyle::Line,
+        },
+        Series {
+            name: "logarithmic decrement".into(),
+            points: pts(log, |e| e.loss_factor),
+            style: SeriesStyle::Points,
+        },
+        Series {
+            name: "Hilbert envelope (2 cycles)".into(),
+            points: pts(env, |e| e.loss_factor),
+            style: SeriesStyle::Points,
+        },
+    ];
+    let gammas: Vec<f64> = log.iter().map(|e| e.gamma).collect();
+    if let (Some(lo), Some(hi)) = (
+        gammas.iter().copied().reduce(f64::min),
+        gammas.iter().copied().reduce(f64::max),
+    ) {
+        series.push(Series {
+            name: "bare host".into(),
+            points: vec![(lo, host_eta), (hi, host_eta)],
+            style: SeriesStyle::Line,
+        });
+    }
+    series.retain(|s| !s.points.is_empty());
+    plot_xy_svg(
+        &dir.join("loss-factor.svg"),
+        "Loss factor against amplitude, free decay",
+        "Gamma at the damper (peak acceleration / g)",
+        "loss factor eta",
+        &series,
+    )?;
+    Ok(())
+}

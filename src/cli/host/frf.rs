@@ -1,0 +1,450 @@
+//! `vlab host frf`: the host's frequency response with the damper, by a
+//! stepped sine (the lab's receptance, its half-power loss factor, the peak
+//! against the host without particles and with their mass as a solid, the
+//! power-input estimate of the damper's dissipation against the DEM's, and
+//! with `--map` the map-based prediction beside it) or by a periodic random
+//! force (H1, H2 and coherence). [`vlab::experiment::host_frf`] does the work.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use vlab::atomic_write::OutputDir;
+use vlab::experiment::host_frf::{SteppedSine, SteppedSineResult, random_frf, run_stepped_sine};
+use vlab::experiment::host_test::{Damper, HostTest};
+use vlab::host::Excitation;
+use vlab::host::map_model::stepped_sine;
+use vlab::signals::{Series, SeriesStyle, plot_xy_svg};
+use vlab::study::dissipation_map::{MapSource, dissipation_map};
+use vlab::study::sweep::SweepFile;
+
+use super::{FreqList, HostTestArgs, damper_slug, write_records, write_text};
+use crate::cli::args;
+use crate::cli::progress::ProgressLine;
+
+#[derive(Debug, Clone, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct FrfArgs {
+    #[command(flatten)]
+    common: HostTestArgs,
+    /// Stepped sine: the frequencies (Hz), FROM:TO:STEP or a comma-separated list.
+    #[arg(long = "freq", value_name = "LIST", value_parser = super::parse_freqs, required_unless_present = "random")]
+    freqs: Option<FreqList>,
+    /// Stepped sine: force amplitude at the drive point (N).
+    #[arg(long = "force-n", value_name = "N", default_value = "5", value_parser = args::newtons)]
+    force_n: f64,
+    /// Stepped sine: cycles to settle at each frequency (from the steady
+    /// response of the host with the particles' mass as a solid).
+    #[arg(long = "settle-cycles", value_name = "N", default_value = "30")]
+    settle_cycles: u32,
+    /// Stepped sine: cycles measured at each frequency.
+    #[arg(long = "record-cycles", value_name = "N", default_value = "20")]
+    record_cycles: u32,
+    /// Periodic random instead: LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED (H1, H2,
+    /// coherence over --duration-s, the first period dropped).
+    #[arg(long, value_name = "KEY", conflicts_with = "freqs")]
+    random: Option<String>,
+    /// Periodic random: length of the test (s).
+    #[arg(long = "duration-s", value_name = "S", default_value = "8", value_parser = args::seconds)]
+    duration_s: f64,
+    /// A sweep (its sweep.csv): the map-based model's prediction of the same
+    /// stepped sine, drawn beside the measurement.
+    #[arg(long, value_name = "FILE")]
+    map: Option<PathBuf>,
+    /// Output folder [default: signals/host-frf-<host>-<damper>].
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
+    let (scene, test) = a
+        .common
+        .test(Excitation::Release { x0_m: 1e-3 }, a.duration_s)?;
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from("signals").join(format!(
+            "host-frf-{}-{}",
+            test.host.name,
+            damper_slug(test.damper)
+        ))
+    });
+    let map = match &a.map {
+        Some(path) => {
+            let file =
+                SweepFile::read(path).with_context(|| format!("--map {}", path.display()))?;
+            Some(
+                dissipation_map(
+                    &file,
+                    Some(scene.enclosure.orientation),
+                    None,
+                    MapSource::Dem,
+                )
+                .with_context(|| format!("--map {}", path.display()))?,
+            )
+        }
+        None => None,
+    };
+    let made = OutputDir::prepare(&out)
+        .with_context(|| format!("cannot create output folder {}", out.display()))?;
+    if let Some(key) = &a.random {
+        return made.keep_if_ok(random(&a, key, &scene, test, &out, quiet));
+    }
+    let freqs = a.freqs.clone().map(|f| f.0).unwrap_or_default();
+    let plan = SteppedSine {
+        freqs_hz: freqs.clone(),
+        force_n: a.force_n,
+        settle_cycles: a.settle_cycles,
+        record_cycles: a.record_cycles,
+    };
+    plan.validate()?;
+    let progress = Mutex::new((ProgressLine::new("host frf", quiet), 0usize));
+    let total = freqs.len();
+    let done = |p: &vlab::experiment::host_frf::FrfPoint| {
+        if let Ok(mut g) = progress.lock() {
+            g.1 += 1;
+            let n = g.1;
+            g.0.note(&format!(
+                "  {n}/{total}: {:.2} Hz, Gamma {:.2}, {:.1} s wall",
+                p.freq_hz, p.gamma, p.wall_time_s
+            ));
+        }
+    };
+    let beds = a.common.cache.source(&mut |n| eprintln!("{n}"));
+    let measured = made.keep_if_ok(
+        run_stepped_sine(&scene, &beds, &test, &plan, &done).context("the stepped sine"),
+    )?;
+    // The comparisons a lab makes: the host without particles and with
+    // their mass as a solid (linear, a second each).
+    let compare = |damper: Damper| -> Result<SteppedSineResult> {
+        let mut t: HostTest = test.clone();
+        t.damper = damper;
+        run_stepped_sine(&scene, &beds, &t, &plan, &|_| {}).context("the comparison")
+    };
+    let empty = compare(Damper::Empty)?;
+    let solid = compare(Damper::Solid)?;
+    let started = Instant::now();
+    let predicted = map
+        .as_ref()
+        .map(|m| stepped_sine(m, &test.host, &freqs, a.force_n));
+    let predict_ms = started.elapsed().as_secs_f64() * 1e3;
+    report(
+        &a,
+        &test,
+        &measured,
+        &empty,
+        &solid,
+        predicted.as_deref(),
+        predict_ms,
+        &out,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn report(
+    a: &FrfArgs,
+    test: &HostTest,
+    measured: &SteppedSineResult,
+    empty: &SteppedSineResult,
+    solid: &SteppedSineResult,
+    predicted: Option<&[(vlab::host::map_model::SteadyResponse, usize)]>,
+    predict_ms: f64,
+    out: &Path,
+) -> Result<()> {
+    println!(
+        "{} on {}, {} N stepped sine: {} frequencies in {:.1} s wall ({} + {} cycles each)",
+        test.damper.label(),
+        test.host.name,
+        a.force_n,
+        measured.points.len(),
+        measured.wall_time_s,
+        a.settle_cycles,
+        a.record_cycles
+    );
+    println!(
+        "  freq_hz  |X|/F mm/N  Gamma   P_in W    damper W (P_in - host)  DEM work W  DEM dissipated W{}",
+        if predicted.is_some() {
+            "  map |X|/F mm/N"
+        } else {
+            ""
+        }
+    );
+    let mut csv = String::from(
+        "freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,gamma,true_amplitude_m,power_input_w,damper_power_w,true_input_w,true_host_w,true_damper_work_w,true_damper_w,empty_receptance_m_per_n,solid_receptance_m_per_n,predicted_receptance_m_per_n\n",
+    );
+    for (k, p) in measured.points.iter().enumerate() {
+        let pred = predicted
+            .and_then(|v| v.iter().find(|(r, _)| r.freq_hz == p.freq_hz))
+            .map(|(r, _)| r.amplitude_m / a.force_n);
+        println!(
+            "  {:7.2}  {:10.4}  {:5.2}  {:8.5}  {:10.5}              {:10.5}  {:10.5}{}",
+            p.freq_hz,
+            p.receptance().norm() * 1e3,
+            p.gamma,
+            p.power_input_w,
+            p.damper_power_w,
+            p.true_damper_work_w,
+            p.true_damper_w,
+            pred.map_or(String::new(), |h| format!("        {:10.4}", h * 1e3))
+        );
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            p.freq_hz,
+            p.receptance_re,
+            p.receptance_im,
+            p.amplitude_m,
+            p.gamma,
+            p.true_amplitude_m,
+            p.power_input_w,
+            p.damper_power_w,
+            p.true_input_w,
+            p.true_host_w,
+            p.true_damper_work_w,
+            p.true_damper_w,
+            empty.points[k].receptance().norm(),
+            solid.points[k].receptance().norm(),
+            pred.unwrap_or(f64::NAN)
+        ));
+    }
+    let reduction =
+        |other: &SteppedSineResult| 20.0 * (measured.peak_m_per_n / other.peak_m_per_n).log10();
+    println!(
+        "  peak {:.4} mm/N at {:.2} Hz: {:+.1} dB against the empty host ({:.4} mm/N at {:.2} Hz), {:+.1} dB against the solid mass ({:.4} mm/N at {:.2} Hz)",
+        measured.peak_m_per_n * 1e3,
+        measured.peak_freq_hz,
+        reduction(empty),
+        empty.peak_m_per_n * 1e3,
+        empty.peak_freq_hz,
+        reduction(solid),
+        solid.peak_m_per_n * 1e3,
+        solid.peak_freq_hz
+    );
+    match (&measured.half_power, &measured.half_power_note) {
+        (Some(h), _) => println!(
+            "  half-power loss factor {:.4} ({:.2}-{:.2} Hz); the empty host's {}",
+            h.loss_factor,
+            h.f_low_hz,
+            h.f_high_hz,
+            empty
+                .half_power
+                .map_or("outside the frequencies".to_string(), |e| format!(
+                    "{:.4}",
+                    e.loss_factor
+                ))
+        ),
+        (None, Some(why)) => println!("  no half-power loss factor: {why}"),
+        _ => {}
+    }
+    if predicted.is_some() {
+        println!(
+            "  map-based prediction of the same {} frequencies: {:.1} ms",
+            measured.points.len(),
+            predict_ms
+        );
+    }
+    write_text(&out.join("frf.csv"), &csv)?;
+    let json = serde_json::json!({
+        "host": test.host,
+        "damper": test.damper,
+        "force_n": a.force_n,
+        "settle_cycles": a.settle_cycles,
+        "record_cycles": a.record_cycles,
+        "measured": measured,
+        "empty": empty,
+        "solid": solid,
+        "predicted": predicted.map(|v| v.iter().map(|(r, n)| serde_json::json!({"response": r, "roots": n})).collect::<Vec<_>>()),
+        "predict_ms": predict_ms,
+    });
+    write_text(&out.join("frf.json"), &serde_json::to_string_pretty(&json)?)?;
+    plot_frf(out, test, measured, empty, solid, predicted, a.force_n)?;
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// `frf-magnitude.svg` (dB re 1 m/N) and `frf-phase.svg`.
+fn plot_frf(
+    dir: &Path,
+    test: &HostTest,
+    measured: &SteppedSineResult,
+    empty: &SteppedSineResult,
+    solid: &SteppedSineResult,
+    predicted: Option<&[(vlab::host::map_model::SteadyResponse, usize)]>,
+    force_n: f64,
+) -> Result<()> {
+    let db = |h: f64| 20.0 * h.log10();
+    let mag = |r: &SteppedSineResult| -> Vec<(f64, f64)> {
+        r.points
+            .iter()
+            .map(|p| (p.freq_hz, db(p.receptance().norm())))
+            .collect()
+    };
+    let phase = |r: &SteppedSineResult| -> Vec<(f64, f64)> {
+        r.points
+            .iter()
+            .map(|p| (p.freq_hz, p.receptance().arg().to_degrees()))
+            .collect()
+    };
+    let line = |name: &str, points| Series {
+        name: name.into(),
+        points,
+        style: SeriesStyle::Line,
+    };
+    let mut series = vec![
+        line("empty host", mag(empty)),
+        line("particles' mass as a solid", mag(solid)),
+        Series {
+            name: format!("{} (coupled DEM)", test.damper.label()),
+            points: mag(measured),
+            style: SeriesStyle::Points,
+        },
+    ];
+    let mut phases = vec![
+        line("empty host", phase(empty)),
+        line("particles' mass as a solid", phase(solid)),
+        Series {
+            name: format!("{} (coupled DEM)", test.damper.label()),
+            points: phase(measured),
+            style: SeriesStyle::Points,
+        },
+    ];
+    if let Some(p) = predicted {
+        series.push(line(
+            "map-based model",
+            p.iter()
+                .map(|(r, _)| (r.freq_hz, db(r.amplitude_m / force_n)))
+                .collect(),
+        ));
+        phases.push(line(
+            "map-based model",
+            p.iter()
+                .map(|(r, _)| (r.freq_hz, r.phase_rad.to_degrees()))
+                .collect(),
+        ));
+    }
+    plot_xy_svg(
+        &dir.join("frf-magnitude.svg"),
+        &format!(
+            "Receptance at the damper, {} N at the drive, {}",
+            force_n, test.host.name
+        ),
+        "frequency (Hz)",
+        "|X / F| (dB re 1 m/N)",
+        &series,
+    )?;
+    plot_xy_svg(
+        &dir.join("frf-phase.svg"),
+        &format!("Phase of the receptance, {}", test.host.name),
+        "frequency (Hz)",
+        "phase of X / F (degrees)",
+        &phases,
+    )?;
+    Ok(())
+}
+
+fn random(
+    a: &FrfArgs,
+    key: &str,
+    scene: &vlab::scene::Scene,
+    mut test: HostTest,
+    out: &Path,
+    quiet: bool,
+) -> Result<()> {
+    test.excitation = Excitation::parse(&format!("random:{key}"))
+        .map_err(|e| anyhow::Error::from(e.renamed("--random")))?;
+    let Excitation::Lines { lines, .. } = &test.excitation else {
+        anyhow::bail!("--random {key}: not a periodic random force");
+    };
+    let period_s = key
+        .split(':')
+        .nth(3)
+        .and_then(|p| p.parse::<f64>().ok())
+        .unwrap_or(1.0);
+    if a.duration_s < 3.0 * period_s {
+        anyhow::bail!(
+            "--duration-s = {} s: must be at least three periods of the random force ({} s each): one dropped, two averaged",
+            a.duration_s,
+            period_s
+        );
+    }
+    let band = (
+        lines.first().map_or(0.0, |l| l.freq_hz),
+        lines.last().map_or(0.0, |l| l.freq_hz),
+    );
+    let run = super::run_test(scene, &test, a.common.cache, quiet)?;
+    let frf = random_frf(&run, period_s)?;
+    write_records(out, &run)?;
+    let mut csv = String::from(
+        "freq_hz,h1_re_m_per_n,h1_im_m_per_n,h2_re_m_per_n,h2_im_m_per_n,coherence,h1_magnitude_stderr_rel\n",
+    );
+    let mut h1 = Vec::new();
+    let mut h2 = Vec::new();
+    let mut coh = Vec::new();
+    for (k, f) in frf.freq_hz.iter().enumerate() {
+        if *f < band.0 || *f > band.1 {
+            continue;
+        }
+        csv.push_str(&format!(
+            "{},{},{},{},{},{},{}\n",
+            f,
+            frf.h1[k].re,
+            frf.h1[k].im,
+            frf.h2[k].re,
+            frf.h2[k].im,
+            frf.coherence[k],
+            frf.magnitude_stderr_rel(k)
+        ));
+        h1.push((*f, 20.0 * frf.h1[k].norm().log10()));
+        h2.push((*f, 20.0 * frf.h2[k].norm().log10()));
+        coh.push((*f, frf.coherence[k]));
+    }
+    write_text(&out.join("frf.csv"), &csv)?;
+    plot_xy_svg(
+        &out.join("frf-magnitude.svg"),
+        &format!(
+            "H1 and H2 of the receptance, periodic random, {}",
+            test.host.name
+        ),
+        "frequency (Hz)",
+        "|X / F| (dB re 1 m/N)",
+        &[
+            Series {
+                name: "H1".into(),
+                points: h1,
+                style: SeriesStyle::Line,
+            },
+            Series {
+                name: "H2".into(),
+                points: h2,
+                style: SeriesStyle::Line,
+            },
+        ],
+    )?;
+    plot_xy_svg(
+        &out.join("coherence.svg"),
+        &format!("Coherence, periodic random, {}", test.host.name),
+        "frequency (Hz)",
+        "coherence",
+        &[Series {
+            name: "coherence".into(),
+            points: coh.clone(),
+            style: SeriesStyle::Line,
+        }],
+    )?;
+    let low = coh
+        .iter()
+        .cloned()
+        .fold((f64::NAN, 2.0), |b, p| if p.1 < b.1 { p } else { b });
+    println!(
+        "{} on {}, periodic random {}: {} periods averaged, {:.1} s wall; coherence lowest {:.3} at {:.1} Hz",
+        test.damper.label(),
+        test.host.name,
+        key,
+        frf.blocks,
+        run.wall_time_s,
+        low.1,
+        low.0
+    );
+    println!("wrote {}", out.display());
+    Ok(())
+}
