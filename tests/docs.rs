@@ -572,6 +572,139 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
     );
 }
 
+/// The chapter on the damper on a structure: its commands run in order and
+/// every number it quotes is what they give.
+#[test]
+fn host_chapter_commands_run() {
+    let commands = vlab_commands(&read("docs/host.md"));
+    assert!(
+        commands.len() >= 8,
+        "found only {} commands",
+        commands.len()
+    );
+    let dir = run_in_order("host-chapter", "docs/host.md", &commands);
+    let page = read("docs/host.md")
+        .lines()
+        .map(|l| l.trim_start().trim_start_matches('>'))
+        .flat_map(str::split_whitespace)
+        .collect::<Vec<_>>()
+        .join(" ");
+    let mut wrong = Vec::new();
+    let mut quote = |sentence: String| {
+        if !page.contains(&sentence) {
+            wrong.push(sentence);
+        }
+    };
+    let plate = vlab::host::HostSpec::sdof("plate", 40.0, 0.5, 0.003).expect("valid");
+    let m = plate.modes[0];
+    let zeta = |c: f64| m.damping_ratio + c / (2.0 * (m.stiffness() * m.modal_mass_kg).sqrt());
+
+    // 2. The dashpot.
+    let d = json_file(&dir, "host/dashpot/decay.json");
+    let a = &d["analysis"];
+    quote(format!("a loss factor η = 2ζ = {:.4}", 2.0 * zeta(15.0)));
+    quote(format!(
+        "logarithmic decrement reads {:.4} on the first cycle and the Hilbert envelope {:.4}",
+        num(&a["log_decrement"][0]["loss_factor"]),
+        num(&a["envelope"][0]["loss_factor"])
+    ));
+    quote(format!(
+        "puts {:.4} J into the dashpot, which dissipated {:.4} J",
+        num(&a["damper_energy_sum_j"]),
+        num(&a["true_damper_dissipated_sum_j"])
+    ));
+    let f = json_file(&dir, "host/frf-dashpot/frf.json");
+    quote(format!(
+        "a loss factor of {:.4} against the known {:.4}",
+        num(&f["measured"]["half_power"]["loss_factor"]),
+        2.0 * zeta(10.0)
+    ));
+    let coherence = std::fs::read_to_string(dir.path("host/random-dashpot/frf.csv"))
+        .expect("frf.csv")
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').nth(5)?.parse::<f64>().ok())
+        .fold(f64::INFINITY, f64::min);
+    quote(format!(
+        "stays above {:.3}",
+        (coherence * 1000.0).floor() / 1000.0
+    ));
+
+    // 3. and 4. The granular damper on both hosts.
+    let sums = |name: &str| {
+        let a = json_file(&dir, name)["analysis"].clone();
+        (
+            num(&a["damper_energy_sum_j"]),
+            num(&a["true_damper_energy_sum_j"]),
+            num(&a["true_damper_dissipated_sum_j"]),
+            a,
+        )
+    };
+    let (log, work, dissipated, plate_a) = sums("host/plate/decay.json");
+    quote(format!(
+        "the log decrement puts {log:.4} J into the damper, the host did {work:.4} J of work on the bed and the DEM dissipated {dissipated:.4} J"
+    ));
+    let first = &plate_a["log_decrement"][0];
+    quote(format!(
+        "at the start of the decay (Γ {:.1}) the log decrement's damper energy per cycle is {:.4} J",
+        num(&first["gamma"]),
+        num(&first["damper_energy_j"])
+    ));
+    let csv = std::fs::read_to_string(dir.path("host/plate/decay.csv")).expect("decay.csv");
+    let yang0: f64 = csv
+        .lines()
+        .nth(1)
+        .and_then(|l| l.split(',').nth(10)?.parse().ok())
+        .expect("a Yang column");
+    quote(format!("and the map's steady figure {yang0:.4} J"));
+    let (blog, bwork, bdissipated, beam_a) = sums("host/beam/decay.json");
+    let beam_first = &beam_a["log_decrement"][0];
+    quote(format!(
+        "its first cycle's loss factor is {:.3} (Γ {:.1}) against the plate's {:.3}",
+        num(&beam_first["loss_factor"]),
+        num(&beam_first["gamma"]),
+        num(&first["loss_factor"])
+    ));
+    quote(format!(
+        "over the decay the log decrement puts {blog:.4} J into the damper, the host's work on the bed is {bwork:.4} J and the DEM dissipated {bdissipated:.4} J"
+    ));
+
+    // 5. The map-based model.
+    let peak = |name: &str| {
+        std::fs::read_to_string(dir.path(name))
+            .expect("predict.csv")
+            .lines()
+            .skip(1)
+            .filter_map(|l| {
+                let c: Vec<f64> = l
+                    .split(',')
+                    .take(2)
+                    .filter_map(|v| v.parse().ok())
+                    .collect();
+                (c.len() == 2).then(|| (c[0], c[1]))
+            })
+            .fold((0.0, 0.0), |b: (f64, f64), p| if p.1 > b.1 { p } else { b })
+    };
+    let (pf, px) = peak("host/predict/predict.csv");
+    quote(format!(
+        "predicts a flat top of {:.2} mm at {:.1} Hz",
+        px * 1e3,
+        pf
+    ));
+    let (bf, bx) = peak("host/predict-beam/predict.csv");
+    quote(format!(
+        "the beam's peak {:.2} mm at {:.1} Hz",
+        bx * 1e3,
+        bf
+    ));
+
+    assert!(
+        wrong.is_empty(),
+        "docs/host.md no longer says what its commands give; it should say:\n{}",
+        wrong.join("\n")
+    );
+}
+
 #[test]
 fn readme_commands_run() {
     let text = read("README.md");

@@ -2,7 +2,8 @@
 //! the DEM (thesis Section 2.3.1: the decay of free vibration is how most
 //! granular dampers are characterised).
 //!
-//! The lab's acceleration record at the damper ([`HostRun::trace`]) goes
+//! The lab's acceleration record at the damper ([`HostRun::trace`]),
+//! band-passed around the first mode when the host has others, goes
 //! through the logarithmic decrement and the Hilbert envelope
 //! ([`crate::signals::structural`]): a loss factor `η` at each amplitude
 //! `X = A / ω²`. The damper's share is `η − η_host` (the bare host's loss
@@ -35,7 +36,7 @@ use super::host_test::HostRun;
 use crate::host::HostSpec;
 use crate::rig::ACCEL_CHANNEL;
 use crate::scene::SceneError;
-use crate::signals::structural::{DecayPoint, envelope_decay, log_decrement};
+use crate::signals::structural::{DecayPoint, band_pass, envelope_decay, log_decrement};
 
 /// Cycles a Hilbert-envelope fit spans.
 pub const ENVELOPE_CYCLES: f64 = 2.0;
@@ -178,7 +179,24 @@ pub fn analyse_decay(
     g_mps2: f64,
 ) -> Result<DecayAnalysis, SceneError> {
     let trace = run.trace.from_time(skip_s);
-    let accel = &trace.channel(ACCEL_CHANNEL)?.samples;
+    let raw = &trace.channel(ACCEL_CHANNEL)?.samples;
+    // Of a host of several modes, the first alone (a lab's band-pass
+    // before a decrement): from a quarter of its frequency to halfway (in
+    // log) to the next, at most two and a half times it, so that a bed
+    // landing every other cycle (side bands at half and one and a half
+    // times the mode) passes.
+    let mut freqs: Vec<f64> = host.modes.iter().map(|m| m.natural_freq_hz()).collect();
+    freqs.sort_by(f64::total_cmp);
+    let filtered;
+    let accel: &[f64] = match freqs.as_slice() {
+        [f1, f2, ..] => {
+            let high = (2.5 * f1).min((f1 * f2).sqrt());
+            filtered = band_pass(raw, trace.sample_rate_hz, 0.25 * f1, high)
+                .map_err(crate::signals::SignalsError::from)?;
+            &filtered
+        }
+        _ => raw,
+    };
     // Times of the methods are from the cut record's start.
     let shift = |mut v: Vec<DecayPoint>| {
         for p in &mut v {

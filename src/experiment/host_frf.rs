@@ -34,9 +34,9 @@ use crate::validation::{Bound, InvalidParameter, count_in, in_range};
 /// Harmonics the power-input method sums.
 pub const POWER_HARMONICS: usize = 10;
 
-/// How a stepped sine is run: each frequency from the steady response of
-/// the host with the particles' mass as a solid, `settle_cycles` to settle,
-/// then `record_cycles` measured.
+/// How a stepped sine is run: each frequency from a steady response of the
+/// host ([`super::host_test::particles_guess`] with particles),
+/// `settle_cycles` to settle, then `record_cycles` measured.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SteppedSine {
     pub freqs_hz: Vec<f64>,
@@ -117,6 +117,13 @@ pub struct FrfPoint {
     pub true_host_w: f64,
     pub true_damper_work_w: f64,
     pub true_damper_w: f64,
+    /// Change of the host's stored energy over the record per second (W):
+    /// the power-input method assumes none.
+    pub host_energy_drift_w: f64,
+    /// The record is steady: the drift within 5 % of the input power (a
+    /// granular damper's impacts move the host's energy from cycle to cycle
+    /// by a few per cent even in steady state).
+    pub steady: bool,
     pub steps: u64,
     pub wall_time_s: f64,
 }
@@ -201,6 +208,11 @@ fn measure_point(
     }
     .map_err(SignalsError::from)?;
     let span = r.time_s[r.time_s.len() - 1] - r.time_s[i0];
+    // Whole periods apart, the stored energy's ripple cancels.
+    let periods = (span * freq_hz).floor();
+    let i_end = (i0 + (periods / freq_hz * rate_hz).round() as usize).min(r.time_s.len() - 1);
+    let drift = (r.host_energy_j[i_end] - r.host_energy_j[i0]) / (r.time_s[i_end] - r.time_s[i0]);
+    let true_input = rate(&r.excitation_work_j, i0, span);
     let drive_x = true_x.norm()
         * test
             .host
@@ -225,12 +237,14 @@ fn measure_point(
         true_amplitude_m: true_x.norm(),
         power_input_w: power,
         damper_power_w: power - host_power,
-        true_input_w: rate(&r.excitation_work_j, i0, span),
+        true_input_w: true_input,
         true_host_w: rate(&r.host_dissipated_j, i0, span),
         true_damper_work_w: rate(&r.damper_work_in_j, i0, span)
             + rate(&r.dashpot_dissipated_j, i0, span),
         true_damper_w: rate(&r.damper_dissipated_j, i0, span)
             + rate(&r.dashpot_dissipated_j, i0, span),
+        host_energy_drift_w: drift,
+        steady: drift.abs() <= 0.05 * true_input.abs(),
         steps: run.steps,
         wall_time_s: run.wall_time_s,
     })
@@ -279,7 +293,16 @@ pub fn run_stepped_sine(
         );
     let freqs: Vec<f64> = points.iter().map(|p| p.freq_hz).collect();
     let mags: Vec<f64> = points.iter().map(|p| p.receptance().norm()).collect();
+    let step = freqs.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
     let (half_power, half_power_note) = match half_power(&freqs, &mags) {
+        Ok(h) if h.f_high_hz - h.f_low_hz < 2.0 * step => (
+            None,
+            Some(format!(
+                "the half-power band ({:.3} Hz by interpolation) is narrower than two frequency steps ({step} Hz): step finer around {:.2} Hz",
+                h.f_high_hz - h.f_low_hz,
+                h.peak_freq_hz
+            )),
+        ),
         Ok(h) => (Some(h), None),
         Err(e) => (None, Some(e.to_string())),
     };

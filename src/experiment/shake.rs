@@ -990,4 +990,37 @@ mod tests {
             w[0]
         );
     }
+
+    #[test]
+    fn a_bed_that_moves_with_the_floor_has_its_whole_mass_in_phase() {
+        // At Gamma 0.8 the bed never leaves the floor: the particles push
+        // the enclosure with -M a (and their weight), so the apparent mass
+        // of their force's fundamental is the bed's mass, within 1 % (the
+        // bed's own elastic ringing under the drive is all that differs);
+        // at Gamma 20, bouncing, it is well below it.
+        let mut scene = crate::scene::Scene::thesis();
+        scene.drive.cycles = crate::scene::CyclesSpec::Count(12);
+        scene.drive.steady_cycles = 8;
+        let mass = scene.particle_mass_kg();
+        let at = |gamma: f64| {
+            let drive = super::shake_drive(&scene, 40.0, gamma).expect("drive");
+            let setup = crate::experiment::measurement::ShakeSetup {
+                rig: super::resolve_rig("ideal", None, &drive).expect("rig"),
+                drive,
+                noise_seed: 1,
+                calibration: crate::experiment::measurement::CalibrationSource::OnTheFly,
+            };
+            let run = super::run_shake(&scene, &setup, &mut |_| {}).expect("runs");
+            run.experiment
+                .truth
+                .apparent_mass_kg(run.summary.steady_start_s, 40.0)
+        };
+        let locked = at(0.8);
+        assert!(
+            (locked / mass - 1.0).abs() < 0.01,
+            "{locked} kg of {mass} kg"
+        );
+        let bouncing = at(20.0);
+        assert!(bouncing < 0.8 * mass, "{bouncing} kg of {mass} kg");
+    }
 }

@@ -132,14 +132,19 @@ impl HostDynamics {
         }
     }
 
-    /// Releases the host from rest under a constant drive-point force that
-    /// holds the damper at `x0_m`: each mode at its static deflection
-    /// `q_r = φ_r(e) F / k_r`, `F = x0 / Σ φ_r(d) φ_r(e) / k_r` (a free decay
-    /// as a lab starts one: pull, hold, let go).
+    /// Releases the host from rest under a constant force at the damper
+    /// that holds it at `x0_m`: each mode at its static deflection
+    /// `q_r = φ_r(d) F / k_r`, `F = x0 / Σ φ_r(d)² / k_r` (a free decay as a
+    /// lab starts one: pull the damper, hold, let go).
     pub fn release_from(&mut self, spec: &HostSpec, x0_m: f64) {
-        let force = x0_m / spec.static_transfer_m_per_n();
+        let flexibility: f64 = spec
+            .modes
+            .iter()
+            .map(|m| m.shape_at_damper.powi(2) / m.stiffness())
+            .sum();
+        let force = x0_m / flexibility;
         for r in 0..self.n {
-            self.z[r] = self.phi_e[r] * force / self.stiffness[r];
+            self.z[r] = self.phi_d[r] * force / self.stiffness[r];
             self.z[self.n + r] = 0.0;
         }
     }
@@ -228,11 +233,6 @@ impl HostDynamics {
     /// Velocity at the drive point, m/s.
     pub fn drive_velocity_mps(&self) -> f64 {
         Self::dot(&self.phi_e, &self.z[self.n..])
-    }
-
-    /// Acceleration at the drive point, m/s².
-    pub fn drive_acceleration_mps2(&self) -> f64 {
-        Self::dot(&self.phi_e, &self.modal_acceleration())
     }
 
     /// Kinetic and strain energy of the host and its payload, J.

@@ -211,16 +211,6 @@ impl HostSpec {
             .map(ModeSpec::natural_freq_hz)
             .fold(0.0, f64::max)
     }
-
-    /// Static flexibility from the drive point to the damper,
-    /// `Σ φ_r(d) φ_r(e) / k_r`, m/N: how far the damper moves under a unit
-    /// constant force at the drive point.
-    pub fn static_transfer_m_per_n(&self) -> f64 {
-        self.modes
-            .iter()
-            .map(|m| m.shape_at_damper * m.shape_at_drive / m.stiffness())
-            .sum()
-    }
 }
 
 impl RigFile for HostSpec {
@@ -254,6 +244,24 @@ impl RigFile for HostSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_file_in_host_loads_as_a_host() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("host");
+        let mut seen = 0;
+        for entry in std::fs::read_dir(&dir).expect("host/ exists") {
+            let path = entry.expect("entry").path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                drop(HostSpec::load(&path).expect("a host"));
+                seen += 1;
+            }
+        }
+        assert_eq!(
+            seen,
+            HostSpec::names().len(),
+            "every file in host/ is built in"
+        );
+    }
 
     #[test]
     fn the_built_in_hosts_load_and_give_their_documented_figures() {

@@ -4,7 +4,7 @@
 //! A rig file is TOML with `version = 1` and `kind = "shaker"` (the damper
 //! rigs of [`super::spec`]), `kind = "drop-test"` (the restitution rig of
 //! [`super::drop_spec`]) or `kind = "host"` (a structure carrying the damper,
-//! [`crate::host::HostSpec`]). A file without `kind` is told by its sections
+//! described by the `host` module, which implements [`RigFile`] for it). A file without `kind` is told by its sections
 //! (`[shaker]`, `[plate]` or `[[mode]]`). A file of the wrong kind for what was asked is
 //! refused by its kind, not by the first key the other kind does not know.
 //! The built-in rigs are the files of the top-level `rig/` folder, and the
@@ -276,7 +276,8 @@ mod tests {
             match table.get("kind").and_then(toml::Value::as_str) {
                 Some("shaker") => drop(RigSpec::load(&path).expect("shaker rig")),
                 Some("drop-test") => drop(DropRigSpec::load(&path).expect("drop rig")),
-                Some("host") => drop(crate::host::HostSpec::load(&path).expect("host")),
+                // Loaded by the host module's own test (it sits above rig).
+                Some("host") => assert!(path.starts_with(root.join("host"))),
                 other => panic!("{}: kind {other:?}", path.display()),
             }
             seen += 1;

@@ -36,8 +36,9 @@ pub struct FrfArgs {
     /// Stepped sine: force amplitude at the drive point (N).
     #[arg(long = "force-n", value_name = "N", default_value = "5", value_parser = args::newtons)]
     force_n: f64,
-    /// Stepped sine: cycles to settle at each frequency (from the steady
-    /// response of the host with the particles' mass as a solid).
+    /// Stepped sine: cycles to settle at each frequency (from a steady
+    /// response of the host with half the particles' mass and a dashpot of
+    /// efficiency 0.5).
     #[arg(long = "settle-cycles", value_name = "N", default_value = "30")]
     settle_cycles: u32,
     /// Stepped sine: cycles measured at each frequency.
@@ -70,19 +71,17 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
             damper_slug(test.damper)
         ))
     });
-    let map = match &a.map {
+    // The map: the DEM's efficiency for the model, Yang's for the
+    // structure-independent figure at each point's frequency and Γ.
+    let maps = match &a.map {
         Some(path) => {
             let file =
                 SweepFile::read(path).with_context(|| format!("--map {}", path.display()))?;
-            Some(
-                dissipation_map(
-                    &file,
-                    Some(scene.enclosure.orientation),
-                    None,
-                    MapSource::Dem,
-                )
-                .with_context(|| format!("--map {}", path.display()))?,
-            )
+            let of = |source| {
+                dissipation_map(&file, Some(scene.enclosure.orientation), None, source)
+                    .with_context(|| format!("--map {}", path.display()))
+            };
+            Some((of(MapSource::Dem)?, of(MapSource::Yang)?))
         }
         None => None,
     };
@@ -125,30 +124,44 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
     let empty = compare(Damper::Empty)?;
     let solid = compare(Damper::Solid)?;
     let started = Instant::now();
-    let predicted = map
+    let predicted = maps
         .as_ref()
-        .map(|m| stepped_sine(m, &test.host, &freqs, a.force_n));
+        .map(|(m, _)| stepped_sine(m, &test.host, &freqs, a.force_n));
     let predict_ms = started.elapsed().as_secs_f64() * 1e3;
+    // Yang's energy per cycle at each point's frequency and amplitude, as
+    // power.
+    let yang_w: Vec<f64> = measured
+        .points
+        .iter()
+        .map(|p| {
+            maps.as_ref().map_or(f64::NAN, |(_, yang)| {
+                let d = yang.damper_at(p.freq_hz, p.amplitude_m);
+                let v =
+                    d.gamma * scene.simulation.gravity_mps2 / (std::f64::consts::TAU * p.freq_hz);
+                d.efficiency * 4.0 * v * v * yang.particle_mass_kg * p.freq_hz
+            })
+        })
+        .collect();
     report(
         &a,
         &test,
         &measured,
-        &empty,
-        &solid,
-        predicted.as_deref(),
+        (&empty, &solid),
+        (predicted.as_deref(), &yang_w),
         predict_ms,
         &out,
     )
 }
 
-#[allow(clippy::too_many_arguments)]
+/// A frequency's predicted response and how many roots it had.
+type Predicted = (vlab::host::map_model::SteadyResponse, usize);
+
 fn report(
     a: &FrfArgs,
     test: &HostTest,
     measured: &SteppedSineResult,
-    empty: &SteppedSineResult,
-    solid: &SteppedSineResult,
-    predicted: Option<&[(vlab::host::map_model::SteadyResponse, usize)]>,
+    (empty, solid): (&SteppedSineResult, &SteppedSineResult),
+    (predicted, yang_w): (Option<&[Predicted]>, &[f64]),
     predict_ms: f64,
     out: &Path,
 ) -> Result<()> {
@@ -165,13 +178,13 @@ fn report(
     println!(
         "  freq_hz  |X|/F mm/N  Gamma   P_in W    damper W (P_in - host)  DEM work W  DEM dissipated W{}",
         if predicted.is_some() {
-            "  map |X|/F mm/N"
+            "  map |X|/F mm/N  Yang's map W"
         } else {
             ""
         }
     );
     let mut csv = String::from(
-        "freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,gamma,true_amplitude_m,power_input_w,damper_power_w,true_input_w,true_host_w,true_damper_work_w,true_damper_w,empty_receptance_m_per_n,solid_receptance_m_per_n,predicted_receptance_m_per_n\n",
+        "freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,gamma,true_amplitude_m,power_input_w,damper_power_w,true_input_w,true_host_w,true_damper_work_w,true_damper_w,host_energy_drift_w,steady,empty_receptance_m_per_n,solid_receptance_m_per_n,predicted_receptance_m_per_n,yang_map_w\n",
     );
     for (k, p) in measured.points.iter().enumerate() {
         let pred = predicted
@@ -186,10 +199,21 @@ fn report(
             p.damper_power_w,
             p.true_damper_work_w,
             p.true_damper_w,
-            pred.map_or(String::new(), |h| format!("        {:10.4}", h * 1e3))
+            pred.map_or(String::new(), |h| format!(
+                "        {:10.4}  {:12.5}",
+                h * 1e3,
+                yang_w[k]
+            ))
         );
+        if !p.steady {
+            println!(
+                "           not steady: the host's energy moved by {:.4} W over the record ({:+.1} % of the input): the power input is not the dissipation here (more --settle-cycles)",
+                p.host_energy_drift_w,
+                100.0 * p.host_energy_drift_w / p.true_input_w
+            );
+        }
         csv.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             p.freq_hz,
             p.receptance_re,
             p.receptance_im,
@@ -202,9 +226,12 @@ fn report(
             p.true_host_w,
             p.true_damper_work_w,
             p.true_damper_w,
+            p.host_energy_drift_w,
+            p.steady,
             empty.points[k].receptance().norm(),
             solid.points[k].receptance().norm(),
-            pred.unwrap_or(f64::NAN)
+            pred.unwrap_or(f64::NAN),
+            yang_w[k]
         ));
     }
     let reduction =
@@ -226,12 +253,11 @@ fn report(
             h.loss_factor,
             h.f_low_hz,
             h.f_high_hz,
-            empty
-                .half_power
-                .map_or("outside the frequencies".to_string(), |e| format!(
-                    "{:.4}",
-                    e.loss_factor
-                ))
+            match (&empty.half_power, &empty.half_power_note) {
+                (Some(e), _) => format!("{:.4}", e.loss_factor),
+                (None, Some(why)) => format!("not measured: {why}"),
+                (None, None) => "not measured".to_string(),
+            }
         ),
         (None, Some(why)) => println!("  no half-power loss factor: {why}"),
         _ => {}
@@ -269,7 +295,7 @@ fn plot_frf(
     measured: &SteppedSineResult,
     empty: &SteppedSineResult,
     solid: &SteppedSineResult,
-    predicted: Option<&[(vlab::host::map_model::SteadyResponse, usize)]>,
+    predicted: Option<&[Predicted]>,
     force_n: f64,
 ) -> Result<()> {
     let db = |h: f64| 20.0 * h.log10();
