@@ -107,6 +107,8 @@ pub struct FrfPoint {
     /// Power-input method: `⟨F v_e⟩` from the force channel and the drive
     /// point's velocity (W).
     pub power_input_w: f64,
+    /// Its one-sigma error from the spread of the record's periods (W).
+    pub power_input_stderr_w: f64,
     /// The damper's dissipation by the power-input method,
     /// `P_in − ½ c_host ω² |X_e|²` (W).
     pub damper_power_w: f64,
@@ -195,18 +197,33 @@ fn measure_point(
         .modes
         .iter()
         .all(|m| m.shape_at_drive == m.shape_at_damper);
-    let power = if at_damper {
-        power_input_w(force, accel, rate_hz, freq_hz, POWER_HARMONICS)
+    let n = drive_accel.len().min(force.len());
+    let (f_in, a_in): (&[f64], &[f64]) = if at_damper {
+        (force, accel)
     } else {
-        power_input_w(
-            &force[..drive_accel.len().min(force.len())],
-            &drive_accel[..drive_accel.len().min(force.len())],
-            rate_hz,
-            freq_hz,
-            POWER_HARMONICS,
-        )
-    }
-    .map_err(SignalsError::from)?;
+        (&force[..n], &drive_accel[..n])
+    };
+    let power =
+        power_input_w(f_in, a_in, rate_hz, freq_hz, POWER_HARMONICS).map_err(SignalsError::from)?;
+    // Its ± : the same method on each period alone, the periods' spread
+    // (crate::stats::mean_stderr), as Yang's method's is.
+    let per_period = (rate_hz / freq_hz).round() as usize;
+    let periods: Vec<f64> = (0..f_in.len() / per_period.max(1))
+        .filter_map(|k| {
+            let r = k * per_period..(k + 1) * per_period;
+            power_input_w(
+                &f_in[r.clone()],
+                &a_in[r],
+                rate_hz,
+                freq_hz,
+                POWER_HARMONICS,
+            )
+            .ok()
+        })
+        .collect();
+    let power_stderr = crate::stats::mean_stderr(&periods)
+        .stderr
+        .unwrap_or(f64::NAN);
     let span = r.time_s[r.time_s.len() - 1] - r.time_s[i0];
     // Whole periods apart, the stored energy's ripple cancels.
     let periods = (span * freq_hz).floor();
@@ -236,6 +253,7 @@ fn measure_point(
         gamma: a.norm() / g_mps2,
         true_amplitude_m: true_x.norm(),
         power_input_w: power,
+        power_input_stderr_w: power_stderr,
         damper_power_w: power - host_power,
         true_input_w: true_input,
         true_host_w: rate(&r.host_dissipated_j, i0, span),

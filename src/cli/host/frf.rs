@@ -85,11 +85,6 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
         }
         None => None,
     };
-    let made = OutputDir::prepare(&out)
-        .with_context(|| format!("cannot create output folder {}", out.display()))?;
-    if let Some(key) = &a.random {
-        return made.keep_if_ok(random(&a, key, &scene, test, &out, quiet));
-    }
     let freqs = a.freqs.clone().map(|f| f.0).unwrap_or_default();
     let plan = SteppedSine {
         freqs_hz: freqs.clone(),
@@ -97,7 +92,22 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
         settle_cycles: a.settle_cycles,
         record_cycles: a.record_cycles,
     };
-    plan.validate()?;
+    if a.random.is_none() {
+        plan.validate().map_err(|e| {
+            let flag = match e.key.as_str() {
+                "record_cycles" => "--record-cycles",
+                "settle_cycles" => "--settle-cycles",
+                "force_n" => "--force-n",
+                _ => "--freq",
+            };
+            anyhow::Error::from(e.renamed(flag))
+        })?;
+    }
+    let made = OutputDir::prepare(&out)
+        .with_context(|| format!("cannot create output folder {}", out.display()))?;
+    if let Some(key) = &a.random {
+        return made.keep_if_ok(random(&a, key, &scene, test, &out, quiet));
+    }
     let progress = Mutex::new((ProgressLine::new("host frf", quiet), 0usize));
     let total = freqs.len();
     let done = |p: &vlab::experiment::host_frf::FrfPoint| {
@@ -176,7 +186,7 @@ fn report(
         a.record_cycles
     );
     println!(
-        "  freq_hz  |X|/F mm/N  Gamma   P_in W    damper W (P_in - host)  DEM work W  DEM dissipated W{}",
+        "  freq_hz  |X|/F mm/N  Gamma   P_in W (+- periods)   damper W (P_in - host)  DEM work W  DEM dissipated W{}",
         if predicted.is_some() {
             "  map |X|/F mm/N  Yang's map W"
         } else {
@@ -184,18 +194,19 @@ fn report(
         }
     );
     let mut csv = String::from(
-        "freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,gamma,true_amplitude_m,power_input_w,damper_power_w,true_input_w,true_host_w,true_damper_work_w,true_damper_w,host_energy_drift_w,steady,empty_receptance_m_per_n,solid_receptance_m_per_n,predicted_receptance_m_per_n,yang_map_w\n",
+        "freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,gamma,true_amplitude_m,power_input_w,power_input_stderr_w,damper_power_w,true_input_w,true_host_w,true_damper_work_w,true_damper_w,host_energy_drift_w,steady,empty_receptance_m_per_n,solid_receptance_m_per_n,predicted_receptance_m_per_n,yang_map_w\n",
     );
     for (k, p) in measured.points.iter().enumerate() {
         let pred = predicted
             .and_then(|v| v.iter().find(|(r, _)| r.freq_hz == p.freq_hz))
             .map(|(r, _)| r.amplitude_m / a.force_n);
         println!(
-            "  {:7.2}  {:10.4}  {:5.2}  {:8.5}  {:10.5}              {:10.5}  {:10.5}{}",
+            "  {:7.2}  {:10.4}  {:5.2}  {:8.5} +- {:7.5}  {:10.5}              {:10.5}  {:10.5}{}",
             p.freq_hz,
             p.receptance().norm() * 1e3,
             p.gamma,
             p.power_input_w,
+            p.power_input_stderr_w,
             p.damper_power_w,
             p.true_damper_work_w,
             p.true_damper_w,
@@ -213,7 +224,7 @@ fn report(
             );
         }
         csv.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             p.freq_hz,
             p.receptance_re,
             p.receptance_im,
@@ -221,6 +232,7 @@ fn report(
             p.gamma,
             p.true_amplitude_m,
             p.power_input_w,
+            p.power_input_stderr_w,
             p.damper_power_w,
             p.true_input_w,
             p.true_host_w,

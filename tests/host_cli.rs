@@ -1,0 +1,97 @@
+//! `vlab host` refuses wrong input with the flag, its unit and its range,
+//! exits non-zero and leaves no output folder behind.
+
+#![cfg(all(feature = "cli", feature = "plot"))]
+
+mod common;
+
+use common::{Scratch, stderr, vlab};
+
+#[test]
+fn wrong_host_input_is_refused_and_leaves_nothing() {
+    let dir = Scratch::new("host-cli");
+    let cases: [(&[&str], &str); 7] = [
+        (
+            &["host", "decay", "--damper", "dashpot:-1", "--out", "out"],
+            "damper dashpot = -1 N s/m: must be in (0, 1000000]",
+        ),
+        (
+            &["host", "decay", "--damper", "sand", "--out", "out"],
+            "particles, empty, solid or dashpot:N_S_PER_M",
+        ),
+        (
+            &["host", "decay", "--x0-m", "0.2", "--out", "out"],
+            "--x0-m = 0.2 m: must be in [-0.05, 0.05]",
+        ),
+        (
+            &["host", "frf", "--freq", "50:40:1", "--out", "out"],
+            "STEP must be positive and TO at least FROM",
+        ),
+        (
+            &[
+                "host",
+                "frf",
+                "--freq",
+                "40",
+                "--record-cycles",
+                "2",
+                "--out",
+                "out",
+            ],
+            "--record-cycles = 2 cycles: must be",
+        ),
+        (
+            &["host", "run", "--excitation", "sine:40", "--out", "out"],
+            "sine:freq_hz:force_n",
+        ),
+        (
+            &["host", "decay", "--host", "no-such-host", "--out", "out"],
+            "no built-in rig 'no-such-host'",
+        ),
+    ];
+    for (args, wanted) in cases {
+        let out = vlab(&dir.0, args);
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{args:?} passed");
+        assert!(err.contains(wanted), "{args:?}: {err}");
+        assert!(!dir.path("out").exists(), "{args:?} left its folder");
+    }
+}
+
+#[test]
+fn a_dashpot_decay_writes_its_record_and_recovers_its_loss_factor() {
+    // The command a reader runs first (docs/host.md, section 2): its
+    // decay.json's first log-decrement point within 1 % of 2 zeta.
+    let dir = Scratch::new("host-cli-decay");
+    let out = vlab(
+        &dir.0,
+        &[
+            "--quiet",
+            "host",
+            "decay",
+            "--damper",
+            "dashpot:15",
+            "--duration-s",
+            "0.3",
+            "--out",
+            "d",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    for f in [
+        "trace.csv",
+        "trace.wav",
+        "record.csv",
+        "decay.csv",
+        "decay.json",
+        "loss-factor.svg",
+    ] {
+        assert!(dir.path(&format!("d/{f}")).is_file(), "{f}");
+    }
+    let j = common::json(&dir.path("d/decay.json"));
+    let eta = j["analysis"]["log_decrement"][0]["loss_factor"]
+        .as_f64()
+        .expect("eta");
+    let want = 2.0 * (0.003 + 15.0 / (2.0 * (31_582.734_f64 * 0.5).sqrt()));
+    assert!((eta / want - 1.0).abs() < 0.01, "{eta} against {want}");
+}
