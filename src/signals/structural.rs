@@ -70,18 +70,10 @@ pub type Result<T> = std::result::Result<T, StructuralError>;
 /// Everything that can go wrong in a structural measurement.
 #[derive(Debug, thiserror::Error)]
 pub enum StructuralError {
-    /// A scalar parameter is outside its valid range.
-    #[error("{name} = {value} {unit}: {requirement}")]
-    InvalidParameter {
-        /// Parameter name as in the API (e.g. `sample_rate_hz`).
-        name: &'static str,
-        /// The value given.
-        value: f64,
-        /// Its unit (`Hz`, `samples`, `cycles`, ...).
-        unit: &'static str,
-        /// The valid range, in words.
-        requirement: String,
-    },
+    /// A scalar parameter is outside its valid range (the crate's one
+    /// refusal, [`crate::validation::InvalidParameter`]).
+    #[error("{0}")]
+    InvalidParameter(#[from] crate::validation::InvalidParameter),
     /// A sample is NaN or infinite.
     #[error("{name}[{index}] = {value}: samples of {name} must be finite")]
     NonFiniteSample {
@@ -193,16 +185,27 @@ pub enum StructuralError {
 // Validation helpers
 // ---------------------------------------------------------------------------
 
+/// The crate's refusal of `value` for `name`: `requirement` is the valid
+/// range in words, with or without a leading "must be".
+fn invalid(name: &str, value: f64, unit: &str, requirement: impl Into<String>) -> StructuralError {
+    let requirement: String = requirement.into();
+    let valid = requirement
+        .strip_prefix("must be ")
+        .unwrap_or(&requirement)
+        .to_string();
+    crate::validation::InvalidParameter::new(name, value, unit, valid).into()
+}
+
 fn check_sample_rate(sample_rate_hz: f64) -> Result<()> {
     if sample_rate_hz.is_finite() && sample_rate_hz > 0.0 {
         Ok(())
     } else {
-        Err(StructuralError::InvalidParameter {
-            name: "sample_rate_hz",
-            value: sample_rate_hz,
-            unit: "Hz",
-            requirement: "must be positive and finite".into(),
-        })
+        Err(invalid(
+            "sample_rate_hz",
+            sample_rate_hz,
+            "Hz",
+            "must be positive and finite",
+        ))
     }
 }
 
@@ -212,15 +215,15 @@ fn check_analysis_freq(freq_hz: f64, sample_rate_hz: f64) -> Result<()> {
     if freq_hz.is_finite() && freq_hz > 0.0 && freq_hz < nyquist_hz {
         Ok(())
     } else {
-        Err(StructuralError::InvalidParameter {
-            name: "freq_hz",
-            value: freq_hz,
-            unit: "Hz",
-            requirement: format!(
+        Err(invalid(
+            "freq_hz",
+            freq_hz,
+            "Hz",
+            format!(
                 "must be in (0, {nyquist_hz}) Hz, i.e. positive and below the Nyquist \
                  frequency sample_rate_hz / 2"
             ),
-        })
+        ))
     }
 }
 
@@ -754,16 +757,16 @@ pub fn envelope_decay(
 ) -> Result<Vec<DecayPoint>> {
     check_sample_rate(sample_rate_hz)?;
     if !(cycles_per_fit.is_finite() && cycles_per_fit >= MIN_CYCLES_PER_FIT) {
-        return Err(StructuralError::InvalidParameter {
-            name: "cycles_per_fit",
-            value: cycles_per_fit,
-            unit: "cycles",
-            requirement: format!(
+        return Err(invalid(
+            "cycles_per_fit",
+            cycles_per_fit,
+            "cycles",
+            format!(
                 "must be finite and at least MIN_CYCLES_PER_FIT = {MIN_CYCLES_PER_FIT} \
                  (over one cycle the slope and the ripple terms of the fit are nearly \
                  collinear)"
             ),
-        });
+        ));
     }
     check_min_len("x", x, 8, "envelope_decay")?;
     check_finite("x", x)?;
@@ -913,23 +916,23 @@ pub fn welch_frf(
     check_same_len("input", input, "output", output)?;
     check_sample_rate(sample_rate_hz)?;
     if block_len < 8 || block_len > input.len() {
-        return Err(StructuralError::InvalidParameter {
-            name: "block_len",
-            value: block_len as f64,
-            unit: "samples",
-            requirement: format!(
+        return Err(invalid(
+            "block_len",
+            block_len as f64,
+            "samples",
+            format!(
                 "must be at least 8 and at most the record length ({} samples)",
                 input.len()
             ),
-        });
+        ));
     }
     if !(overlap.is_finite() && (0.0..1.0).contains(&overlap)) {
-        return Err(StructuralError::InvalidParameter {
-            name: "overlap",
-            value: overlap,
-            unit: "(fraction of block_len)",
-            requirement: "must be in [0, 1)".into(),
-        });
+        return Err(invalid(
+            "overlap",
+            overlap,
+            "(fraction of block_len)",
+            "must be in [0, 1)",
+        ));
     }
     check_finite("input", input)?;
     check_finite("output", output)?;
@@ -1083,24 +1086,24 @@ pub fn half_power(freq_hz: &[f64], magnitude: &[f64]) -> Result<HalfPower> {
     check_finite("freq_hz", freq_hz)?;
     check_finite("magnitude", magnitude)?;
     if let Some(i) = (1..freq_hz.len()).find(|&i| freq_hz[i] <= freq_hz[i - 1]) {
-        return Err(StructuralError::InvalidParameter {
-            name: "freq_hz",
-            value: freq_hz[i],
-            unit: "Hz",
-            requirement: format!(
+        return Err(invalid(
+            "freq_hz",
+            freq_hz[i],
+            "Hz",
+            format!(
                 "must be strictly increasing: freq_hz[{i}] follows freq_hz[{}] = {} Hz",
                 i - 1,
                 freq_hz[i - 1]
             ),
-        });
+        ));
     }
     if let Some(i) = magnitude.iter().position(|&m| m < 0.0) {
-        return Err(StructuralError::InvalidParameter {
-            name: "magnitude",
-            value: magnitude[i],
-            unit: "(unit of the FRF, e.g. m/N)",
-            requirement: format!("must be >= 0 (magnitude[{i}])"),
-        });
+        return Err(invalid(
+            "magnitude",
+            magnitude[i],
+            "(unit of the FRF, e.g. m/N)",
+            format!("must be >= 0 (magnitude[{i}])"),
+        ));
     }
     let last = magnitude.len() - 1;
     let ip = (0..=last)
@@ -1108,12 +1111,12 @@ pub fn half_power(freq_hz: &[f64], magnitude: &[f64]) -> Result<HalfPower> {
         .unwrap_or(0); // never empty: at least 3 points checked above
     let raw_peak = magnitude[ip];
     if raw_peak <= 0.0 {
-        return Err(StructuralError::InvalidParameter {
-            name: "magnitude",
-            value: raw_peak,
-            unit: "(unit of the FRF, e.g. m/N)",
-            requirement: "must have a positive maximum".into(),
-        });
+        return Err(invalid(
+            "magnitude",
+            raw_peak,
+            "(unit of the FRF, e.g. m/N)",
+            "must have a positive maximum",
+        ));
     }
     let (peak_freq_hz, peak_magnitude) =
         if ip > 0 && ip < last && magnitude[ip - 1] > 0.0 && magnitude[ip + 1] > 0.0 {
@@ -1205,12 +1208,12 @@ pub fn sine_component(x: &[f64], sample_rate_hz: f64, freq_hz: f64) -> Result<Co
     // Over at least one period of more than 2 samples the three basis
     // functions are linearly independent, so the system is regular; a
     // failure would be a numerical breakdown, reported as a parameter error.
-    let [ca, cb, _] = fit.ok_or(StructuralError::InvalidParameter {
-        name: "freq_hz",
-        value: freq_hz,
-        unit: "Hz",
-        requirement: "gives a singular least-squares fit on this record".into(),
-    })?;
+    let [ca, cb, _] = fit.ok_or(invalid(
+        "freq_hz",
+        freq_hz,
+        "Hz",
+        "gives a singular least-squares fit on this record",
+    ))?;
     Ok(Complex64::new(ca, -cb))
 }
 
@@ -1260,16 +1263,16 @@ pub fn power_input_w(
     check_analysis_freq(freq_hz, sample_rate_hz)?;
     let nyquist_hz = 0.5 * sample_rate_hz;
     if harmonics == 0 || harmonics as f64 * freq_hz >= nyquist_hz {
-        return Err(StructuralError::InvalidParameter {
-            name: "harmonics",
-            value: harmonics as f64,
-            unit: "(count)",
-            requirement: format!(
+        return Err(invalid(
+            "harmonics",
+            harmonics as f64,
+            "(count)",
+            format!(
                 "must be at least 1 and keep harmonics × freq_hz below the Nyquist frequency \
                  {nyquist_hz} Hz (at most {} for freq_hz = {freq_hz} Hz)",
                 ((nyquist_hz / freq_hz).ceil() as usize).saturating_sub(1)
             ),
-        });
+        ));
     }
     check_finite("force_n", force_n)?;
     check_finite("accel_mps2", accel_mps2)?;
