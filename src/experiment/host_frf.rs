@@ -207,7 +207,9 @@ fn measure_point(
         power_input_w(f_in, a_in, rate_hz, freq_hz, POWER_HARMONICS).map_err(SignalsError::from)?;
     // Its ± : the same method on each period alone, the periods' spread
     // (crate::stats::mean_stderr), as Yang's method's is.
-    let per_period = (rate_hz / freq_hz).round() as usize;
+    // At least one whole period in each chunk (the method takes the
+    // longest whole number of periods of it).
+    let per_period = (rate_hz / freq_hz).ceil() as usize;
     let periods: Vec<f64> = (0..f_in.len() / per_period.max(1))
         .filter_map(|k| {
             let r = k * per_period..(k + 1) * per_period;

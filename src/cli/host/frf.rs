@@ -186,7 +186,7 @@ fn report(
         a.record_cycles
     );
     println!(
-        "  freq_hz  |X|/F mm/N  Gamma   P_in W (+- periods)   damper W (P_in - host)  DEM work W  DEM dissipated W{}",
+        "  freq_hz  |X|/F mm/N  Gamma   P_in W (+- periods)   damper W (P_in - host)  truth: work on damper W  damper dissipated W{}",
         if predicted.is_some() {
             "  map |X|/F mm/N  Yang's map W"
         } else {
