@@ -268,19 +268,24 @@ fn the_answers_quote_the_class_map() {
     }
 }
 
+/// The words of the repository page `name`, one space apart, the quote
+/// marks of boxes taken out: a sentence is found whatever its line breaks.
+fn page_words(name: &str) -> String {
+    read(name)
+        .lines()
+        .map(|l| l.trim_start().trim_start_matches('>'))
+        .flat_map(str::split_whitespace)
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// Every number the tutorial's steps 1–10 quote, against the runs of its
 /// commands (and a few `--json` twins run in the same folder): the page
 /// must still hold each sentence with the number as the run gives it,
 /// rounded as the page rounds it. A change that moves a number fails here
 /// with the sentence to edit.
 fn tutorial_numbers_are_the_runs(dir: &Scratch) {
-    // The page's words, one space apart, quote marks of boxes taken out.
-    let page = read("docs/tutorial.md")
-        .lines()
-        .map(|l| l.trim_start().trim_start_matches('>'))
-        .flat_map(str::split_whitespace)
-        .collect::<Vec<_>>()
-        .join(" ");
+    let page = page_words("docs/tutorial.md");
     let mut wrong = Vec::new();
     let mut quote = |sentence: String| {
         if !page.contains(&sentence) {
@@ -583,12 +588,7 @@ fn host_chapter_commands_run() {
         commands.len()
     );
     let dir = run_in_order("host-chapter", "docs/host.md", &commands);
-    let page = read("docs/host.md")
-        .lines()
-        .map(|l| l.trim_start().trim_start_matches('>'))
-        .flat_map(str::split_whitespace)
-        .collect::<Vec<_>>()
-        .join(" ");
+    let page = page_words("docs/host.md");
     let mut wrong = Vec::new();
     let mut quote = |sentence: String| {
         if !page.contains(&sentence) {
