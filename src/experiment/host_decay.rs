@@ -131,11 +131,7 @@ fn compare(
     cycles: f64,
     g_mps2: f64,
 ) -> Vec<DecayEstimate> {
-    let mode = host
-        .modes
-        .iter()
-        .min_by(|a, b| a.natural_freq_hz().total_cmp(&b.natural_freq_hz()));
-    let Some(mode) = mode else {
+    let Some(mode) = host.first_mode() else {
         return Vec::new();
     };
     let k_at_damper = mode.stiffness() / mode.shape_at_damper.powi(2);
@@ -211,11 +207,7 @@ pub fn analyse_decay(
     );
     let log_decrement = compare(run, host, &log, 1.0, g_mps2);
     let envelope = compare(run, host, &env, ENVELOPE_CYCLES, g_mps2);
-    let host_loss_factor = host
-        .modes
-        .iter()
-        .min_by(|a, b| a.natural_freq_hz().total_cmp(&b.natural_freq_hz()))
-        .map_or(0.0, |m| 2.0 * m.damping_ratio);
+    let host_loss_factor = host.first_mode().map_or(0.0, |m| 2.0 * m.damping_ratio);
     Ok(DecayAnalysis {
         host_loss_factor,
         damper_energy_sum_j: log_decrement.iter().map(|e| e.damper_energy_j).sum(),

@@ -9,7 +9,7 @@
 //! damper's fundamental amplitude, the power the excitation put in, what the
 //! host's own damping took, the work the host did on the damper and what the
 //! damper dissipated, so the power-input estimate of the damper's
-//! dissipation, `P_in − ½ c_host ω² |X_e|²` (`c_host` from the bare host's
+//! dissipation, `P_in − ½ c₁ ω² |X_d / φ₁(d)|²` (`c₁` the first mode's, from the bare host's
 //! modal test), is checked against the DEM, and so is Yang's
 //! structure-independent figure at the same frequency and Γ where a sweep's
 //! map is given (the CLI).
@@ -110,7 +110,7 @@ pub struct FrfPoint {
     /// Its one-sigma error from the spread of the record's periods (W).
     pub power_input_stderr_w: f64,
     /// The damper's dissipation by the power-input method,
-    /// `P_in − ½ c_host ω² |X_e|²` (W).
+    /// `P_in − ½ c₁ ω² |X_d / φ₁(d)|²` (W).
     pub damper_power_w: f64,
     /// Truth over the record (W): the excitation's power, the host's own
     /// damping, the work the host did on the damper, the damper's
@@ -178,30 +178,28 @@ fn measure_point(
     let i0 = r.time_s.partition_point(|t| *t < record_from_s - 1e-9);
     let true_x =
         sine_component(&r.displacement_m[i0..], rate_hz, freq_hz).map_err(SignalsError::from)?;
-    // The drive point's velocity: the damper's own where the drive is at the
-    // damper (an impedance head's accelerometer), else the truth's (an
-    // ideal accelerometer at the drive point).
-    let drive_velocity: Vec<f64> = r.drive_velocity_mps[i0..].to_vec();
-    let drive_accel: Vec<f64> = {
-        // d v / dt by central differences at the sample rate.
-        let n = drive_velocity.len();
-        (0..n)
-            .map(|k| {
-                let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
-                (drive_velocity[hi] - drive_velocity[lo]) * rate_hz / (hi - lo).max(1) as f64
-            })
-            .collect()
-    };
+    // The drive point's acceleration: the damper's own where the drive is at
+    // the damper (an impedance head's accelerometer), else the truth's
+    // velocity differentiated (an ideal accelerometer at the drive point).
     let at_damper = test
         .host
         .modes
         .iter()
         .all(|m| m.shape_at_drive == m.shape_at_damper);
-    let n = drive_accel.len().min(force.len());
+    let drive_accel: Vec<f64>;
     let (f_in, a_in): (&[f64], &[f64]) = if at_damper {
         (force, accel)
     } else {
-        (&force[..n], &drive_accel[..n])
+        // d v / dt by central differences at the sample rate.
+        let v = &r.drive_velocity_mps[i0..];
+        let n = v.len().min(force.len());
+        drive_accel = (0..n)
+            .map(|k| {
+                let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
+                (v[hi] - v[lo]) * rate_hz / (hi - lo).max(1) as f64
+            })
+            .collect();
+        (&force[..n], &drive_accel)
     };
     let power =
         power_input_w(f_in, a_in, rate_hz, freq_hz, POWER_HARMONICS).map_err(SignalsError::from)?;
@@ -232,21 +230,13 @@ fn measure_point(
     let i_end = (i0 + (periods / freq_hz * rate_hz).round() as usize).min(r.time_s.len() - 1);
     let drift = (r.host_energy_j[i_end] - r.host_energy_j[i0]) / (r.time_s[i_end] - r.time_s[i0]);
     let true_input = rate(&r.excitation_work_j, i0, span);
-    let drive_x = true_x.norm()
-        * test
-            .host
-            .modes
-            .first()
-            .map_or(1.0, |m| (m.shape_at_drive / m.shape_at_damper).abs());
-    let c_host = test
-        .host
-        .modes
-        .iter()
-        .min_by(|p, q| p.natural_freq_hz().total_cmp(&q.natural_freq_hz()))
-        .map_or(0.0, |m| {
-            m.damping_n_s_per_m() / m.shape_at_drive.powi(2).max(1e-12)
-        });
-    let host_power = 0.5 * c_host * omega * omega * drive_x * drive_x;
+    // The bare host's own damping at this amplitude, as its modal test
+    // gives it: the first mode's `c_r` on its modal velocity `ω X_d / φ_d`,
+    // `X_d` as the lab measured it.
+    let host_power = test.host.first_mode().map_or(0.0, |m| {
+        let q = x.norm() / m.shape_at_damper;
+        0.5 * m.damping_n_s_per_m() * omega * omega * q * q
+    });
     Ok(FrfPoint {
         freq_hz,
         receptance_re: h.re,

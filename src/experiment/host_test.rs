@@ -440,7 +440,7 @@ fn dominant_freq_hz(test: &HostTest) -> f64 {
         Excitation::Sweep { .. } | Excitation::Lines { .. } => test
             .excitation
             .highest_freq_hz()
-            .min(test.host.highest_freq_hz().max(test.host.lowest_freq_hz())),
+            .min(test.host.highest_freq_hz()),
         Excitation::Hammer { .. } | Excitation::Release { .. } => test.host.lowest_freq_hz(),
     }
 }

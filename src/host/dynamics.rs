@@ -265,6 +265,23 @@ fn inverse_mass(spec: &HostSpec, phi: &[f64], added_kg: f64) -> DenseMatrix {
     inv
 }
 
+/// Each mode's dynamic compliance `1 / (k_r − ω² m_r + i ω c_r)` at
+/// `omega_rad_s` (m/N per unit of modal force): the diagonal `D⁻¹` both
+/// [`receptance`] and [`sine_steady_state`] correct for the damper.
+fn modal_compliances(spec: &HostSpec, omega_rad_s: f64) -> Vec<Complex64> {
+    let w = omega_rad_s;
+    spec.modes
+        .iter()
+        .map(|m| {
+            Complex64::new(
+                m.stiffness() - w * w * m.modal_mass_kg,
+                w * m.damping_n_s_per_m(),
+            )
+            .inv()
+        })
+        .collect()
+}
+
 /// The state `[q; q']` at t = 0 of `spec` with `payload` in the steady
 /// response to `F sin ω t` at the drive point: `q(t) = Im(Q e^{iωt})`,
 /// `Q = Z⁻¹ φ_e F` (Sherman–Morrison as [`receptance`]).
@@ -276,17 +293,7 @@ pub fn sine_steady_state(
 ) -> Vec<f64> {
     let w = omega_rad_s;
     let s = Complex64::new(-w * w * payload.mass_kg, w * payload.dashpot_n_s_per_m);
-    let inv_d: Vec<Complex64> = spec
-        .modes
-        .iter()
-        .map(|m| {
-            Complex64::new(
-                m.stiffness() - w * w * m.modal_mass_kg,
-                w * m.damping_n_s_per_m(),
-            )
-            .inv()
-        })
-        .collect();
+    let inv_d = modal_compliances(spec, w);
     let dd: Complex64 = spec
         .modes
         .iter()
@@ -337,17 +344,7 @@ pub fn receptance(
         Point::Damper => m.shape_at_damper,
         Point::Drive => m.shape_at_drive,
     };
-    let inv_d: Vec<Complex64> = spec
-        .modes
-        .iter()
-        .map(|m| {
-            Complex64::new(
-                m.stiffness() - w * w * m.modal_mass_kg,
-                w * m.damping_n_s_per_m(),
-            )
-            .inv()
-        })
-        .collect();
+    let inv_d = modal_compliances(spec, w);
     let sum = |a: Point, b: Point| -> Complex64 {
         spec.modes
             .iter()

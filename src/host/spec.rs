@@ -196,6 +196,13 @@ impl HostSpec {
         Ok(host)
     }
 
+    /// The mode of the lowest natural frequency (a valid host has one).
+    pub fn first_mode(&self) -> Option<&ModeSpec> {
+        self.modes
+            .iter()
+            .min_by(|a, b| a.natural_freq_hz().total_cmp(&b.natural_freq_hz()))
+    }
+
     /// The lowest natural frequency, Hz.
     pub fn lowest_freq_hz(&self) -> f64 {
         self.modes

@@ -67,15 +67,18 @@ pub fn dissipation_map(
         }
     };
     let g = file.header.gravity_mps2;
-    let mut masses = Vec::new();
-    for r in &file.rows {
+    // The particles' mass from any ok row's E_max (eq. 6.10): every row of
+    // one scene has the same.
+    let mass = file.rows.iter().find_map(|r| {
         let c = &r.condition;
-        if r.status == RowStatus::Ok && c.orientation == orientation && c.fill_ratio == fill {
-            let v = c.gamma * g / (TAU * c.freq_hz);
-            masses.push(r.e_max_j / (4.0 * v * v));
-        }
-    }
-    let Some(&mass) = masses.first() else {
+        (r.status == RowStatus::Ok && c.orientation == orientation && c.fill_ratio == fill).then(
+            || {
+                let v = c.gamma * g / (TAU * c.freq_hz);
+                r.e_max_j / (4.0 * v * v)
+            },
+        )
+    });
+    let Some(mass) = mass else {
         return Err(InvalidParameter::new(
             "map",
             format!("no ok row at {} and fill {fill}", orientation.as_str()),
