@@ -52,11 +52,17 @@ pub struct DecayEstimate {
     pub gamma: f64,
     /// The method's total loss factor.
     pub loss_factor: f64,
+    /// Its one-sigma error from the record's noise around the estimate
+    /// ([`crate::signals::structural::DecayPoint::loss_factor_stderr`]: the
+    /// error of reading this decay, not the spread of decays).
+    pub loss_factor_stderr: f64,
     /// The truth's total loss factor over the same cycles (one for the log
     /// decrement, a fit's for the envelope).
     pub true_loss_factor: f64,
     /// The damper's energy per cycle by the method, `(η − η_host) 2π U` (J).
     pub damper_energy_j: f64,
+    /// Its one-sigma error from the loss factor's (J).
+    pub damper_energy_stderr_j: f64,
     /// The work the host did on the damper over the same cycle (J; a
     /// dashpot's is its dissipation).
     pub true_damper_energy_j: f64,
@@ -76,6 +82,10 @@ pub struct DecayAnalysis {
     /// covers, summed by the method, as work the host did and as the
     /// damper's dissipation (J).
     pub damper_energy_sum_j: f64,
+    /// At most this one-sigma error (J): the points' errors in quadrature.
+    /// Successive points share a peak, whose error enters one with a plus
+    /// and the next with a minus, so the sum's error is smaller.
+    pub damper_energy_sum_stderr_j: f64,
     pub true_damper_energy_sum_j: f64,
     pub true_damper_dissipated_sum_j: f64,
 }
@@ -146,18 +156,22 @@ fn compare(
             let x = p.amplitude * (1.0 - zeta * zeta) / (omega * omega);
             let (true_eta, true_damper, dissipated) =
                 truth_over_cycles(run, p.time_s, p.freq_hz, cycles)?;
+            let strain = 0.5 * k_at_damper * x * x;
             Some(DecayEstimate {
                 time_s: p.time_s,
                 freq_hz: p.freq_hz,
                 amplitude_m: x,
                 gamma: p.amplitude / g_mps2,
                 loss_factor: p.loss_factor,
+                loss_factor_stderr: p.loss_factor_stderr,
                 true_loss_factor: true_eta,
-                damper_energy_j: damper_share(p.loss_factor, host_eta, cycles)
-                    * 0.5
-                    * k_at_damper
-                    * x
-                    * x,
+                damper_energy_j: damper_share(p.loss_factor, host_eta, cycles) * strain,
+                // The share's slope at η, by a central difference over ±σ_η.
+                damper_energy_stderr_j: 0.5
+                    * (damper_share(p.loss_factor + p.loss_factor_stderr, host_eta, cycles)
+                        - damper_share(p.loss_factor - p.loss_factor_stderr, host_eta, cycles))
+                    .abs()
+                    * strain,
                 true_damper_energy_j: true_damper,
                 true_damper_dissipated_j: dissipated,
             })
@@ -211,6 +225,11 @@ pub fn analyse_decay(
     Ok(DecayAnalysis {
         host_loss_factor,
         damper_energy_sum_j: log_decrement.iter().map(|e| e.damper_energy_j).sum(),
+        damper_energy_sum_stderr_j: log_decrement
+            .iter()
+            .map(|e| e.damper_energy_stderr_j.powi(2))
+            .sum::<f64>()
+            .sqrt(),
         true_damper_energy_sum_j: log_decrement.iter().map(|e| e.true_damper_energy_j).sum(),
         true_damper_dissipated_sum_j: log_decrement
             .iter()

@@ -115,11 +115,11 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         analysis.host_loss_factor
     );
     println!(
-        "  method          t_s     Gamma   eta      eta_true  damper J/cycle: method  host's work  dissipated{}",
+        "  method          t_s     Gamma   eta (+- reading)     eta_true  damper J/cycle: method  host's work  dissipated{}",
         if map.is_some() { "  Yang's map" } else { "" }
     );
     let mut csv = String::from(
-        "method,time_s,freq_hz,amplitude_m,gamma,loss_factor,true_loss_factor,damper_energy_j,true_damper_energy_j,true_damper_dissipated_j,yang_map_energy_j\n",
+        "method,time_s,freq_hz,amplitude_m,gamma,loss_factor,loss_factor_stderr,true_loss_factor,damper_energy_j,damper_energy_stderr_j,true_damper_energy_j,true_damper_dissipated_j,yang_map_energy_j\n",
     );
     for (name, points) in [
         ("log-decrement", &analysis.log_decrement),
@@ -128,11 +128,12 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         for e in points.iter() {
             let yang = yang_energy(e);
             println!(
-                "  {:14} {:6.3}  {:6.2}  {:.4}   {:.4}    {:12.5}  {:11.5}  {:10.5}{}",
+                "  {:14} {:6.3}  {:6.2}  {:.4} +- {:.4}   {:.4}    {:12.5}  {:11.5}  {:10.5}{}",
                 name,
                 e.time_s,
                 e.gamma,
                 e.loss_factor,
+                e.loss_factor_stderr,
                 e.true_loss_factor,
                 e.damper_energy_j,
                 e.true_damper_energy_j,
@@ -140,14 +141,16 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
                 yang.map_or(String::new(), |y| format!("  {y:10.5}"))
             );
             csv.push_str(&format!(
-                "{name},{},{},{},{},{},{},{},{},{},{}\n",
+                "{name},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 e.time_s,
                 e.freq_hz,
                 e.amplitude_m,
                 e.gamma,
                 e.loss_factor,
+                e.loss_factor_stderr,
                 e.true_loss_factor,
                 e.damper_energy_j,
+                e.damper_energy_stderr_j,
                 e.true_damper_energy_j,
                 e.true_damper_dissipated_j,
                 yang.map_or(f64::NAN, |y| y)
@@ -155,8 +158,9 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         }
     }
     println!(
-        "  over the decay the damper took {:.5} J by the log decrement; the host did {:.5} J of work on it and it dissipated {:.5} J",
+        "  over the decay the damper took {:.5} J (+- at most {:.5} J) by the log decrement; the host did {:.5} J of work on it and it dissipated {:.5} J",
         analysis.damper_energy_sum_j,
+        analysis.damper_energy_sum_stderr_j,
         analysis.true_damper_energy_sum_j,
         analysis.true_damper_dissipated_sum_j
     );
