@@ -651,11 +651,16 @@ fn host_chapter_commands_run() {
         num(&first["damper_energy_j"])
     ));
     let csv = std::fs::read_to_string(dir.path("host/plate/decay.csv")).expect("decay.csv");
+    let yang_column = csv
+        .lines()
+        .next()
+        .and_then(|h| h.split(',').position(|c| c == "yang_map_energy_j"))
+        .expect("a Yang column");
     let yang0: f64 = csv
         .lines()
         .nth(1)
-        .and_then(|l| l.split(',').nth(10)?.parse().ok())
-        .expect("a Yang column");
+        .and_then(|l| l.split(',').nth(yang_column)?.parse().ok())
+        .expect("a Yang value");
     quote(format!("and the map's steady figure {yang0:.4} J"));
     let (blog, bwork, bdissipated, beam_a) = sums("host/beam/decay.json");
     let beam_first = &beam_a["log_decrement"][0];

@@ -86,15 +86,7 @@ impl BedToBed {
 /// built-in thesis damper (any seed) at the conditions of
 /// [`THESIS_BED_SPREAD`], not measured elsewhere.
 pub fn bed_to_bed(scene: &Scene, drive: &Drive) -> BedToBed {
-    let thesis = Scene::thesis();
-    // The same damper poured again: every setting but the seed.
-    let mut simulation = scene.simulation.clone();
-    simulation.seed = thesis.simulation.seed;
-    let same_damper = scene.particles == thesis.particles
-        && scene.enclosure == thesis.enclosure
-        && scene.contact == thesis.contact
-        && simulation == thesis.simulation;
-    if !same_damper {
+    if !is_thesis_damper(scene) {
         return BedToBed::NotMeasured;
     }
     THESIS_BED_SPREAD
@@ -103,6 +95,18 @@ pub fn bed_to_bed(scene: &Scene, drive: &Drive) -> BedToBed {
         .map_or(BedToBed::NotMeasured, |&(_, _, rel, beds)| {
             BedToBed::Measured { rel, beds }
         })
+}
+
+/// `scene` is the built-in thesis damper poured again: every setting but
+/// the seed as [`Scene::thesis`]'s.
+pub fn is_thesis_damper(scene: &Scene) -> bool {
+    let thesis = Scene::thesis();
+    let mut simulation = scene.simulation.clone();
+    simulation.seed = thesis.simulation.seed;
+    scene.particles == thesis.particles
+        && scene.enclosure == thesis.enclosure
+        && scene.contact == thesis.contact
+        && simulation == thesis.simulation
 }
 
 #[cfg(test)]

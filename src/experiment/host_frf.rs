@@ -9,8 +9,11 @@
 //! damper's fundamental amplitude, the power the excitation put in, what the
 //! host's own damping took, the work the host did on the damper and what the
 //! damper dissipated, so the power-input estimate of the damper's
-//! dissipation, `P_in − ½ c₁ ω² |X_d / φ₁(d)|²` (`c₁` the first mode's, from the bare host's
-//! modal test), is checked against the DEM, and so is Yang's
+//! dissipation, `P_in − dĒ/dt − ½ c₁ ω² |X_d / φ₁(d)|²` (the input with the
+//! channels' phase error taken out, less the change of the host's stored
+//! energy and its own damping; `c₁` the first mode's, from the bare host's
+//! modal test; see `balanced_periods`), is checked against the DEM, and so
+//! is Yang's
 //! structure-independent figure at the same frequency and Γ where a sweep's
 //! map is given (the CLI).
 
@@ -21,15 +24,59 @@ use realfft::num_complex::Complex64;
 use serde::Serialize;
 
 use super::bed_cache::BedSource;
-use super::host_test::{HostRun, HostTest, run_host_test};
+use super::bed_spread::{BedToBed, is_thesis_damper};
+use super::host_test::{Damper, HostRun, HostTest, run_host_test};
 use crate::host::Excitation;
 use crate::rig::{ACCEL_CHANNEL, FORCE_CHANNEL};
 use crate::scene::{Scene, SceneError};
 use crate::signals::SignalsError;
 use crate::signals::structural::{
-    Frf, HalfPower, Window, half_power, power_input_w, sine_component, welch_frf,
+    Frf, HalfPower, Window, half_power, power_input_corrected_w, sine_component, welch_frf,
 };
 use crate::validation::{Bound, InvalidParameter, count_in, in_range};
+
+/// Where the bed-to-bed part of the power-input estimate was measured: the
+/// built-in thesis damper (any seed) on a built-in host, driven with a
+/// force amplitude (N) at a frequency (Hz), 30 cycles settled and 20
+/// recorded; the part relative to the damper's power, and over how many
+/// beds. One record's balanced periods cannot see how far independent
+/// beds' steady states differ. Measured with
+/// `vlab host frf --freq 39,40,41,44 --force-n 5 --seed N` for N = 1..20
+/// (2026-11-26, `docs/host.md`): the beds' estimates spread by 0.0651 W at
+/// 39 Hz (mean 0.533 W, Γ 14.6-16.1: some beds sit below the onset of the
+/// flat top, some on it) against the records' rms error 0.0531 W, a part
+/// of 0.0377 W (7.1 %); at 40 Hz by 0.0199 W against 0.0206 W and at
+/// 41 Hz by 0.0366 W against 0.243 W (the records' errors there are
+/// cautious): no part; at 44 Hz (Γ 5.5) by 0.00391 W against 0.00140 W, a
+/// part of 0.00365 W (9.0 % of 0.0405 W). The truth spreads as much as the
+/// estimates: the beds dissipate differently, and the method reads each
+/// within 0.002-0.006 W on the flat top and 0.0001 W at 44 Hz.
+const HOST_BED_SPREAD: [(&str, f64, f64, f64, u32); 4] = [
+    ("plate-40hz", 5.0, 39.0, 0.071, 20),
+    ("plate-40hz", 5.0, 40.0, 0.0, 20),
+    ("plate-40hz", 5.0, 41.0, 0.0, 20),
+    ("plate-40hz", 5.0, 44.0, 0.090, 20),
+];
+
+/// The bed-to-bed part of a stepped-sine point of `test` at `freq_hz`:
+/// measured at [`HOST_BED_SPREAD`]'s conditions, not elsewhere.
+pub fn bed_to_bed(scene: &Scene, test: &HostTest, plan: &SteppedSine, freq_hz: f64) -> BedToBed {
+    let measured_plan = plan.settle_cycles == 30 && plan.record_cycles == 20;
+    if test.damper != Damper::Particles || !measured_plan || !is_thesis_damper(scene) {
+        return BedToBed::NotMeasured;
+    }
+    HOST_BED_SPREAD
+        .iter()
+        .find(|(host, force_n, f, _, _)| {
+            <crate::host::HostSpec as crate::rig::RigFile>::builtin(host)
+                .is_ok_and(|h| h == test.host)
+                && *force_n == plan.force_n
+                && *f == freq_hz
+        })
+        .map_or(BedToBed::NotMeasured, |&(_, _, _, rel, beds)| {
+            BedToBed::Measured { rel, beds }
+        })
+}
 
 /// Harmonics the power-input method sums.
 pub const POWER_HARMONICS: usize = 10;
@@ -105,13 +152,27 @@ pub struct FrfPoint {
     /// The same from the truth record (m).
     pub true_amplitude_m: f64,
     /// Power-input method: `⟨F v_e⟩` from the force channel and the drive
-    /// point's velocity (W).
+    /// point's velocity (W), over the periods the balance uses.
     pub power_input_w: f64,
-    /// Its one-sigma error from the spread of the record's periods (W).
-    pub power_input_stderr_w: f64,
+    /// The change of the host's stored energy over those periods per
+    /// second, from the lab's amplitudes (W; see `balanced_periods`).
+    pub host_storage_w: f64,
     /// The damper's dissipation by the power-input method,
-    /// `P_in − ½ c₁ ω² |X_d / φ₁(d)|²` (W).
+    /// `P_in − dĒ/dt − ½ c₁ ω² |X_d / φ₁(d)|²` (W), the mean of the
+    /// balanced periods.
     pub damper_power_w: f64,
+    /// Its one-sigma error (W): the record's part and the bed-to-bed part
+    /// in quadrature (the record's alone where the bed-to-bed part is not
+    /// measured, see [`bed_to_bed`]).
+    pub damper_power_stderr_w: f64,
+    /// The record's part: the balanced periods' series
+    /// ([`crate::stats::mean_stderr_ar2`]; NaN below 16 periods, or when the
+    /// periods are correlated over the record, under two effective values:
+    /// a beat of the host's response that only a longer record averages)
+    /// (W).
+    pub damper_power_record_stderr_w: f64,
+    /// The bed-to-bed part, and how it is known.
+    pub bed_to_bed: BedToBed,
     /// Truth over the record (W): the excitation's power, the host's own
     /// damping, the work the host did on the damper, the damper's
     /// dissipation (the DEM's ledger or the dashpot's).
@@ -119,12 +180,11 @@ pub struct FrfPoint {
     pub true_host_w: f64,
     pub true_damper_work_w: f64,
     pub true_damper_w: f64,
-    /// Change of the host's stored energy over the record per second (W):
-    /// the power-input method assumes none.
+    /// The truth's change of the host's stored energy over the same
+    /// periods per second (W).
     pub host_energy_drift_w: f64,
-    /// The record is steady: the drift within 5 % of the input power (a
-    /// granular damper's impacts move the host's energy from cycle to cycle
-    /// by a few per cent even in steady state).
+    /// The record is steady as the lab sees it: the host's stored energy
+    /// (`host_storage_w`) moved by at most 5 % of the input power.
     pub steady: bool,
     pub steps: u64,
     pub wall_time_s: f64,
@@ -151,9 +211,122 @@ pub struct SteppedSineResult {
     pub wall_time_s: f64,
 }
 
-/// Rates over a record from `i0` to the end of a cumulative column (per s).
-fn rate(v: &[f64], i0: usize, span_s: f64) -> f64 {
-    (v[v.len() - 1] - v[i0]) / span_s
+/// The power-input method one period at a time, balanced for the host's
+/// stored energy.
+///
+/// A damper's steady state is a state of the host *and* the bed: from one
+/// period to the next the host's stored energy moves by a few per cent as
+/// the impacts fall, so one period's input exceeds its dissipation by what
+/// the next gives back. The periods' raw inputs are anticorrelated and
+/// their spread says little about the error of their mean (measured against
+/// six seeds it was 0.15 to 18 times the seeds' spread). Here each period's
+/// input `P_k` is less the change of the host's stored energy across it,
+/// `ΔĒ_k / T`, `Ē` the first mode's period-averaged energy
+/// `¼ (M₁ / φ₁(d)²)(ω² + ω₁²)|X|²` around each period boundary from the
+/// lab's amplitude `X` over the period centred on it (whole periods apart,
+/// the energy's ripple at `2ω` cancels), and less the bare host's damping on
+/// the period's amplitude, `½ c₁ ω² |X_k / φ₁(d)|²`: what is left is the
+/// work the host did on the damper over the period (its dissipation, give
+/// or take what the bed holds in flight from one period to the next), a
+/// series for
+/// [`crate::stats::mean_stderr_ar2`] (it can beat). Periods `1`
+/// to `n − 2` of the `n` whole periods of the record are used, so that the
+/// boundary windows lie inside it.
+#[derive(Debug, Clone, PartialEq)]
+struct BalancedPeriods {
+    /// The first period used and how many: the record's samples
+    /// `first · T` to `(first + len) · T`.
+    first: usize,
+    /// `P_k`, `ΔĒ_k / T` and the host's damping of each period (W).
+    input_w: Vec<f64>,
+    storage_w: Vec<f64>,
+    host_w: Vec<f64>,
+}
+
+impl BalancedPeriods {
+    /// The damper's dissipation of each period (W).
+    fn damper_w(&self) -> Vec<f64> {
+        (0..self.input_w.len())
+            .map(|k| self.input_w[k] - self.storage_w[k] - self.host_w[k])
+            .collect()
+    }
+}
+
+/// [`BalancedPeriods`] of a stepped-sine record: the force and acceleration
+/// at the drive point (`drive_force_n`, `drive_accel_mps2`) and the
+/// acceleration at the damper, at `rate_hz`, driven at `freq_hz`, on a host
+/// whose first mode is `mode` (the bare host's modal test); the force leads
+/// the drive point's acceleration by `phase_error_rad(f)` in the record (the
+/// channels' calibration).
+fn balanced_periods(
+    drive_force_n: &[f64],
+    drive_accel_mps2: &[f64],
+    damper_accel_mps2: &[f64],
+    rate_hz: f64,
+    freq_hz: f64,
+    mode: Option<&crate::host::ModeSpec>,
+    phase_error_rad: &dyn Fn(f64) -> f64,
+) -> Result<BalancedPeriods, SignalsError> {
+    let len = drive_force_n
+        .len()
+        .min(drive_accel_mps2.len())
+        .min(damper_accel_mps2.len());
+    let per_period = rate_hz / freq_hz;
+    let window = per_period.ceil() as usize;
+    let omega = TAU * freq_hz;
+    let whole = (len as f64 / per_period + 1e-9).floor() as usize;
+    // A period's (or a boundary's) window from `start_periods` periods in.
+    let span = |start_periods: f64| {
+        let s = (start_periods * per_period).round().max(0.0) as usize;
+        (s + window <= len).then_some(s..s + window)
+    };
+    let amplitude = |r: std::ops::Range<usize>| -> Result<f64, SignalsError> {
+        Ok(sine_component(&damper_accel_mps2[r], rate_hz, freq_hz)?.norm() / (omega * omega))
+    };
+    let (modal_mass, shape, omega_n2, damping) = mode.map_or((0.0, 1.0, 0.0, 0.0), |m| {
+        (
+            m.modal_mass_kg,
+            m.shape_at_damper,
+            m.omega_rad_s().powi(2),
+            m.damping_n_s_per_m(),
+        )
+    });
+    let stored = |x: f64| 0.25 * modal_mass / (shape * shape) * (omega * omega + omega_n2) * x * x;
+    // Boundaries 1 ..= n - 1, periods 1 ..= n - 2.
+    let mut boundary_j = Vec::new();
+    for j in 1..whole {
+        match span(j as f64 - 0.5) {
+            Some(r) => boundary_j.push(stored(amplitude(r)?)),
+            None => break,
+        }
+    }
+    let mut out = BalancedPeriods {
+        first: 1,
+        input_w: Vec::new(),
+        storage_w: Vec::new(),
+        host_w: Vec::new(),
+    };
+    for k in 1..boundary_j.len() {
+        let Some(r) = span(k as f64) else { break };
+        out.input_w.push(power_input_corrected_w(
+            &drive_force_n[r.clone()],
+            &drive_accel_mps2[r.clone()],
+            rate_hz,
+            freq_hz,
+            POWER_HARMONICS,
+            phase_error_rad,
+        )?);
+        out.storage_w
+            .push((boundary_j[k] - boundary_j[k - 1]) * freq_hz);
+        let q = amplitude(r)? / shape;
+        out.host_w.push(0.5 * damping * omega * omega * q * q);
+    }
+    Ok(out)
+}
+
+/// Rates over the samples `i0 ..= i1` of a cumulative column (per s).
+fn rate(v: &[f64], i0: usize, i1: usize, span_s: f64) -> f64 {
+    (v[i1] - v[i0]) / span_s
 }
 
 /// One stepped-sine point of `run` (driven at `freq_hz`), its record from
@@ -201,42 +374,61 @@ fn measure_point(
             .collect();
         (&force[..n], &drive_accel)
     };
-    let power =
-        power_input_w(f_in, a_in, rate_hz, freq_hz, POWER_HARMONICS).map_err(SignalsError::from)?;
-    // Its ± : the same method on each period alone, the periods' spread
-    // (crate::stats::mean_stderr), as Yang's method's is.
-    // At least one whole period in each chunk (the method takes the
-    // longest whole number of periods of it).
-    let per_period = (rate_hz / freq_hz).ceil() as usize;
-    let periods: Vec<f64> = (0..f_in.len() / per_period.max(1))
-        .filter_map(|k| {
-            let r = k * per_period..(k + 1) * per_period;
-            power_input_w(
-                &f_in[r.clone()],
-                &a_in[r],
-                rate_hz,
-                freq_hz,
-                POWER_HARMONICS,
-            )
-            .ok()
-        })
-        .collect();
-    let power_stderr = crate::stats::mean_stderr(&periods)
-        .stderr
-        .unwrap_or(f64::NAN);
-    let span = r.time_s[r.time_s.len() - 1] - r.time_s[i0];
-    // Whole periods apart, the stored energy's ripple cancels.
-    let periods = (span * freq_hz).floor();
-    let i_end = (i0 + (periods / freq_hz * rate_hz).round() as usize).min(r.time_s.len() - 1);
-    let drift = (r.host_energy_j[i_end] - r.host_energy_j[i0]) / (r.time_s[i_end] - r.time_s[i0]);
-    let true_input = rate(&r.excitation_work_j, i0, span);
-    // The bare host's own damping at this amplitude, as its modal test
-    // gives it: the first mode's `c_r` on its modal velocity `ω X_d / φ_d`,
-    // `X_d` as the lab measured it.
-    let host_power = test.host.first_mode().map_or(0.0, |m| {
-        let q = x.norm() / m.shape_at_damper;
-        0.5 * m.damping_n_s_per_m() * omega * omega * q * q
-    });
+    // The channels' phase error as the lab's calibration knows it: the
+    // force's against the accelerometer's, or against an ideal drive-point
+    // velocity.
+    let force_channel = test.rig.force_channel();
+    let phase_error = |f: f64| {
+        if at_damper {
+            test.rig.expected_phase_error_rad(f)
+        } else {
+            force_channel.response(f, rate_hz).arg()
+        }
+    };
+    let periods = balanced_periods(
+        f_in,
+        a_in,
+        accel,
+        rate_hz,
+        freq_hz,
+        test.host.first_mode(),
+        &phase_error,
+    )?;
+    let n = periods.input_w.len();
+    if n == 0 {
+        // Validation asks for 4 recorded cycles, which give 2 periods.
+        return Err(InvalidParameter::new(
+            "record_cycles",
+            f_in.len() as f64 * freq_hz / rate_hz,
+            "cycles",
+            "at least 4 whole periods recorded",
+        )
+        .into());
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    // On the flat top of the damped resonance the host's response beats
+    // over some ten periods: the series oscillates, and its error is an
+    // oscillation's (`mean_stderr_ar2`; the AR(1) error was 10-40 times the
+    // spread of independent beds at 39 and 41 Hz on plate-40hz at 5 N). A
+    // series correlated over about the record (under two effective values)
+    // has no error a record can tell.
+    let damper = crate::stats::mean_stderr_ar2(&periods.damper_w());
+    let record_stderr = if damper.dof > 1.0 {
+        damper.stderr_or_nan()
+    } else {
+        f64::NAN
+    };
+    // The truth over the same periods (whole periods apart, the stored
+    // energy's ripple cancels).
+    let at = |periods_in: usize| {
+        (i0 + (periods_in as f64 * rate_hz / freq_hz).round() as usize).min(r.time_s.len() - 1)
+    };
+    let (i1, i2) = (at(periods.first), at(periods.first + n));
+    let span = r.time_s[i2] - r.time_s[i1];
+    let drift = rate(&r.host_energy_j, i1, i2, span);
+    let true_input = rate(&r.excitation_work_j, i1, i2, span);
+    let power = mean(&periods.input_w);
+    let storage = mean(&periods.storage_w);
     Ok(FrfPoint {
         freq_hz,
         receptance_re: h.re,
@@ -245,16 +437,19 @@ fn measure_point(
         gamma: a.norm() / g_mps2,
         true_amplitude_m: true_x.norm(),
         power_input_w: power,
-        power_input_stderr_w: power_stderr,
-        damper_power_w: power - host_power,
+        host_storage_w: storage,
+        damper_power_w: damper.mean,
+        damper_power_stderr_w: record_stderr,
+        damper_power_record_stderr_w: record_stderr,
+        bed_to_bed: BedToBed::NotMeasured,
         true_input_w: true_input,
-        true_host_w: rate(&r.host_dissipated_j, i0, span),
-        true_damper_work_w: rate(&r.damper_work_in_j, i0, span)
-            + rate(&r.dashpot_dissipated_j, i0, span),
-        true_damper_w: rate(&r.damper_dissipated_j, i0, span)
-            + rate(&r.dashpot_dissipated_j, i0, span),
+        true_host_w: rate(&r.host_dissipated_j, i1, i2, span),
+        true_damper_work_w: rate(&r.damper_work_in_j, i1, i2, span)
+            + rate(&r.dashpot_dissipated_j, i1, i2, span),
+        true_damper_w: rate(&r.damper_dissipated_j, i1, i2, span)
+            + rate(&r.dashpot_dissipated_j, i1, i2, span),
         host_energy_drift_w: drift,
-        steady: drift.abs() <= 0.05 * true_input.abs(),
+        steady: storage.abs() <= 0.05 * power.abs(),
         steps: run.steps,
         wall_time_s: run.wall_time_s,
     })
@@ -272,7 +467,7 @@ pub fn run_stepped_sine(
     plan.validate()?;
     let started = crate::clock::Stopwatch::start();
     // Settle (or read) the bed once, before the frequencies share it.
-    if test.damper == super::host_test::Damper::Particles {
+    if test.damper == Damper::Particles {
         beds.settle(scene, &mut |_| {})?;
     }
     let g = scene.simulation.gravity_mps2;
@@ -289,7 +484,11 @@ pub fn run_stepped_sine(
             t.start_steady = true;
             t.duration_s = f64::from(plan.settle_cycles + plan.record_cycles) * period;
             let run = run_host_test(scene, beds, &t, &mut |_| {})?;
-            let point = measure_point(&run, &t, *f, f64::from(plan.settle_cycles) * period, g)?;
+            let mut point = measure_point(&run, &t, *f, f64::from(plan.settle_cycles) * period, g)?;
+            point.bed_to_bed = bed_to_bed(scene, &t, plan, *f);
+            point.damper_power_stderr_w = point
+                .damper_power_record_stderr_w
+                .hypot(point.bed_to_bed.rel() * point.damper_power_w);
             done(&point);
             Ok(point)
         })
@@ -411,6 +610,87 @@ mod tests {
             (hp.loss_factor / (2.0 * zeta) - 1.0).abs() < 0.03,
             "{hp:?} against {}",
             2.0 * zeta
+        );
+    }
+
+    #[test]
+    fn the_balance_takes_out_the_energy_a_host_is_still_storing() {
+        // plate-40hz with a 10 N s/m dashpot driven at 40 Hz from rest: over
+        // cycles 2-10 the host's energy is still growing (its time constant
+        // 1 / (zeta omega) is 4 cycles), so the plain power input exceeds
+        // what the dashpot dissipates by more than 20 %. Less the storage
+        // the lab's amplitudes give, the estimate is within 1 % of the
+        // dashpot's dissipation, and the storage within 2 % of the truth's
+        // (both 0.13 % when written).
+        let mut test = test_of(Damper::Dashpot { n_s_per_m: 10.0 }, "plate-40hz");
+        test.excitation = Excitation::Sine {
+            freq_hz: 40.0,
+            force_n: 2.0,
+        };
+        test.start_steady = false;
+        test.duration_s = 11.0 / 40.0;
+        let run =
+            run_host_test(&Scene::thesis(), &BedSource::Settle, &test, &mut |_| {}).expect("runs");
+        let p = measure_point(&run, &test, 40.0, 1.0 / 40.0, 9.81).expect("measured");
+        let host = p.power_input_w - p.host_storage_w - p.damper_power_w;
+        assert!(
+            p.power_input_w > 1.2 * (p.true_damper_w + host),
+            "{p:?}: the host should still be filling"
+        );
+        assert!(
+            (p.damper_power_w / p.true_damper_w - 1.0).abs() < 0.01,
+            "{p:?}"
+        );
+        assert!(
+            (p.host_storage_w / p.host_energy_drift_w - 1.0).abs() < 0.02,
+            "{p:?}"
+        );
+    }
+
+    /// The bed-to-bed part is the table's only for the thesis damper (any
+    /// seed) on the built-in host at the measured force, frequency and
+    /// plan; a dashpot, another frequency, plan or damper has none.
+    #[test]
+    fn the_bed_to_bed_part_is_known_only_where_it_was_measured() {
+        let test = test_of(Damper::Particles, "plate-40hz");
+        let plan = SteppedSine {
+            freqs_hz: vec![44.0],
+            force_n: 5.0,
+            settle_cycles: 30,
+            record_cycles: 20,
+        };
+        let mut scene = Scene::thesis();
+        scene.simulation.seed = 17;
+        assert!(matches!(
+            bed_to_bed(&scene, &test, &plan, 44.0),
+            BedToBed::Measured { beds: 20, .. }
+        ));
+        assert_eq!(
+            bed_to_bed(&scene, &test, &plan, 43.0),
+            BedToBed::NotMeasured
+        );
+        let longer = SteppedSine {
+            record_cycles: 40,
+            ..plan.clone()
+        };
+        assert_eq!(
+            bed_to_bed(&scene, &test, &longer, 44.0),
+            BedToBed::NotMeasured
+        );
+        let dashpot = test_of(Damper::Dashpot { n_s_per_m: 10.0 }, "plate-40hz");
+        assert_eq!(
+            bed_to_bed(&scene, &dashpot, &plan, 44.0),
+            BedToBed::NotMeasured
+        );
+        let beam = test_of(Damper::Particles, "beam-2mode");
+        assert_eq!(
+            bed_to_bed(&scene, &beam, &plan, 44.0),
+            BedToBed::NotMeasured
+        );
+        scene.particles.count = 200;
+        assert_eq!(
+            bed_to_bed(&scene, &test, &plan, 44.0),
+            BedToBed::NotMeasured
         );
     }
 

@@ -163,6 +163,39 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
     )
 }
 
+/// What the damper power's +- holds: the record's periods, and the
+/// bed-to-bed part where it was measured.
+fn error_note(points: &[vlab::experiment::host_frf::FrfPoint]) -> String {
+    use vlab::experiment::bed_spread::BedToBed;
+    let measured: Vec<String> = points
+        .iter()
+        .filter_map(|p| match p.bed_to_bed {
+            BedToBed::Measured { rel, beds } => Some(format!(
+                "{:.1} % at {} Hz ({beds} beds)",
+                100.0 * rel,
+                p.freq_hz
+            )),
+            BedToBed::NotMeasured => None,
+        })
+        .collect();
+    let record = "the damper's +- is one sigma from the record's periods, each balanced for the host's stored energy";
+    if measured.len() == points.len() {
+        format!(
+            "  {record}, and the bed-to-bed part measured here: {}",
+            measured.join(", ")
+        )
+    } else if measured.is_empty() {
+        format!(
+            "  {record} alone: independent beds can spread more (on plate-40hz at 5 N, by 7 % of the damper's power at 39 Hz and 9 % at 44 Hz; docs/host.md)"
+        )
+    } else {
+        format!(
+            "  {record}; the bed-to-bed part added where measured ({}), not at the other frequencies",
+            measured.join(", ")
+        )
+    }
+}
+
 /// A frequency's predicted response and how many roots it had.
 type Predicted = (vlab::host::map_model::SteadyResponse, usize);
 
@@ -186,7 +219,7 @@ fn report(
         a.record_cycles
     );
     println!(
-        "  freq_hz  |X|/F mm/N  Gamma   P_in W (+- periods)   damper W (P_in - host)  truth: work on damper W  damper dissipated W{}",
+        "  freq_hz  |X|/F mm/N  Gamma   P_in W    dE/dt W   damper W (P_in - dE/dt - host)  truth: work on damper W  damper dissipated W{}",
         if predicted.is_some() {
             "  map |X|/F mm/N  Yang's map W"
         } else {
@@ -194,20 +227,21 @@ fn report(
         }
     );
     let mut csv = String::from(
-        "freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,gamma,true_amplitude_m,power_input_w,power_input_stderr_w,damper_power_w,true_input_w,true_host_w,true_damper_work_w,true_damper_w,host_energy_drift_w,steady,empty_receptance_m_per_n,solid_receptance_m_per_n,predicted_receptance_m_per_n,yang_map_w\n",
+        "freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,gamma,true_amplitude_m,power_input_w,host_storage_w,damper_power_w,damper_power_stderr_w,damper_power_record_stderr_w,true_input_w,true_host_w,true_damper_work_w,true_damper_w,host_energy_drift_w,steady,empty_receptance_m_per_n,solid_receptance_m_per_n,predicted_receptance_m_per_n,yang_map_w\n",
     );
     for (k, p) in measured.points.iter().enumerate() {
         let pred = predicted
             .and_then(|v| v.iter().find(|(r, _)| r.freq_hz == p.freq_hz))
             .map(|(r, _)| r.amplitude_m / a.force_n);
         println!(
-            "  {:7.2}  {:10.4}  {:5.2}  {:8.5} +- {:7.5}  {:10.5}              {:10.5}  {:10.5}{}",
+            "  {:7.2}  {:10.4}  {:5.2}  {:8.5}  {:8.5}  {:8.5} +- {:7.5}            {:10.5}  {:10.5}{}",
             p.freq_hz,
             p.receptance().norm() * 1e3,
             p.gamma,
             p.power_input_w,
-            p.power_input_stderr_w,
+            p.host_storage_w,
             p.damper_power_w,
+            p.damper_power_stderr_w,
             p.true_damper_work_w,
             p.true_damper_w,
             pred.map_or(String::new(), |h| format!(
@@ -216,15 +250,20 @@ fn report(
                 yang_w[k]
             ))
         );
+        if p.damper_power_stderr_w.is_nan() {
+            println!(
+                "           +- not known: the record's periods are correlated over about its length (the host's response beats); more --record-cycles"
+            );
+        }
         if !p.steady {
             println!(
-                "           not steady: the host's energy moved by {:.4} W over the record ({:+.1} % of the input): the power input is not the dissipation here (more --settle-cycles)",
-                p.host_energy_drift_w,
-                100.0 * p.host_energy_drift_w / p.true_input_w
+                "           not steady: the host's stored energy moved by {:.4} W over the record ({:+.1} % of the input; booked in the balance, but the damper is not at its steady state: more --settle-cycles)",
+                p.host_storage_w,
+                100.0 * p.host_storage_w / p.power_input_w
             );
         }
         csv.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             p.freq_hz,
             p.receptance_re,
             p.receptance_im,
@@ -232,8 +271,10 @@ fn report(
             p.gamma,
             p.true_amplitude_m,
             p.power_input_w,
-            p.power_input_stderr_w,
+            p.host_storage_w,
             p.damper_power_w,
+            p.damper_power_stderr_w,
+            p.damper_power_record_stderr_w,
             p.true_input_w,
             p.true_host_w,
             p.true_damper_work_w,
@@ -246,6 +287,7 @@ fn report(
             yang_w[k]
         ));
     }
+    println!("{}", error_note(&measured.points));
     let reduction =
         |other: &SteppedSineResult| 20.0 * (measured.peak_m_per_n / other.peak_m_per_n).log10();
     println!(
