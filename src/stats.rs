@@ -85,7 +85,8 @@ pub struct MeanStderr {
     /// How many values.
     pub n: usize,
     /// Lag-1 autocorrelation used for the correction, bias-corrected and
-    /// clamped (0 when the error is not known).
+    /// clamped (0 when the error is not known); [`mean_stderr_ar2`]'s AR(2)
+    /// gives the sample value.
     pub lag1: f64,
     /// Degrees of freedom of the error: effective independent values less 1.
     pub dof: f64,
@@ -241,7 +242,10 @@ pub fn mean_stderr_ar2(xs: &[f64]) -> MeanStderr {
         (1.0 + MAX_LAG1) / (1.0 - MAX_LAG1),
     );
     let var = sample_variance(xs, mean) * (nf - 1.0) / (nf - f).max((nf - 1.0) / 2.0);
-    let dof = (nf / f - 1.0).max(1.0);
+    // An oscillation averages faster than independent values (f < 1), but
+    // the error is still estimated from n values: at most n - 1 degrees of
+    // freedom.
+    let dof = (nf / f - 1.0).clamp(1.0, nf - 1.0);
     MeanStderr {
         mean,
         stderr: Some((var * f / nf).sqrt() * student_t68(dof)),

@@ -581,17 +581,29 @@ fn peak_height_stderr(window: &[f64], u_of: impl Fn(usize) -> f64, parabola: [[f
 }
 
 /// The step of a quantised record: the smallest positive difference
-/// between successive samples (an ADC's record moves by whole codes), or 0
-/// when the record moves by less than a millionth of its range (not
-/// quantised, or filtered after quantising).
+/// between successive samples, when nearly all the differences are whole
+/// multiples of it (an ADC's record moves by whole codes); 0 otherwise (not
+/// quantised, or filtered after quantising), or when it is below a
+/// millionth of the record's range.
 fn quantisation_step(x: &[f64]) -> f64 {
     let range = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    let step = x
+    let moves: Vec<f64> = x
         .windows(2)
         .map(|w| (w[1] - w[0]).abs())
         .filter(|d| *d > 1e-12 * range)
-        .fold(f64::INFINITY, f64::min);
-    if step.is_finite() && step > 1e-6 * range {
+        .collect();
+    let step = moves.iter().copied().fold(f64::INFINITY, f64::min);
+    if !(step.is_finite() && step > 1e-6 * range) {
+        return 0.0;
+    }
+    let on_grid = moves
+        .iter()
+        .filter(|d| {
+            let codes = *d / step;
+            (codes - codes.round()).abs() < 1e-3
+        })
+        .count();
+    if on_grid as f64 >= 0.99 * moves.len() as f64 {
         step
     } else {
         0.0
@@ -625,7 +637,6 @@ fn quantisation_step(x: &[f64]) -> f64 {
 /// the half-width of the peak fit in samples (about a sixteenth of the
 /// samples per period; 0.19 s/a at 1000 samples per period) — compare with
 /// `δ ≈ πη`. For low damping take the median of the points, or use
-/// [`envelope_decay`].
 /// [`envelope_decay`]. Each point's `loss_factor_stderr` is that scatter
 /// for the noise the record carries around its two peaks: each peak's
 /// height error from the residuals of a quartic over its fit window

@@ -251,9 +251,14 @@ fn report(
             ))
         );
         if p.damper_power_stderr_w.is_nan() {
-            println!(
-                "           +- not known: the record's periods are correlated over about its length (the host's response beats); more --record-cycles"
-            );
+            // The balance uses the record's whole periods less the first
+            // and the last.
+            let why = if a.record_cycles < 18 {
+                "fewer than 16 balanced periods (the first and last recorded cycles are not used)"
+            } else {
+                "the record's periods are correlated over about its length (the host's response beats)"
+            };
+            println!("           +- not known: {why}; more --record-cycles");
         }
         if !p.steady {
             println!(
