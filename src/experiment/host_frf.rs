@@ -234,9 +234,6 @@ pub struct SteppedSineResult {
 /// boundary windows lie inside it.
 #[derive(Debug, Clone, PartialEq)]
 struct BalancedPeriods {
-    /// The first period used and how many: the record's samples
-    /// `first · T` to `(first + len) · T`.
-    first: usize,
     /// `P_k`, `ΔĒ_k / T` and the host's damping of each period (W).
     input_w: Vec<f64>,
     storage_w: Vec<f64>,
@@ -251,6 +248,10 @@ impl BalancedPeriods {
             .collect()
     }
 }
+
+/// The record's first period the balance uses (its boundary window
+/// reaches half a period back).
+const FIRST_BALANCED_PERIOD: usize = 1;
 
 /// [`BalancedPeriods`] of a stepped-sine record: the force and acceleration
 /// at the drive point (`drive_force_n`, `drive_accel_mps2`) and the
@@ -301,7 +302,6 @@ fn balanced_periods(
         }
     }
     let mut out = BalancedPeriods {
-        first: 1,
         input_w: Vec::new(),
         storage_w: Vec::new(),
         host_w: Vec::new(),
@@ -423,7 +423,7 @@ fn measure_point(
     let at = |periods_in: usize| {
         (i0 + (periods_in as f64 * rate_hz / freq_hz).round() as usize).min(r.time_s.len() - 1)
     };
-    let (i1, i2) = (at(periods.first), at(periods.first + n));
+    let (i1, i2) = (at(FIRST_BALANCED_PERIOD), at(FIRST_BALANCED_PERIOD + n));
     let span = r.time_s[i2] - r.time_s[i1];
     let drift = rate(&r.host_energy_j, i1, i2, span);
     let true_input = rate(&r.excitation_work_j, i1, i2, span);

@@ -323,6 +323,22 @@ fn normal_equations<const N: usize>(
     (a, r)
 }
 
+/// The residuals `y − Σ_i c_i basis_i` of the rows `(basis, y)` after a fit
+/// with `coefficients`.
+fn fit_residuals<const N: usize>(
+    rows: impl Iterator<Item = ([f64; N], f64)>,
+    coefficients: &[f64; N],
+) -> Vec<f64> {
+    rows.map(|(basis, y)| {
+        y - basis
+            .iter()
+            .zip(coefficients)
+            .map(|(b, c)| b * c)
+            .sum::<f64>()
+    })
+    .collect()
+}
+
 /// The `i`-th diagonal element of `a⁻¹` (`a` the normal matrix `XᵀX` of a
 /// fit: a coefficient's variance per unit noise variance).
 fn inverse_diagonal<const N: usize>(a: [[f64; N]; N], i: usize) -> Option<f64> {
@@ -563,14 +579,11 @@ fn peak_height_stderr(window: &[f64], u_of: impl Fn(usize) -> f64, parabola: [[f
         let u = u_of(i);
         [1.0, u, u * u, u * u * u, u * u * u * u]
     };
-    let Some(c) = least_squares(window.iter().enumerate().map(|(i, &v)| (basis(i), v))) else {
+    let rows = || window.iter().enumerate().map(|(i, &v)| (basis(i), v));
+    let Some(c) = least_squares(rows()) else {
         return f64::NAN;
     };
-    let residuals: Vec<f64> = window
-        .iter()
-        .enumerate()
-        .map(|(i, &v)| v - basis(i).iter().zip(&c).map(|(b, k)| b * k).sum::<f64>())
-        .collect();
+    let residuals = fit_residuals(rows(), &c);
     match (
         residual_noise_variance(&residuals, 5),
         inverse_diagonal(parabola, 0),
@@ -729,6 +742,28 @@ pub fn log_decrement(x: &[f64], sample_rate_hz: f64) -> Result<Vec<DecayPoint>> 
 pub fn analytic_signal(x: &[f64]) -> Result<Vec<Complex64>> {
     check_min_len("x", x, 2, "analytic_signal")?;
     check_finite("x", x)?;
+    // The last bin is the Nyquist bin for even n (then 2 (bins − 1) = n).
+    let n = x.len();
+    let last_bin = n / 2;
+    let nyquist = (2 * last_bin == n).then_some(last_bin);
+    let hilbert = filter_spectrum(x, |k, s| {
+        if k == 0 || Some(k) == nyquist {
+            Complex64::new(0.0, 0.0)
+        } else {
+            // −i (a + i b) = b − i a
+            Complex64::new(s.im, -s.re)
+        }
+    })?;
+    Ok(x.iter()
+        .zip(&hilbert)
+        .map(|(&re, &im)| Complex64::new(re, im))
+        .collect())
+}
+
+/// `x` through its real FFT, each bin `k` replaced by `edit(k, bin)`, and
+/// back (scaled by `1/n`, so an edit that keeps every bin returns `x`). The
+/// Nyquist bin of an even record is kept real, as a real signal's must be.
+fn filter_spectrum(x: &[f64], edit: impl Fn(usize, Complex64) -> Complex64) -> Result<Vec<f64>> {
     let n = x.len();
     let mut planner = RealFftPlanner::<f64>::new();
     let forward = planner.plan_fft_forward(n);
@@ -736,24 +771,18 @@ pub fn analytic_signal(x: &[f64]) -> Result<Vec<Complex64>> {
     let mut input = x.to_vec();
     let mut spectrum = forward.make_output_vec();
     forward.process(&mut input, &mut spectrum)?;
-    // The last bin is the Nyquist bin for even n (then 2 (bins − 1) = n).
-    let last_bin = spectrum.len() - 1;
-    let nyquist = (2 * last_bin == n).then_some(last_bin);
     for (k, s) in spectrum.iter_mut().enumerate() {
-        *s = if k == 0 || Some(k) == nyquist {
-            Complex64::new(0.0, 0.0)
-        } else {
-            // −i (a + i b) = b − i a
-            Complex64::new(s.im, -s.re)
-        };
+        *s = edit(k, *s);
     }
-    let mut hilbert = inverse.make_output_vec();
-    inverse.process(&mut spectrum, &mut hilbert)?;
+    if n % 2 == 0 {
+        if let Some(last) = spectrum.last_mut() {
+            last.im = 0.0;
+        }
+    }
+    let mut out = inverse.make_output_vec();
+    inverse.process(&mut spectrum, &mut out)?;
     let scale = 1.0 / n as f64;
-    Ok(x.iter()
-        .zip(&hilbert)
-        .map(|(&re, &im)| Complex64::new(re, im * scale))
-        .collect())
+    Ok(out.into_iter().map(|v| v * scale).collect())
 }
 
 /// `x` band-passed to `[low_hz, high_hz]` without phase shift: its FFT with
@@ -765,30 +794,15 @@ pub fn analytic_signal(x: &[f64]) -> Result<Vec<Complex64>> {
 pub fn band_pass(x: &[f64], sample_rate_hz: f64, low_hz: f64, high_hz: f64) -> Result<Vec<f64>> {
     check_min_len("x", x, 2, "band_pass")?;
     check_finite("x", x)?;
-    let n = x.len();
-    let bin_hz = sample_rate_hz / n as f64;
-    let mut planner = RealFftPlanner::<f64>::new();
-    let forward = planner.plan_fft_forward(n);
-    let inverse = planner.plan_fft_inverse(n);
-    let mut input = x.to_vec();
-    let mut spectrum = forward.make_output_vec();
-    forward.process(&mut input, &mut spectrum)?;
-    for (k, s) in spectrum.iter_mut().enumerate() {
+    let bin_hz = sample_rate_hz / x.len() as f64;
+    filter_spectrum(x, |k, s| {
         let f = k as f64 * bin_hz;
         if k == 0 || f < low_hz || f > high_hz {
-            *s = Complex64::new(0.0, 0.0);
+            Complex64::new(0.0, 0.0)
+        } else {
+            s
         }
-    }
-    // The Nyquist bin of an even record must stay real.
-    if let Some(last) = spectrum.last_mut() {
-        if 2 * (n / 2) == n {
-            last.im = 0.0;
-        }
-    }
-    let mut out = inverse.make_output_vec();
-    inverse.process(&mut spectrum, &mut out)?;
-    let scale = 1.0 / n as f64;
-    Ok(out.into_iter().map(|v| v * scale).collect())
+    })
 }
 
 /// Unwraps a sequence of phases (rad) so that successive values differ by
@@ -852,18 +866,10 @@ fn envelope_window_fit(
         let (s, c) = phase[j].sin_cos();
         [1.0, (j as f64 - centre) / sample_rate_hz, c, s]
     };
-    let (normal, r) = normal_equations((start..end).map(|j| (basis(j), ln_envelope[j])));
+    let rows = || (start..end).map(|j| (basis(j), ln_envelope[j]));
+    let (normal, r) = normal_equations(rows());
     let coefficients = solve(normal, r)?;
-    let residuals: Vec<f64> = (start..end)
-        .map(|j| {
-            ln_envelope[j]
-                - basis(j)
-                    .iter()
-                    .zip(&coefficients)
-                    .map(|(b, k)| b * k)
-                    .sum::<f64>()
-        })
-        .collect();
+    let residuals = fit_residuals(rows(), &coefficients);
     let slope_stderr = match (
         residual_noise_variance(&residuals, 4),
         inverse_diagonal(normal, 1),
