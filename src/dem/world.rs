@@ -63,6 +63,7 @@ use super::step::checks::{self, Diagnosis, Limits};
 use super::step::forces::{ForceScratch, ForceStage};
 use super::step::integrate::{KickSums, VelocityVerlet};
 use super::step::neighbour_update::{OrderScratch, PerParticle};
+use super::step::team::Team;
 use super::step::thread_choice::ThreadChoice;
 use super::step::{clump_motion, drive, neighbour_update};
 use super::walls::Walls;
@@ -183,6 +184,8 @@ struct StepScratch {
     forces: ForceScratch,
     /// The renumbering's keys and order.
     order: OrderScratch,
+    /// The threads a parallel step runs its blocks on.
+    team: Team,
 }
 
 impl World {
@@ -546,8 +549,9 @@ impl World {
         let parallel = self.threads.pick(self.can_split(), self.forced_split());
         let verlet = self.integrator();
         // 1. Integration: half kick and drift; a position that is not finite stops.
-        let sums = &mut self.scratch.kick_sums;
-        let mut drift = verlet.kick_drift(&mut self.particles, &self.neighbours, sums, parallel);
+        let (sums, team) = (&mut self.scratch.kick_sums, &mut self.scratch.team);
+        let team = parallel.then_some(team);
+        let mut drift = verlet.kick_drift(&mut self.particles, &self.neighbours, sums, team);
         if !self.particles.clumps.is_empty() {
             let built = self.neighbours.reference();
             let built = (built.len() == self.particles.len()).then_some(built);
@@ -587,8 +591,9 @@ impl World {
             self.particles.len(),
             self.pp_law.has_friction(),
         );
-        let sums = &mut self.scratch.kick_sums;
-        let mut kick = verlet.kick(&mut self.particles, shares, sums, drift.work, parallel);
+        let (sums, team) = (&mut self.scratch.kick_sums, &mut self.scratch.team);
+        let team = parallel.then_some(team);
+        let mut kick = verlet.kick(&mut self.particles, shares, sums, drift.work, team);
         if !self.particles.clumps.is_empty() {
             kick.work = clump_motion::kick(&mut self.particles, (dt, self.gravity), kick.work);
         }
@@ -637,7 +642,8 @@ impl World {
     /// ledger accumulates (0 for a pure evaluation that changes no history).
     /// `defer_cross`: the shares of pairs into later blocks are left for the
     /// half kick that follows to add (a step); else added here. `parallel`:
-    /// the blocks run on all threads (the same bits either way).
+    /// the blocks run on all threads of the step's team (the same bits
+    /// either way).
     fn compute_forces(
         &mut self,
         dt: f64,
@@ -648,7 +654,7 @@ impl World {
         self.wall_force_by_wall
             .resize(self.walls.len(), DVec3::ZERO);
         let stage = ForceStage {
-            parallel,
+            team: parallel.then_some(&mut self.scratch.team),
             defer_cross,
             limits: Limits {
                 min_steps_per_collision: self.numerics.min_steps_per_collision,

@@ -17,14 +17,11 @@
 //! forces to its own particles ([`super::blocks::pair_rows`]); then each
 //! block adds the shares of the pairs that reach it from earlier blocks
 //! ([`super::blocks::cross_in`]). On one core the blocks run one after the
-//! other, on all threads side by side; a thread writes only what its block
+//! other, on the threads of a [`super::team::Team`] side by side; a thread writes only what its block
 //! owns, and every sum is taken in the same order either way, so the same
 //! bits. A bed of one block (the thesis bed) is one serial loop: walls,
 //! then the pairs in pair order. The books are then added walls first,
 //! block by block ([`super::books`]).
-
-use glam::DVec3;
-use rayon::prelude::*;
 
 use super::block_size::{PARTICLE_BLOCK, spans_blocks};
 use super::blocks::{CrossShares, CrossSlots, CrossSlotsMut, PairRun, pair_rows};
@@ -33,10 +30,12 @@ use super::checks::{Limits, Refusal, Refused};
 use super::contacts::{
     Bodies, ContactAt, ContactResult, WallGeometry, bodies, law_kind, wall_contact,
 };
+use super::team::{Team, for_each_block};
 use crate::dem::contact::{ContactLaw, ContactState};
 use crate::dem::neighbours::{NeighbourList, StepView};
 use crate::dem::particles::Particles;
 use crate::dem::walls::Walls;
+use glam::DVec3;
 
 /// Buffers of the force stage, kept from step to step so that the step
 /// allocates nothing once they have grown.
@@ -79,8 +78,9 @@ pub struct ForceStage<'a> {
     /// Gravitational acceleration (m/s²).
     pub gravity: DVec3,
     pub limits: Limits,
-    /// Run the blocks on all threads.
-    pub parallel: bool,
+    /// The threads to run the blocks on; `None`: one after the other on
+    /// the caller.
+    pub team: Option<&'a mut Team>,
     /// Leave the shares of the pairs into later blocks for the half kick
     /// that follows to add ([`ForceScratch::cross_shares`]), instead of
     /// adding them here.
@@ -134,7 +134,7 @@ impl ForceStage<'_> {
             pw_law,
             gravity: g,
             limits,
-            parallel,
+            mut team,
             defer_cross,
             neighbours,
             wall_states,
@@ -244,11 +244,7 @@ impl ForceStage<'_> {
                 )
             );
         };
-        if parallel {
-            jobs.into_par_iter().for_each(block);
-        } else {
-            jobs.into_iter().for_each(block);
-        }
+        for_each_block(team.as_deref_mut(), jobs, block);
         // The shares of the pairs from earlier blocks.
         if n_blocks > 1 && !defer_cross {
             let shares = CrossShares {
@@ -259,19 +255,11 @@ impl ForceStage<'_> {
             let add = |(c, (f, t)): (usize, (&mut [DVec3], &mut [DVec3]))| {
                 shares.add_to(c * PARTICLE_BLOCK, f, t);
             };
-            if parallel {
-                p.force
-                    .par_chunks_mut(PARTICLE_BLOCK)
-                    .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK))
-                    .enumerate()
-                    .for_each(add);
-            } else {
-                p.force
-                    .chunks_mut(PARTICLE_BLOCK)
-                    .zip(p.torque.chunks_mut(PARTICLE_BLOCK))
-                    .enumerate()
-                    .for_each(add);
-            }
+            let blocks = p
+                .force
+                .chunks_mut(PARTICLE_BLOCK)
+                .zip(p.torque.chunks_mut(PARTICLE_BLOCK));
+            for_each_block(team, blocks.enumerate(), add);
         }
         books.book(Kind::Wall, &scratch.wall_books[..n_blocks], dt)?;
         books.book(Kind::Pair, &scratch.pair_books[..n_blocks], dt)

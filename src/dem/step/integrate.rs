@@ -24,14 +24,13 @@
 //! that crossed into the block ([`CrossShares`]), which the force stage left
 //! for it: one pass over the particles instead of two.
 
-use glam::DVec3;
-use rayon::prelude::*;
-
 use super::block_size::PARTICLE_BLOCK;
 use super::blocks::CrossShares;
+use super::team::{Team, for_each_block};
 use crate::dem::clumps::NOT_IN_CLUMP;
 use crate::dem::neighbours::NeighbourList;
 use crate::dem::particles::Particles;
+use glam::DVec3;
 
 /// Velocity Verlet for a time step `dt_s` under `gravity`.
 #[derive(Debug, Clone, Copy)]
@@ -56,12 +55,12 @@ impl VelocityVerlet {
         particles: &mut Particles,
         list: &NeighbourList,
         sums: &mut Vec<KickSums>,
-        parallel: bool,
+        team: Option<&mut Team>,
     ) -> KickSums {
         let reference = list.reference();
         let reference = (reference.len() == particles.len()).then_some(reference);
         let kick = self.pass(Pass::KickDrift, list.rebuild_travel_sq_m2());
-        half_kick(&kick, particles, (reference, None), sums, 0.0, parallel)
+        half_kick(&kick, particles, (reference, None), sums, 0.0, team)
     }
 
     /// The second half kick of every particle, with the forces at the new
@@ -74,10 +73,10 @@ impl VelocityVerlet {
         shares: Option<CrossShares>,
         sums: &mut Vec<KickSums>,
         carry: f64,
-        parallel: bool,
+        team: Option<&mut Team>,
     ) -> KickSums {
         let kick = self.pass(Pass::Kick, f64::INFINITY);
-        half_kick(&kick, particles, (None, shares), sums, carry, parallel)
+        half_kick(&kick, particles, (None, shares), sums, carry, team)
     }
 
     fn pass(&self, pass: Pass, travel_sq_m2: f64) -> Kick {
@@ -218,19 +217,19 @@ fn half_kick(
     (reference, shares): (Option<&[DVec3]>, Option<CrossShares>),
     sums: &mut Vec<KickSums>,
     carry: f64,
-    parallel: bool,
+    team: Option<&mut Team>,
 ) -> KickSums {
     let (mass, inv_mass, inv_inertia) = (&p.mass, &p.inv_mass, &p.inv_inertia);
     let clump = &p.clump;
     let has_clumps = !p.clumps.is_empty();
     type Block<'b> = (
-        usize,
+        (usize, &'b mut KickSums),
         (
             ((&'b mut [DVec3], &'b mut [DVec3]), &'b mut [DVec3]),
             (&'b mut [DVec3], &'b mut [DVec3]),
         ),
     );
-    let block = |(c, (((x, v), w), (force, torque))): Block<'_>| {
+    let block = |((c, out), (((x, v), w), (force, torque))): Block<'_>| {
         let s = c * PARTICLE_BLOCK;
         let e = s + x.len();
         if let Some(shares) = &shares {
@@ -250,40 +249,25 @@ fn half_kick(
         } else {
             kick.block::<false>(&loads, x, v, w, &[], built_at, carry)
         };
-        KickSums {
+        *out = KickSums {
             nonfinite: sums.nonfinite.map(|k| s + k),
             ..sums
-        }
+        };
     };
-    if parallel {
+    sums.clear();
+    sums.resize(p.len().div_ceil(PARTICLE_BLOCK), KickSums::default());
+    let blocks = sums.iter_mut().enumerate().zip(
         p.position
-            .par_chunks_mut(PARTICLE_BLOCK)
-            .zip(p.velocity.par_chunks_mut(PARTICLE_BLOCK))
-            .zip(p.angular_velocity.par_chunks_mut(PARTICLE_BLOCK))
+            .chunks_mut(PARTICLE_BLOCK)
+            .zip(p.velocity.chunks_mut(PARTICLE_BLOCK))
+            .zip(p.angular_velocity.chunks_mut(PARTICLE_BLOCK))
             .zip(
                 p.force
-                    .par_chunks_mut(PARTICLE_BLOCK)
-                    .zip(p.torque.par_chunks_mut(PARTICLE_BLOCK)),
-            )
-            .enumerate()
-            .map(block)
-            .collect_into_vec(sums);
-    } else {
-        sums.clear();
-        sums.extend(
-            p.position
-                .chunks_mut(PARTICLE_BLOCK)
-                .zip(p.velocity.chunks_mut(PARTICLE_BLOCK))
-                .zip(p.angular_velocity.chunks_mut(PARTICLE_BLOCK))
-                .zip(
-                    p.force
-                        .chunks_mut(PARTICLE_BLOCK)
-                        .zip(p.torque.chunks_mut(PARTICLE_BLOCK)),
-                )
-                .enumerate()
-                .map(block),
-        );
-    }
+                    .chunks_mut(PARTICLE_BLOCK)
+                    .zip(p.torque.chunks_mut(PARTICLE_BLOCK)),
+            ),
+    );
+    for_each_block(team, blocks, block);
     let mut total = KickSums {
         work: if sums.is_empty() { carry } else { 0.0 },
         nonfinite: None,

@@ -41,4 +41,5 @@ pub mod drive;
 pub mod forces;
 pub mod integrate;
 pub mod neighbour_update;
+pub mod team;
 pub mod thread_choice;

@@ -3,16 +3,18 @@
 //!
 //! Both ways give the same bits ([`super::forces`]), so the choice is only
 //! about speed, and the machine, its load and the bed decide it: a small bed
-//! loses more to waking the other threads three times a step than it gains
-//! (the thesis bed of 358 spheres is one block and never splits), a poured
-//! bed of 5 000 spheres gains half again. So a world that can split its
+//! loses more to handing its blocks to the [`super::team::Team`] three times
+//! a step than it gains (the thesis bed of 358 spheres is one block and
+//! never splits), a poured bed of 5 000 spheres gains most of a second core,
+//! and a sweep whose other beds hold the cores gains nothing. So a world that can split its
 //! step (several threads, several blocks) times it both ways, in runs of
 //! [`RUN_STEPS`] steps taken in turn ([`TRIAL_RUNS`] of them, parallel
 //! first), keeps the way of the fastest run for [`KEEP_STEPS`] steps, and
 //! tries again, so that it follows a bed that settles or a machine whose
-//! load changes. Runs, not single steps in turn: threads that sat idle
-//! through a serial step wake slowly, which a parallel step run alone pays
-//! and a run of them does not. Nobody has a key to tune; `vlab bench` shows
+//! load changes. Runs, not single steps in turn: a team that sat idle
+//! through serial steps has gone to sleep ([`super::team::PARK_AFTER`]) and
+//! wakes slowly, which a parallel step run alone pays and a run of them
+//! does not. Nobody has a key to tune; `vlab bench` shows
 //! the result.
 
 use std::time::Duration;
