@@ -25,6 +25,7 @@
 //! The helpers are started at the first parallel phase, as many as the
 //! current rayon pool has threads, less the caller, which works too.
 
+use std::any::Any;
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::atomic::{AtomicBool, AtomicPtr, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
@@ -35,8 +36,11 @@ use std::time::{Duration, Instant};
 /// before it sleeps until woken.
 pub const PARK_AFTER: Duration = Duration::from_millis(2);
 
-/// Spins before a waiting thread starts to yield the core instead.
-const SPINS_BEFORE_YIELD: u32 = 2_000;
+/// Spins before a waiting thread starts to yield the core instead (a spin
+/// is one `pause`, 14-17 ns on the 2-core VM: about 3 µs in all; after that
+/// a look costs a system call, about a microsecond when nothing else wants
+/// the core, and gives the core away when something does).
+const SPINS_BEFORE_YIELD: u32 = 200;
 
 /// A persistent team of helper threads for the blocks of a step.
 ///
@@ -58,13 +62,13 @@ struct Crew {
 struct Shared {
     /// Counts the phases handed out (the first is 1); a helper that sees it
     /// change looks for the phase at `job`.
-    epoch: AtomicUsize,
+    epoch: AtomicU64,
     /// The phase under way, on the caller's stack until the caller has
     /// closed it and `inside` is zero.
     job: AtomicPtr<Job<'static>>,
     /// The epoch of the phase helpers may still join; 0 once the caller has
     /// taken the last block and closed it.
-    open: AtomicUsize,
+    open: AtomicU64,
     /// Helpers between asking to join a phase and leaving it.
     inside: AtomicUsize,
     /// Helpers asleep, waiting for `wake`.
@@ -81,8 +85,8 @@ struct Job<'a> {
     ends: AtomicU64,
     count: usize,
     run: &'a (dyn Fn(usize) + Sync),
-    /// A block panicked on a helper.
-    panicked: AtomicBool,
+    /// What a block that panicked on a helper panicked with.
+    panic: Mutex<Option<Box<dyn Any + Send>>>,
 }
 
 impl Job<'_> {
@@ -219,8 +223,12 @@ impl Crew {
             ends: AtomicU64::new(0),
             count,
             run,
-            panicked: AtomicBool::new(false),
+            panic: Mutex::new(None),
         };
+        assert!(
+            u32::try_from(count).is_ok(),
+            "{count} blocks: more than a phase can count"
+        );
         let s = &*self.shared;
         // SAFETY: a helper reads `job` only after it has counted itself
         // `inside` and then found this phase still `open`, and it leaves
@@ -232,6 +240,9 @@ impl Crew {
         // the lifetime is erased only to put the pointer where the helpers
         // can see it.
         let ptr = (&job as *const Job<'_>).cast_mut().cast::<Job<'static>>();
+        // Closes the phase however this function is left, from before the
+        // phase is open.
+        let finish = Finish(s);
         s.job.store(ptr, Ordering::SeqCst);
         let epoch = s.epoch.load(Ordering::SeqCst) + 1;
         s.open.store(epoch, Ordering::SeqCst);
@@ -240,11 +251,15 @@ impl Crew {
             drop(s.lock.lock().unwrap_or_else(PoisonError::into_inner));
             s.wake.notify_all();
         }
-        let finish = Finish(s);
         job.work(false);
         drop(finish);
-        if job.panicked.load(Ordering::SeqCst) {
-            resume_unwind(Box::new("a block of the step panicked on a helper thread"));
+        let panic = job
+            .panic
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .take();
+        if let Some(payload) = panic {
+            resume_unwind(payload);
         }
     }
 }
@@ -305,8 +320,11 @@ fn help(s: &Shared, from_back: bool) {
             // SAFETY: see `Crew::run`: the phase was open after this
             // helper counted itself inside, so the caller waits for it.
             let job = unsafe { &*s.job.load(Ordering::SeqCst) };
-            if catch_unwind(AssertUnwindSafe(|| job.work(from_back))).is_err() {
-                job.panicked.store(true, Ordering::SeqCst);
+            if let Err(payload) = catch_unwind(AssertUnwindSafe(|| job.work(from_back))) {
+                // Kept for the caller to raise: dropped here, a payload
+                // whose drop panicked would kill this helper inside.
+                let mut first = job.panic.lock().unwrap_or_else(PoisonError::into_inner);
+                first.get_or_insert(payload);
             }
         }
         s.inside.fetch_sub(1, Ordering::SeqCst);
@@ -315,7 +333,7 @@ fn help(s: &Shared, from_back: bool) {
 
 /// Waits for an epoch other than `seen`: spinning, then yielding, then,
 /// after [`PARK_AFTER`], asleep. `None` when the team stops.
-fn next_epoch(s: &Shared, seen: usize) -> Option<usize> {
+fn next_epoch(s: &Shared, seen: u64) -> Option<u64> {
     let started = Instant::now();
     let mut spins = 0u32;
     loop {
@@ -413,18 +431,36 @@ mod tests {
         });
     }
 
-    /// A panic in a block reaches the caller, and the team still works.
+    /// A panic in a block reaches the caller with its own message, from the
+    /// caller's blocks and from a helper's, and the team still works.
     #[test]
     fn a_panicking_block_panics_the_caller() {
         in_pool(2, || {
             let mut team = Team::default();
+            let text = |p: &Box<dyn Any + Send>| {
+                let s = p.downcast_ref::<&str>().map(|s| s.to_string());
+                s.or_else(|| p.downcast_ref::<String>().cloned())
+            };
+            let message = |r: std::thread::Result<()>| text(&r.expect_err("the phase panicked"));
             let r = catch_unwind(AssertUnwindSafe(|| {
-                team.for_each(0..16, |i| {
-                    std::thread::sleep(Duration::from_micros(50));
-                    assert!(i != 7, "block 7");
-                })
+                team.for_each(0..16, |i| assert!(i != 0, "block 0"));
             }));
-            assert!(r.is_err());
+            assert_eq!(message(r).as_deref(), Some("block 0"));
+            // A helper's: only a helper panics, so retry until one has
+            // joined a phase (it takes the first block from the back).
+            let on_helper = (0..50).find_map(|_| {
+                catch_unwind(AssertUnwindSafe(|| {
+                    team.for_each(0..16, |_| {
+                        std::thread::sleep(Duration::from_micros(50));
+                        let name = std::thread::current().name().map(str::to_owned);
+                        let helper = name.is_some_and(|n| n.starts_with("vlab-step"));
+                        assert!(!helper, "a helper's block");
+                    });
+                }))
+                .err()
+            });
+            let payload = on_helper.expect("a helper joined one of 50 phases");
+            assert_eq!(text(&payload).as_deref(), Some("a helper's block"));
             let mut n = AtomicUsize::new(0);
             team.for_each(0..16, |_| {
                 n.fetch_add(1, Ordering::Relaxed);
@@ -492,7 +528,7 @@ mod tests {
             ends: AtomicU64::new(0),
             count: 7,
             run: &run,
-            panicked: AtomicBool::new(false),
+            panic: Mutex::new(None),
         };
         let mut front = Vec::new();
         let mut back = Vec::new();
