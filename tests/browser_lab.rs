@@ -228,6 +228,8 @@ fn the_browser_lab_runs_a_shake_and_agrees_with_the_cli() {
         &[
             "-q",
             "shake",
+            "--beds",
+            "1",
             "--freq",
             FREQ_HZ,
             "--gamma",

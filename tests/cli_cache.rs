@@ -13,6 +13,8 @@ fn shake(dir: &Scratch, out: &str, extra: &[&str]) -> std::process::Output {
     let mut args = vec![
         "--quiet",
         "shake",
+        "--beds",
+        "1",
         "--scene",
         "small.toml",
         "--freq",
@@ -90,6 +92,8 @@ fn a_cached_bed_gives_the_same_run_and_a_damaged_one_is_rebuilt() {
         &dir.0,
         &[
             "shake",
+            "--beds",
+            "1",
             "--scene",
             "small.toml",
             "--freq",

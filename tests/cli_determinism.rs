@@ -22,6 +22,8 @@ fn one_and_two_threads_give_identical_physics() {
                 "--threads",
                 threads,
                 "shake",
+                "--beds",
+                "1",
                 "--scene",
                 "small.toml",
                 "--freq",
@@ -50,6 +52,8 @@ fn one_and_two_threads_give_identical_physics() {
         &[
             "--quiet",
             "shake",
+            "--beds",
+            "1",
             "--scene",
             "small.toml",
             "--freq",
@@ -65,4 +69,56 @@ fn one_and_two_threads_give_identical_physics() {
     assert!(out.status.success(), "{}", stderr(&out));
     let other = std::fs::read(dir.path("seed2/kinematics.csv")).expect("csv");
     assert!(other != records[0]);
+}
+
+/// An ensemble of three beds driven until steady (at most 32 cycles: the
+/// rule looks at 25 and 32) and judged together gives the same bits on one
+/// thread as on two (the beds wait for each other at every checkpoint, and
+/// the verdict reads only their ledgers): every bed's figures, the
+/// ensemble's, and the first bed's record.
+#[test]
+fn an_ensemble_is_the_same_on_one_and_two_threads() {
+    let dir = Scratch::new("determinism-ensemble");
+    dir.write(
+        "small.toml",
+        "[particles]\ncount = 150\n[simulation]\nsettle_s = 0.02\n[drive]\ncycles = \"steady\"\nmax_cycles = 32\n",
+    );
+    let mut runs = Vec::new();
+    for threads in ["1", "2"] {
+        let out_dir = format!("run{threads}");
+        let (_, s) = run_summary(
+            &dir,
+            &[
+                "--quiet",
+                "--threads",
+                threads,
+                "shake",
+                "--beds",
+                "3",
+                "--scene",
+                "small.toml",
+                "--freq",
+                "40",
+                "--gamma",
+                "10",
+                "--no-cache",
+            ],
+            &out_dir,
+        );
+        let mut s = without_keys(s, &TIMING_KEYS);
+        let mut ensemble = s["ensemble"].take();
+        assert_eq!(ensemble["beds"], 3, "{ensemble}");
+        assert_eq!(
+            ensemble["threads"].as_u64(),
+            Some(threads.parse().expect("n"))
+        );
+        let ensemble = without_keys(ensemble.take(), &["wall_time_s", "threads"]);
+        let beds = std::fs::read(dir.path(&format!("{out_dir}/beds.csv"))).expect("beds.csv");
+        let record = std::fs::read(dir.path(&format!("{out_dir}/trace.csv"))).expect("trace");
+        runs.push((s, ensemble, beds, record));
+    }
+    assert_eq!(runs[0].0, runs[1].0, "the first bed differs");
+    assert_eq!(runs[0].1, runs[1].1, "the ensemble differs");
+    assert!(runs[0].2 == runs[1].2, "beds.csv differs");
+    assert!(runs[0].3 == runs[1].3, "trace.csv differs");
 }

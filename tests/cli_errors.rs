@@ -65,6 +65,8 @@ fn steady_window_too_short_for_yangs_method() {
     refuses(
         &[
             "shake",
+            "--beds",
+            "1",
             "--freq",
             "40",
             "--gamma",
@@ -182,6 +184,8 @@ fn failed_run_leaves_no_folders() {
         &[
             "--quiet",
             "shake",
+            "--beds",
+            "1",
             "--scene",
             "coarse.toml",
             "--out",
@@ -209,7 +213,10 @@ fn failed_run_leaves_no_folders() {
 #[test]
 fn unresolved_collision_through_the_flag_stops_with_a_diagnosis() {
     let dir = Scratch::new("unresolved");
-    let out = vlab(&dir.0, &["shake", "--dt-s", "8e-6", "--json"]);
+    let out = vlab(
+        &dir.0,
+        &["shake", "--beds", "1", "--dt-s", "8e-6", "--json"],
+    );
     assert!(!out.status.success(), "the run should fail");
     assert!(out.stdout.is_empty(), "printed a summary");
     let err = stderr(&out);

@@ -31,6 +31,8 @@ fn csv_and_wav_analysis_equal_the_run() {
         &[
             "--quiet",
             "shake",
+            "--beds",
+            "1",
             "--scene",
             "small.toml",
             "--freq",

@@ -463,6 +463,8 @@ fn replay_of_a_shake_gives_its_measurement_back() {
         &[
             "--quiet",
             "shake",
+            "--beds",
+            "1",
             "--scene",
             "small.toml",
             "--freq",

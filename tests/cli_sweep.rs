@@ -336,6 +336,8 @@ fn shake_dump_is_readable_vtk_and_snapshots_are_drawn() {
         &[
             "--quiet",
             "shake",
+            "--beds",
+            "1",
             "--scene",
             "tiny.toml",
             "--freq",

@@ -261,6 +261,8 @@ fn a_window_too_short_once_sampled_is_refused_before_the_run() {
         &dir.0,
         &[
             "shake",
+            "--beds",
+            "1",
             "--freq",
             "1024",
             "--gamma",

@@ -81,7 +81,9 @@ fn wrong_shape_keys_are_refused_with_the_key_and_its_range() {
     );
     refuses_in(
         &dir,
-        &["shake", "--scene", &both, "--freq", "40", "--gamma", "20"],
+        &[
+            "shake", "--beds", "1", "--scene", &both, "--freq", "40", "--gamma", "20",
+        ],
         &[],
     );
     let err = common::stderr(&vlab(&dir.0, &["scene", "--scene", &both]));
@@ -169,7 +171,7 @@ fn a_bed_of_prolates_settles_shakes_and_comes_back_from_the_cache() {
         "name = \"prolates\"\n[particles]\ncount = 24\nshape = \"prolate\"\naspect_ratio = 2.0\nsub_spheres = 11\nequivalent_diameter_m = 0.004\n[enclosure]\ninner_diameter_m = 0.02\ninner_length_m = 0.03\n[simulation]\nsettle_s = 0.05\n[drive]\ncycles = 3\nsteady_cycles = 2\n",
     );
     let args = [
-        "shake", "--scene", &name, "--freq", "40", "--gamma", "10", "--rig", "ideal",
+        "shake", "--beds", "1", "--scene", &name, "--freq", "40", "--gamma", "10", "--rig", "ideal",
     ];
     let (o1, s1) = common::run_summary(&dir, &args, "one");
     let (_, s2) = common::run_summary(&dir, &args, "two");

@@ -234,15 +234,41 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
             d => format!(", the last {d} samples left out"),
         }
     );
-    println!("  dissipated power      {:.4e} W", r.power_w);
+    let pm = |e: Option<f64>, digits: usize| {
+        e.map_or(
+            format!(
+                " +- not known (fewer than {} whole periods)",
+                vlab::stats::MIN_SERIES_VALUES
+            ),
+            |e| format!(" +- {e:.digits$e}"),
+        )
+    };
     println!(
-        "  energy per cycle      {:.4e} J  (eq. 7.8)",
-        r.energy_per_cycle_j
+        "  dissipated power      {:.4e} W{}",
+        r.power_w,
+        pm(r.power_stderr_w, 1)
+    );
+    println!(
+        "  energy per cycle      {:.4e} J{}  (eq. 7.8)",
+        r.energy_per_cycle_j,
+        pm(r.energy_per_cycle_stderr_j, 1)
     );
     match r.efficiency {
-        Some(e) => println!("  damping efficiency    {e:.3}  (eq. 7.7)"),
+        Some(e) => println!(
+            "  damping efficiency    {e:.3}{}  (eq. 7.7)",
+            r.efficiency_stderr
+                .map_or(String::new(), |err| format!(" +- {err:.3}"))
+        ),
         None => println!("  damping efficiency    unknown (needs --gamma and --particle-mass-kg)"),
     }
+    println!(
+        "  (+- : one sigma, from the spread of Yang's power period by period over this record{}: this record's bed and window alone, not another packing of the damper)",
+        if r.periods_alternate {
+            ", in pairs of periods (they alternate)"
+        } else {
+            ""
+        }
+    );
     println!(
         "  phase correction      {:.3} mrad at the drive frequency ({})",
         1e3 * r.phase_correction_rad,

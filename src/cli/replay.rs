@@ -104,6 +104,11 @@ pub fn run(a: ReplayArgs) -> Result<()> {
     let columns = column_map(&a.columns)?;
     let rig = RigSpec::from_name_or_path(&a.rig).with_context(|| format!("--rig {}", a.rig))?;
     let calibration = args::calibration_source(a.calibration.as_deref())?;
+    if let vlab::experiment::measurement::CalibrationSource::Given(table, _) = &calibration {
+        // The rig, before any work (the frequency's range once it is known).
+        vlab::experiment::measurement::check_given_calibration(table, &rig.name, f64::NAN)
+            .context("--calibration")?;
+    }
     let record = read_enclosure_record(&a.record, &columns)?;
     let options = ReplayOptions {
         freq_hz: a.freq_hz,

@@ -10,10 +10,13 @@ use clap::Args;
 use vlab::atomic_write::OutputDir;
 use vlab::drive::Drive;
 use vlab::experiment::damper::StepObserver;
-use vlab::experiment::measurement::ShakeSetup;
+use vlab::experiment::ensemble::{
+    DEFAULT_BEDS, EnsembleSummary, check_beds, run_ensemble_shake, unsteady_reasons,
+};
+use vlab::experiment::measurement::{CalibrationSource, ShakeSetup, check_given_calibration};
 use vlab::experiment::shake::{
     DemTruth, ShakeSummary, check_record_window, default_out_dir, percent_or_unknown, resolve_rig,
-    run_shake_from, shake_drive,
+    shake_drive,
 };
 use vlab::export::snapshots::PhaseSnapshots;
 use vlab::export::vtk_dump::VtkDump;
@@ -58,6 +61,12 @@ pub struct ShakeArgs {
     /// bed measured again with fresh noise.
     #[arg(long = "noise-seed", value_name = "N")]
     pub noise_seed: Option<u64>,
+    /// Independent beds of the damper to drive together (seeds derived from
+    /// --seed, the first bed --seed's own), 1 to 64; the printed figure is
+    /// their mean and its +- their spread. One bed's +- is its window's
+    /// alone and says nothing of another packing of the same damper.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_BEDS)]
+    pub beds: u32,
     /// Print the summary as JSON on standard output.
     #[arg(long)]
     pub json: bool,
@@ -102,9 +111,16 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     if let Some(s) = snaps.as_mut() {
         observers.push(s);
     }
-    let result = run_shake_from(&scene, &setup, &beds, &mut observers, &mut |p| {
-        progress.update(p)
-    })
+    let result = run_ensemble_shake(
+        &scene,
+        &setup,
+        &beds,
+        a.beds,
+        rayon::current_num_threads(),
+        &mut observers,
+        &mut |p| progress.update(p),
+    )
+    .map(|e| e.first)
     .context("running the damper through the rig");
     progress.finish();
     let mut shake = made.keep_if_ok(result)?;
@@ -135,6 +151,7 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
 /// here ([`shake_drive`]), the rig that can drive it, its record window, the
 /// noise seed and the phase calibration; refusals name the flags.
 fn setup(a: &ShakeArgs) -> Result<(Scene, ShakeSetup)> {
+    check_beds(a.beds).context("--beds")?;
     let flags = a.scene.flags().set(true, "freq_hz", "--freq");
     let mut scene = a.scene.resolve()?;
     if let Some(d) = a.duration_s {
@@ -144,11 +161,15 @@ fn setup(a: &ShakeArgs) -> Result<(Scene, ShakeSetup)> {
     let rig = resolve_rig(&a.rig, a.shaker, &drive).with_context(|| format!("--rig {}", a.rig))?;
     check_record_window(&scene, drive.freq_hz(), rig.daq.sample_rate_hz)
         .map_err(|e| flags.name_flags(e.into()))?;
+    let calibration = args::calibration_source(a.calibration.as_deref())?;
+    if let CalibrationSource::Given(table, _) = &calibration {
+        check_given_calibration(table, &rig.name, drive.freq_hz()).context("--calibration")?;
+    }
     let setup = ShakeSetup {
         rig,
         drive,
         noise_seed: a.noise_seed.unwrap_or(scene.simulation.seed),
-        calibration: args::calibration_source(a.calibration.as_deref())?,
+        calibration,
     };
     Ok((scene, setup))
 }
@@ -207,6 +228,13 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         s.dt_s,
         s.seed
     );
+    if let Some(e) = &s.ensemble {
+        print_ensemble(e);
+        println!(
+            "  the first bed (seed {}) alone; its +- is its own window's and leaves out how far other beds lie:",
+            s.seed
+        );
+    }
     print_dem(&s.dem);
     print_measured(s);
     println!(
@@ -248,6 +276,79 @@ fn energy(value_j: f64, error_j: Option<f64>) -> String {
 /// An efficiency and its error as the summary prints them.
 fn efficiency(value: f64, error: Option<f64>) -> String {
     with_error(format!("{value:.3}"), error.map(|e| format!("{e:.3}")), "")
+}
+
+/// The ensemble: the damper's figures with the beds' spread, and each bed.
+fn print_ensemble(e: &EnsembleSummary) {
+    let st = &e.steadiness;
+    let verdict = if st.reached {
+        "steady: error, drift and warm-up tested on the beds' mean".to_string()
+    } else if st.lossless {
+        "lossless: no steady state".to_string()
+    } else if st.capped {
+        format!(
+            "NOT shown steady: {}",
+            unsteady_reasons(st, e.steady_first_cycle)
+        )
+    } else {
+        "not checked steady: fixed cycle count".to_string()
+    };
+    println!(
+        "  ensemble of {} beds (cycles {}-{} of {}; {verdict}):",
+        e.beds,
+        e.steady_first_cycle + 1,
+        e.cycles,
+        e.cycles
+    );
+    let fig = |f: &vlab::experiment::ensemble::EnsembleFigure, digits: usize| match f.stderr {
+        Some(err) => format!("{:.digits$} +- {:.digits$}", f.mean, err),
+        None => format!("{:.digits$} (+- not known)", f.mean),
+    };
+    println!(
+        "    damping efficiency, DEM truth {}   measured {}",
+        fig(&e.dem_efficiency, 3),
+        fig(&e.measured_efficiency, 3)
+    );
+    println!(
+        "    (+- : one sigma of the mean over the beds, from their spread ({:.2} % of the mean), Student's t on {} degrees of freedom)",
+        100.0 * e.dem_efficiency.spread / e.dem_efficiency.mean.abs().max(f64::MIN_POSITIVE),
+        e.beds.saturating_sub(1)
+    );
+    let drift = match (st.drift_rel, st.drift_stderr_rel) {
+        (Some(r), Some(err)) => format!("{:+.2} % +- {:.2} %", 100.0 * r, 100.0 * err),
+        _ => "not known".into(),
+    };
+    println!(
+        "    beds' mean series: drift across the window {drift}, warm-up (MSER-5) {}{}",
+        st.warm_up_cycles
+            .map_or("not known".to_string(), |d| format!("{d} cycles")),
+        if st.alternates {
+            "; alternates from cycle to cycle (period 2): averaged in pairs"
+        } else {
+            ""
+        }
+    );
+    println!("    bed  seed        efficiency DEM (its window's +-)   measured");
+    for r in &e.rows {
+        let window = r.dem_window_stderr_j.map_or("not known".to_string(), |j| {
+            format!("{:.3}", j / r.dem_energy_per_cycle_j * r.dem_efficiency)
+        });
+        println!(
+            "    {:>3}  {:<10}  {:.3} (+- {window}){}   {:.3}",
+            r.bed,
+            r.seed,
+            r.dem_efficiency,
+            if r.alternates { " period 2" } else { "" },
+            r.measured_efficiency
+        );
+    }
+    println!(
+        "    wall time {:.1} s for {} beds on {} thread{}",
+        e.wall_time_s,
+        e.beds,
+        e.threads,
+        if e.threads == 1 { "" } else { "s" }
+    );
 }
 
 /// What the DEM knows.
@@ -359,8 +460,7 @@ fn print_measured(s: &ShakeSummary) {
         efficiency(m.efficiency, m.efficiency_stderr)
     );
     println!(
-        "    (+- : one sigma, the statistical part: the window's spread from cycle to cycle (period to period for the measurement) and the {}, see docs/accuracy.md; the chain: the measurement against the work the enclosure put in, what a lab's post-processing controls; the bed's unsteadiness: work in vs dissipated over the record; their sum is the error vs the DEM's dissipation)",
-        d.bed_to_bed.describe(s.freq_hz, s.gamma)
+        "    (+- : one sigma, this bed's window: its spread from cycle to cycle (period to period for the measurement; pairs of them where they alternate); not the spread of other beds of the damper, which --beds measures (see docs/accuracy.md); the chain: the measurement against the work the enclosure put in, what a lab's post-processing controls; the bed's unsteadiness: work in vs dissipated over the record; their sum is the error vs the DEM's dissipation)"
     );
     println!(
         "    phase correction              {:.3} mrad ({})",

@@ -147,6 +147,8 @@ pub struct World {
     scratch: StepScratch,
     /// Whether steps run on one core or on all threads.
     threads: ThreadChoice,
+    /// Step on the calling thread only (beds driven side by side).
+    one_thread: bool,
     /// Total force of the walls on the particles at the current step (N).
     wall_force: DVec3,
     /// The same, wall by wall.
@@ -215,6 +217,7 @@ impl World {
             wall_gaps: Vec::new(),
             scratch: StepScratch::default(),
             threads: ThreadChoice::default(),
+            one_thread: false,
             wall_force: DVec3::ZERO,
             wall_force_by_wall: Vec::new(),
             baseline: LedgerSnapshot::default(),
@@ -524,10 +527,17 @@ impl World {
         self.threads = ThreadChoice::default();
     }
 
+    /// Steps on the calling thread only (`true`), or as the world chooses:
+    /// beds driven side by side take one thread each, so that N beds on P
+    /// threads keep P busy, not P × P. The same bits either way.
+    pub fn step_on_one_thread(&mut self, yes: bool) {
+        self.one_thread = yes;
+    }
+
     /// Whether a step can split across threads: several threads in the
     /// pool and several blocks of particles.
     fn can_split(&self) -> bool {
-        rayon::current_num_threads() > 1 && spans_blocks(self.particles.len())
+        !self.one_thread && rayon::current_num_threads() > 1 && spans_blocks(self.particles.len())
     }
 
     /// Whether the split is forced ([`Numerics::parallel_min_pairs`] below

@@ -33,7 +33,9 @@ use crate::dem::{CollisionSteps, Dissipation, ImpactSpeeds, LedgerBalance, Ledge
 use crate::drive::Drive;
 pub use crate::rig::{EnclosureMotion, Kinematics, SineMotion};
 use crate::scene::{DriveLength, Orientation, SceneError, SteadyCriteria, transient_cycles};
-use crate::stats::{MIN_SERIES_VALUES, MeanStderr, mean_stderr, trend};
+use crate::stats::{
+    MIN_SERIES_VALUES, MSER_BATCH, MeanStderr, ensemble_mean, mser_truncation, pair_means, trend,
+};
 
 /// Progress of a long run, for display.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -125,12 +127,33 @@ pub struct Steadiness {
     /// enclosure's work only heats it, it has no steady state, and a drive
     /// run until steady stops at its fewest cycles.
     pub lossless: bool,
+    /// The energy per cycle alternates (a period-2 bed,
+    /// [`crate::stats::alternates`]): the window's error and drift are those
+    /// of whole pairs of cycles.
+    pub alternates: bool,
+    /// The warm-up MSER-5 finds in the series from the drive's start
+    /// ([`crate::stats::mser_truncation`]), in cycles; the window starts at
+    /// or after it. `None` for a series too short to tell.
+    pub warm_up_cycles: Option<u32>,
+    /// MSER-5's least lies at the end of the half it searched: the warm-up
+    /// may go on past it.
+    pub warm_up_open: bool,
+    /// Beds the figures are of: 1 for one bed's window, N for an ensemble
+    /// (its error then the spread of the beds' means).
+    pub beds: usize,
 }
 
 impl Steadiness {
     /// The window's drift is more than two of its errors from zero.
     pub fn drifts(&self) -> bool {
         matches!((self.drift_rel, self.drift_stderr_rel), (Some(d), Some(e)) if d.abs() > 2.0 * e)
+    }
+
+    /// The warm-up MSER-5 finds ends after the window starts at
+    /// `first_cycle`, may go on past the half it searched, or could not be
+    /// told.
+    pub fn warming_up(&self, first_cycle: u32) -> bool {
+        self.warm_up_open || self.warm_up_cycles.is_none_or(|d| d > first_cycle)
     }
 }
 
@@ -186,49 +209,130 @@ pub struct DriveOutcome {
 }
 
 /// Energy each cycle of `snapshots[first..]` dissipated (J).
-fn cycle_energies(snapshots: &[LedgerSnapshot], first: usize) -> Vec<f64> {
+pub fn cycle_energies(snapshots: &[LedgerSnapshot], first: usize) -> Vec<f64> {
     snapshots[first..]
         .windows(2)
         .map(|w| w[1].flows.dissipated.total() - w[0].flows.dissipated.total())
         .collect()
 }
 
-/// How steady the window from cycle `first` to the last snapshot is.
-fn steadiness(
+pub use crate::stats::series_mean as window_mean;
+
+/// How steady one series of energies per cycle is over its window
+/// `energies[first..]` (the series from the drive's start): its error
+/// ([`window_mean`]), its drift (of pairs of cycles where it alternates)
+/// and the warm-up MSER-5 finds in the whole series; relative to the
+/// window's mean, or to 1 % of `e_max_j` for a bed that dissipates next to
+/// nothing. `balance_rel`, `reached` and `capped` are left to the caller.
+fn series_steadiness(energies: &[f64], first: usize, e_max_j: f64) -> Steadiness {
+    let window = &energies[first..];
+    let (e, alternating) = window_mean(window);
+    let per_cycle_scale = e.mean.abs().max(0.01 * e_max_j);
+    let pairs;
+    let (series, per_value) = if alternating {
+        pairs = pair_means(window);
+        (pairs.as_slice(), 2.0)
+    } else {
+        (window, 1.0)
+    };
+    let drift = trend(series);
+    let span = per_value * (series.len().max(1) - 1) as f64;
+    Steadiness {
+        stderr_rel: e.stderr.map(|se| se / per_cycle_scale),
+        drift_rel: drift.map(|t| t.slope / per_value * span / per_cycle_scale),
+        drift_stderr_rel: drift.map(|t| t.slope_stderr / per_value * span / per_cycle_scale),
+        alternates: alternating,
+        warm_up_cycles: mser_truncation(energies).map(|d| d as u32),
+        warm_up_open: mser_truncation(energies)
+            .is_some_and(|d| d > 0 && d == (energies.len() / MSER_BATCH / 2) * MSER_BATCH),
+        beds: 1,
+        ..Steadiness::default()
+    }
+}
+
+/// How steady the window from cycle `first` to the last snapshot is, for
+/// one bed.
+pub fn steadiness(
     snapshots: &[LedgerSnapshot],
     first: usize,
     e_max_j: f64,
     criteria: &SteadyCriteria,
 ) -> Steadiness {
-    let last = snapshots.len() - 1;
-    let b = LedgerBalance::between(&snapshots[first], &snapshots[last]);
+    ensemble_steadiness(&[snapshots], first, e_max_j, criteria)
+}
+
+/// How steady the window from cycle `first` to the last snapshot is for
+/// the beds of an ensemble driven alike (the same cycles): the books'
+/// balance summed over the beds; the error of the mean energy per cycle
+/// from the spread of the beds' window means (Student's t on N − 1 degrees
+/// of freedom, [`crate::stats::ensemble_mean`]), or for one bed its
+/// window's; the drift and the warm-up of the beds' mean series (Welch's
+/// ensemble average). Steady when the books balance within
+/// `criteria.balance_rel`, the error is within `criteria.stderr_rel`, the
+/// drift is not told from noise and the warm-up ended before the window.
+pub fn ensemble_steadiness(
+    beds: &[&[LedgerSnapshot]],
+    first: usize,
+    e_max_j: f64,
+    criteria: &SteadyCriteria,
+) -> Steadiness {
+    let last = beds[0].len() - 1;
+    let n = beds.len() as f64;
+    let (mut work, mut dissipated) = (0.0, 0.0);
+    for b in beds {
+        let books = LedgerBalance::between(&b[first], &b[last]);
+        work += books.work_in_j;
+        dissipated += books.dissipated_j;
+    }
     let cycles = (last - first) as f64;
-    let scale = b.dissipated_j.max(0.01 * e_max_j * cycles);
-    let balance_rel = (b.work_in_j - b.dissipated_j) / scale;
-    let energies = cycle_energies(snapshots, first);
-    let e = mean_stderr(&energies);
-    // Per-cycle figures relative to the mean, or to 1 % of E_max for a bed
-    // that dissipates next to nothing.
-    let per_cycle_scale = e.mean.abs().max(0.01 * e_max_j);
-    let stderr_rel = e.stderr.map(|se| se / per_cycle_scale);
-    let drift = trend(&energies);
-    let span = (energies.len().max(1) - 1) as f64;
-    let drift_rel = drift.map(|t| t.slope * span / per_cycle_scale);
-    let drift_stderr_rel = drift.map(|t| t.slope_stderr * span / per_cycle_scale);
-    let mut s = Steadiness {
-        balance_rel,
-        stderr_rel,
-        drift_rel,
-        drift_stderr_rel,
-        reached: false,
-        capped: false,
-        lossless: b.dissipated_j == 0.0,
-    };
+    let scale = dissipated.max(0.01 * e_max_j * cycles * n);
+    let balance_rel = (work - dissipated) / scale;
+    let series: Vec<Vec<f64>> = beds.iter().map(|b| cycle_energies(b, 0)).collect();
+    let mean_series: Vec<f64> = (0..last)
+        .map(|k| series.iter().map(|s| s[k]).sum::<f64>() / n)
+        .collect();
+    let mut s = series_steadiness(&mean_series, first, e_max_j);
+    if beds.len() > 1 {
+        let means: Vec<f64> = series
+            .iter()
+            .map(|e| e[first..].iter().sum::<f64>() / cycles)
+            .collect();
+        let ensemble = ensemble_mean(&means);
+        let per_cycle_scale = ensemble.mean.abs().max(0.01 * e_max_j);
+        s.stderr_rel = ensemble.stderr.map(|se| se / per_cycle_scale);
+        s.beds = beds.len();
+    }
+    s.balance_rel = balance_rel;
+    s.lossless = dissipated == 0.0;
     s.reached = balance_rel.abs() <= criteria.balance_rel
-        && stderr_rel.is_some_and(|r| r <= criteria.stderr_rel)
-        && drift.is_some()
-        && !s.drifts();
+        && s.stderr_rel.is_some_and(|r| r <= criteria.stderr_rel)
+        && s.drift_rel.is_some()
+        && !s.drifts()
+        && !s.warming_up(first as u32);
     s
+}
+
+/// The first cycle of the steady window of a drive run until steady, after
+/// `done` cycles whose warm-up (MSER-5 on the beds' mean series,
+/// [`warm_up`]) lasted `warm_up_cycles`: all but the transient
+/// ([`transient_cycles`], the thesis' 3 of 8) or all after the warm-up,
+/// whichever is shorter; one cycle fewer where that leaves an odd count, so
+/// that a bed that alternates from cycle to cycle is averaged over whole
+/// pairs (an odd window of a period-2 bed is biased by about 35 %/n).
+pub fn steady_window_first(done: u32, warm_up_cycles: u32) -> u32 {
+    let first = transient_cycles(done).max(warm_up_cycles.min(done));
+    first + (done - first) % 2
+}
+
+/// The warm-up MSER-5 finds in the mean of the beds' energies per cycle
+/// from the drive's start, in cycles (0 for a series too short to tell).
+pub fn warm_up(beds: &[&[LedgerSnapshot]]) -> u32 {
+    let series: Vec<Vec<f64>> = beds.iter().map(|b| cycle_energies(b, 0)).collect();
+    let n = series[0].len();
+    let mean: Vec<f64> = (0..n)
+        .map(|k| series.iter().map(|s| s[k]).sum::<f64>() / beds.len() as f64)
+        .collect();
+    mser_truncation(&mean).map_or(0, |d| d as u32)
 }
 
 /// The cycle counts at which a drive run until steady is tested, from
@@ -254,60 +358,107 @@ pub fn steady_checkpoint(done: u32, min_cycles: u32, max_cycles: u32) -> bool {
 /// [`crate::stats::MIN_SERIES_VALUES`] cycles.
 pub fn first_checkpoint(min_cycles: u32) -> u32 {
     let mut c = min_cycles.max(1);
-    while ((c - transient_cycles(c)) as usize) < MIN_SERIES_VALUES {
+    while ((c - steady_window_first(c, 0)) as usize) < MIN_SERIES_VALUES {
         c += 1;
     }
     c
 }
 
-/// The verdict after `snapshots.len() - 1` whole cycles of a drive of
-/// `length`: the first cycle of the steady window and its steadiness once the
-/// drive is done, `None` while it goes on. `latest` keeps the steadiness of a
-/// drive run until steady as it is checked, for the progress display.
-fn verdict(
+/// A finished drive's window: its first cycle and how steady it is (of
+/// the ensemble, for beds driven together).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Verdict {
+    pub first_cycle: usize,
+    pub steadiness: Steadiness,
+}
+
+/// Whether a drive of `length` is judged after `done` cycles: a drive run
+/// until steady at its fewest cycles (a lossless bed stops there) and at
+/// its checkpoints ([`steady_checkpoint`]), a fixed one at its end. Beds
+/// driven together are judged at the same counts.
+pub fn judged_at(length: DriveLength, done: u32) -> bool {
+    match length {
+        DriveLength::Fixed { cycles, .. } => done == cycles,
+        DriveLength::UntilSteady {
+            min_cycles,
+            max_cycles,
+            ..
+        } => {
+            done == min_cycles
+                || (done > min_cycles && steady_checkpoint(done, min_cycles, max_cycles))
+        }
+    }
+}
+
+/// The verdict on beds driven alike for `done` cycles by a drive of
+/// `length` (called where [`judged_at`]): the window and its steadiness
+/// once the drive is done, `None` while it goes on; and the steadiness as
+/// it stands, for the progress display.
+pub fn verdict(
     length: DriveLength,
-    snapshots: &[LedgerSnapshot],
+    beds: &[&[LedgerSnapshot]],
     e_max_j: f64,
-    latest: &mut Option<Steadiness>,
-) -> Option<(usize, Steadiness)> {
-    let done = (snapshots.len() - 1) as u32;
+) -> (Option<Verdict>, Option<Steadiness>) {
+    let done = (beds[0].len() - 1) as u32;
     match length {
         DriveLength::Fixed {
             cycles,
             steady_cycles,
-        } => (done >= cycles).then(|| {
+        } => {
             let first = (cycles - steady_cycles) as usize;
             let criteria = SteadyCriteria::default();
-            (first, steadiness(snapshots, first, e_max_j, &criteria))
-        }),
+            let s = ensemble_steadiness(beds, first, e_max_j, &criteria);
+            (
+                Some(Verdict {
+                    first_cycle: first,
+                    steadiness: s,
+                }),
+                Some(s),
+            )
+        }
         DriveLength::UntilSteady {
-            min_cycles,
             max_cycles,
             criteria,
+            ..
         } => {
-            if done < min_cycles {
-                return None;
-            }
-            let first = transient_cycles(done) as usize;
-            // A lossless bed is told at its fewest cycles; every other
-            // verdict waits for a checkpoint.
-            let lossless = LedgerBalance::between(&snapshots[first], &snapshots[done as usize])
-                .dissipated_j
-                == 0.0;
-            if !lossless && !steady_checkpoint(done, min_cycles, max_cycles) {
-                return None;
-            }
-            let s = steadiness(snapshots, first, e_max_j, &criteria);
-            *latest = Some(s);
-            if s.reached || s.lossless {
-                Some((first, s))
+            let first = steady_window_first(done, warm_up(beds)) as usize;
+            let s = ensemble_steadiness(beds, first, e_max_j, &criteria);
+            let finished = if s.reached || s.lossless {
+                Some(s)
             } else if done >= max_cycles {
-                Some((first, Steadiness { capped: true, ..s }))
+                Some(Steadiness { capped: true, ..s })
             } else {
                 None
-            }
+            };
+            (
+                finished.map(|steadiness| Verdict {
+                    first_cycle: first,
+                    steadiness,
+                }),
+                Some(s),
+            )
         }
     }
+}
+
+/// Decides, at the ends of cycles, when a drive is done: alone, or
+/// together with the other beds of an ensemble
+/// ([`crate::experiment::ensemble::EnsembleJudge`]).
+pub trait DriveJudge {
+    /// After the cycles of `snapshots` (bed `bed`'s ledger at the drive's
+    /// start and every cycle's end): the verdict once the drive is done.
+    /// An error when the ensemble was given up (another bed failed).
+    fn judge(
+        &self,
+        bed: usize,
+        snapshots: &[LedgerSnapshot],
+    ) -> Result<Option<Verdict>, SceneError>;
+
+    /// The steadiness as it stood at the last judgement, for display.
+    fn latest(&self) -> Option<Steadiness>;
+
+    /// How many beds it judges together.
+    fn beds(&self) -> usize;
 }
 
 /// Drives a settled world with `motion` as `plan` says, calling `observer`
@@ -318,6 +469,21 @@ pub fn run_drive(
     motion: &mut dyn EnclosureMotion,
     observer: &mut dyn StepObserver,
     progress: &mut dyn FnMut(Progress),
+) -> Result<DriveOutcome, SceneError> {
+    let e_max_j = plan.drive.e_max_j(world.particles.total_mass_kg());
+    let judge = crate::experiment::ensemble::EnsembleJudge::new(plan.length, e_max_j, 1, 1);
+    run_drive_judged(world, plan, motion, observer, progress, &judge, 0)
+}
+
+/// [`run_drive`] as bed `bed` of the beds `judge` decides for together.
+pub fn run_drive_judged(
+    world: &mut World,
+    plan: &DrivePlan,
+    motion: &mut dyn EnclosureMotion,
+    observer: &mut dyn StepObserver,
+    progress: &mut dyn FnMut(Progress),
+    judge: &dyn DriveJudge,
+    bed: usize,
 ) -> Result<DriveOutcome, SceneError> {
     let started = Stopwatch::start();
     let dt = world.dt_s();
@@ -332,9 +498,7 @@ pub fn run_drive(
     let report_every = ((2e-3 / dt).round() as u64).max(1);
     let max_cycles = plan.length.max_cycles();
     let mut k = 0u64;
-    let mut done = None;
-    let mut latest: Option<Steadiness> = None;
-    while done.is_none() {
+    let verdict = loop {
         k += 1;
         let t = k as f64 * dt;
         let axial = -world.wall_force().dot(world.walls.axis);
@@ -346,7 +510,11 @@ pub fn run_drive(
         if (t / period - next_boundary) * period > -0.5 * dt {
             snapshots.push(world.snapshot());
             largest_speed = largest_speed.max(world.particles.max_speed_mps());
-            done = verdict(plan.length, &snapshots, e_max_j, &mut latest);
+            if judged_at(plan.length, (snapshots.len() - 1) as u32)
+                && let Some(v) = judge.judge(bed, &snapshots)?
+            {
+                break v;
+            }
         }
         if k % report_every == 0 {
             let cycles = (snapshots.len() - 1) as u32;
@@ -357,11 +525,22 @@ pub fn run_drive(
                 particle_steps: k * n,
                 wall_time_s: started.elapsed().as_secs_f64(),
                 cycle: cycles,
-                steadiness: latest,
+                steadiness: judge.latest(),
             });
         }
-    }
-    let (steady_first, steadiness) = done.unwrap_or_default();
+    };
+    let steady_first = verdict.first_cycle;
+    let criteria = match plan.length {
+        DriveLength::UntilSteady { criteria, .. } => criteria,
+        DriveLength::Fixed { .. } => SteadyCriteria::default(),
+    };
+    // This bed's own window judged alone; the ensemble's verdict (and its
+    // cap) is the judge's, reported once for the ensemble.
+    let steadiness = if judge.beds() == 1 {
+        verdict.steadiness
+    } else {
+        steadiness(&snapshots, steady_first, e_max_j, &criteria)
+    };
     let tally = DriveTally {
         period_s: period,
         t0_s: t0,
@@ -397,7 +576,7 @@ impl DriveTally {
         let window_s = snapshots[last].time_s - snapshots[steady_first].time_s;
         let per_cycle = self.period_s / window_s;
         let energy_per_cycle_j = steady.dissipated_j * per_cycle;
-        let energy_per_cycle = mean_stderr(&cycle_energies(&snapshots, steady_first));
+        let energy_per_cycle = window_mean(&cycle_energies(&snapshots, steady_first)).0;
         DriveOutcome {
             cycles: last as u32,
             steady_first_cycle: steady_first as u32,

@@ -1,6 +1,7 @@
 //! Experiments: a scene composed into something that runs. The damper drive and
 //! its observers (`damper`), filling and settling a bed (`fill`, `settle`,
-//! `bed_cache`), the bed-to-bed part of a shake's error (`bed_spread`), the DEM
+//! `bed_cache`), ensembles of beds driven and judged together (`ensemble`),
+//! the bed-to-bed part of a host test's error (`bed_spread`), the DEM
 //! truth recorder (`record`), the shake through the rig and
 //! its measurement by Yang's method (`shake`, `measurement`), the drop test
 //! (`drop`), the single collision (`impact`), a body pressed onto a plate
@@ -13,6 +14,7 @@ pub mod bed_cache;
 pub mod bed_spread;
 pub mod damper;
 pub mod drop;
+pub mod ensemble;
 pub mod fill;
 pub mod host_decay;
 pub mod host_frf;

@@ -64,7 +64,8 @@ use serde::Serialize;
 use crate::atomic_write::write_bytes_atomic;
 use crate::drive::Drive;
 use crate::experiment::measurement::{
-    CalibrationRun, CalibrationSource, YangMeasurement, measure_trace, phase_calibration,
+    CalibrationRun, CalibrationSource, YangMeasurement, check_given_calibration, measure_trace,
+    phase_calibration,
 };
 use crate::experiment::shake::write_rig_record;
 use crate::rig::{
@@ -718,6 +719,10 @@ fn measure_replay(
     let drive = &inputs.drive;
     let freq_hz = drive.freq_hz();
     let periods = inputs.window.periods;
+    let calibration_warnings = match &options.calibration {
+        CalibrationSource::Given(table, _) => check_given_calibration(table, &rig.name, freq_hz)?,
+        CalibrationSource::OnTheFly => Vec::new(),
+    };
     let (calibration, calibration_source) = phase_calibration(
         rig,
         &options.calibration,
@@ -783,7 +788,7 @@ fn measure_replay(
         calibration: calibration_source,
         n_periods: corrected.n_periods,
         rig: rig.name.clone(),
-        clipping: pushed.daq.clipping_warnings(),
+        clipping: [pushed.daq.clipping_warnings(), calibration_warnings].concat(),
     };
     Ok((measured, calibration))
 }

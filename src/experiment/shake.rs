@@ -33,10 +33,12 @@ use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::drive::Drive;
 use crate::experiment::bed_cache::BedSource;
-use crate::experiment::bed_spread::BedToBed;
-use crate::experiment::damper::{DriveOutcome, Observers, Progress, Steadiness, StepObserver};
+use crate::experiment::damper::{
+    DriveJudge, DriveOutcome, Observers, Progress, Steadiness, StepObserver,
+};
+use crate::experiment::ensemble::{EnsembleJudge, EnsembleSummary};
 use crate::experiment::measurement::{
-    Measured, ShakeExperiment, ShakeSetup, run_measured_shake_observed,
+    Measured, ShakeExperiment, ShakeSetup, run_measured_shake_judged,
 };
 use crate::experiment::record::TruthSamples;
 use crate::experiment::settle::{SettledBed, prepare_drive};
@@ -193,15 +195,13 @@ pub const STEPS_PER_CONTACT_SLACK: f64 = 0.8;
 pub struct DemTruth {
     /// Dissipated energy per cycle, averaged over the steady cycles (J), eq. 6.9.
     pub energy_per_cycle_j: f64,
-    /// Its one-sigma error (J): the window's part and the bed-to-bed part in
-    /// quadrature; `None` when the window is too short to tell.
+    /// Its one-sigma error (J): this bed's window, from its cycle-to-cycle
+    /// spread (of pairs of cycles where they alternate,
+    /// [`crate::experiment::damper::window_mean`]); `None` when the window
+    /// is too short to tell. It says nothing of how far another bed of the
+    /// same damper lies: the ensemble's error does
+    /// ([`crate::experiment::ensemble`]).
     pub energy_per_cycle_stderr_j: Option<f64>,
-    /// The window's part alone (J): its cycle-to-cycle spread
-    /// ([`crate::stats::mean_stderr`]).
-    pub energy_per_cycle_window_stderr_j: Option<f64>,
-    /// The bed-to-bed part, and how it is known
-    /// ([`crate::experiment::bed_spread`]).
-    pub bed_to_bed: BedToBed,
     /// Maximum dissipated energy per cycle 4 (Γ g / ω)² M (J), eq. 6.10.
     pub e_max_j: f64,
     /// `energy_per_cycle_j / e_max_j`, eq. 6.8.
@@ -262,9 +262,8 @@ pub struct DemTruth {
 }
 
 impl DemTruth {
-    /// The truth of a drive of `scene`, its error widened by the bed-to-bed
-    /// part `bed`.
-    pub fn new(out: &DriveOutcome, scene: &Scene, bed: BedToBed) -> Self {
+    /// The truth of a drive of `scene`.
+    pub fn new(out: &DriveOutcome, scene: &Scene) -> Self {
         // An identity of the books (the integration term is their remainder):
         // only an accounting bug breaks it.
         debug_assert!(
@@ -272,14 +271,10 @@ impl DemTruth {
             "energy books do not close: residual {} J",
             out.whole.residual_j
         );
-        let energy = out
-            .energy_per_cycle
-            .with_independent_part(bed.rel() * out.energy_per_cycle_j.abs());
+        let energy = out.energy_per_cycle;
         DemTruth {
             energy_per_cycle_j: out.energy_per_cycle_j,
             energy_per_cycle_stderr_j: energy.stderr,
-            energy_per_cycle_window_stderr_j: out.energy_per_cycle.stderr,
-            bed_to_bed: bed,
             e_max_j: out.e_max_j,
             efficiency: out.efficiency,
             efficiency_stderr: energy.stderr.map(|e| e / out.e_max_j),
@@ -454,6 +449,11 @@ pub struct ShakeSummary {
     pub measured: Measured,
     pub warnings: Vec<RunWarning>,
     pub files: Vec<String>,
+    /// The ensemble this bed was driven in, when it was one of several
+    /// ([`crate::experiment::ensemble`]): the figures of the damper, each
+    /// with the error of the beds' spread.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<EnsembleSummary>,
 }
 
 /// A finished shake: the summary and everything recorded.
@@ -509,15 +509,34 @@ pub fn run_shake_on_bed(
     observers: &mut [&mut dyn StepObserver],
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
+    let e_max_j = setup.drive.e_max_j(bed.world.particles.total_mass_kg());
+    let judge = EnsembleJudge::new(scene.drive_length(), e_max_j, 1, 1);
+    run_shake_on_bed_judged(scene, bed, setup, observers, progress, (&judge, 0))
+}
+
+/// [`run_shake_on_bed`] as bed `judged.1` of the beds the judge `judged.0`
+/// decides for together (an ensemble, [`crate::experiment::ensemble`]).
+pub fn run_shake_on_bed_judged(
+    scene: &Scene,
+    bed: &SettledBed,
+    setup: &ShakeSetup,
+    observers: &mut [&mut dyn StepObserver],
+    progress: &mut dyn FnMut(Progress),
+    judged: (&dyn DriveJudge, usize),
+) -> Result<ShakeRun, SceneError> {
     let started = Stopwatch::start();
     let dt = scene.drive_dt_s(&setup.drive);
     let mut world = prepare_drive(bed, scene, dt)?;
+    if judged.0.beds() > 1 {
+        // Beds driven side by side each take one thread.
+        world.step_on_one_thread(true);
+    }
     let mut observers = Observers(observers);
     if observers.wants_particle_dissipation() {
         world.track_particle_dissipation(true);
     }
     let experiment =
-        run_measured_shake_observed(scene, &mut world, setup, &mut observers, progress)?;
+        run_measured_shake_judged(scene, &mut world, setup, &mut observers, progress, judged)?;
     let summary = ShakeSummary::new(scene, bed, setup, &experiment, &world, dt, started);
     Ok(ShakeRun {
         summary,
@@ -539,9 +558,10 @@ impl ShakeSummary {
     ) -> ShakeSummary {
         let outcome = &experiment.outcome;
         let n = world.particles.len();
-        let dem = DemTruth::new(outcome, scene, experiment.bed_to_bed);
+        let dem = DemTruth::new(outcome, scene);
         let mut warnings = bed.warnings.clone();
         warnings.extend(experiment.measured.clipping.iter().cloned());
+        warnings.extend(experiment.measured.calibration_warnings.iter().cloned());
         warnings.extend(dem.warnings(
             setup.drive.freq_hz(),
             scene.simulation.steps_per_contact,
@@ -582,6 +602,7 @@ impl ShakeSummary {
             measured: experiment.measured.clone(),
             warnings,
             files: Vec::new(),
+            ensemble: None,
         }
     }
 }
@@ -644,6 +665,12 @@ impl ShakeRun {
         }
         #[cfg(not(feature = "plot"))]
         let _ = (scene, setup);
+        if let Some(e) = &self.summary.ensemble {
+            let path = dir.join("beds.csv");
+            write_bytes_atomic(&path, e.beds_csv().as_bytes())
+                .map_err(|source| SceneError::Write { path, source })?;
+            files.push("beds.csv");
+        }
         self.summary.files = files.into_iter().map(String::from).collect();
         let path = dir.join("summary.json");
         write_bytes_atomic(&path, self.summary_json().as_bytes())
@@ -828,11 +855,6 @@ mod tests {
         DemTruth {
             energy_per_cycle_j: 0.056,
             energy_per_cycle_stderr_j: Some(5e-4),
-            energy_per_cycle_window_stderr_j: Some(3e-4),
-            bed_to_bed: BedToBed::Measured {
-                rel: 0.010,
-                beds: 32,
-            },
             e_max_j: 0.068,
             efficiency: 0.83,
             efficiency_stderr: Some(0.008),
@@ -844,6 +866,7 @@ mod tests {
                 reached: true,
                 capped: false,
                 lossless: false,
+                ..Steadiness::default()
             },
             cycles: 10,
             steady_first_cycle: 3,
@@ -930,6 +953,7 @@ mod tests {
             reached: false,
             capped: true,
             lossless: false,
+            ..Steadiness::default()
         };
         t.cycles = 400;
         t.steady_first_cycle = 150;
@@ -959,6 +983,7 @@ mod tests {
             reached: false,
             capped: false,
             lossless: true,
+            ..Steadiness::default()
         };
         t.cycles = 8;
         t.energy_per_cycle_j = 0.0;

@@ -18,6 +18,9 @@ use crate::validation::InvalidParameter;
 /// caller handles the drop and the damper alike.
 #[derive(Debug, Error)]
 pub enum SceneError {
+    /// A bed of an ensemble failed, and the others gave up with it.
+    #[error("ensemble of beds given up: {0}")]
+    Ensemble(String),
     #[error("cannot read scene file {path}")]
     Read {
         path: String,

@@ -79,7 +79,7 @@ pub use plot::{
 pub use power::{
     BinSelection, ForcePolarity, HarmonicPower, PhaseCorrection, PolarityVerdict, PowerOptions,
     PowerResult, PowerWindow, WindowPlan, YangPower, efficiency, max_energy_per_cycle_j,
-    mean_power_time_domain, plan_window, yang_power, yang_power_of_trace,
+    mean_power_time_domain, period_powers, plan_window, yang_power, yang_power_of_trace,
 };
 pub use spectrum::{SpectrumPlan, amplitude_spectrum, bin_freq_hz};
 pub use table::{Table, TableFormat};

@@ -503,6 +503,49 @@ impl YangPower {
     }
 }
 
+/// Yang's power (W) of each of `n_periods` whole drive periods from sample
+/// `start`, each analysed alone with `options` (its window replaced):
+/// the series whose spread says how far to trust the record's mean.
+/// Periods start on whole periods rounded to a sample: at drive
+/// frequencies that do not divide the sample rate (1024 Hz at 40 kHz:
+/// 39.06 samples) a period is one to within half a sample.
+pub fn period_powers(
+    force: &[f64],
+    accel: &[f64],
+    sample_rate_hz: f64,
+    drive_freq_hz: f64,
+    start: usize,
+    n_periods: usize,
+    options: &PowerOptions<'_>,
+) -> Result<Vec<f64>> {
+    let period_samples = sample_rate_hz / drive_freq_hz;
+    let len = force.len().min(accel.len());
+    let mut yang = YangPower::new();
+    let mut powers = Vec::with_capacity(n_periods);
+    for p in 0..n_periods {
+        let a = start + (p as f64 * period_samples).round() as usize;
+        let b = (start + ((p + 1) as f64 * period_samples).round() as usize).min(len);
+        if b <= a {
+            break;
+        }
+        let one = PowerOptions {
+            window: PowerWindow::Explicit {
+                start: a,
+                len: b - a,
+            },
+            phase_correction: options.phase_correction,
+            force_polarity: options.force_polarity,
+            bins: options.bins,
+            n_harmonics: options.n_harmonics,
+        };
+        powers.push(
+            yang.compute(force, accel, sample_rate_hz, drive_freq_hz, &one)?
+                .power_w,
+        );
+    }
+    Ok(powers)
+}
+
 /// Yang's structure-independent power (eq. 7.8-7.12): `force` in N (shaker on
 /// damper), `accel` in m/s^2 (enclosure), both sampled at `sample_rate_hz`.
 /// Plans a fresh FFT; keep a [`YangPower`] for repeated calls.
