@@ -731,6 +731,38 @@ mod tests {
         assert_eq!(mser_truncation(&flat[..19]), None);
     }
 
+    /// Period-2 series (a hard and a soft value in turn, ±35 % of the mean,
+    /// with AR(1) noise of ρ 0.5 and 3 % on top, 40 values): [`series_mean`]
+    /// averages them in pairs and its z-scores spread within 0.75-1.35 over
+    /// 2 000 series; the AR(1) estimator on the values themselves, its ρ
+    /// clamped at −0.8, takes the alternation for noise and spreads them
+    /// below 0.75 (it states several times the error).
+    #[test]
+    fn a_period_two_series_is_calibrated_in_pairs() {
+        let mut normal = normal_source(77);
+        let zs = |estimator: fn(&[f64]) -> MeanStderr, normal: &mut dyn FnMut() -> f64| {
+            let zs: Vec<f64> = (0..2000)
+                .map(|_| {
+                    let mut x = 0.0;
+                    let xs: Vec<f64> = (0..40)
+                        .map(|k| {
+                            x = 0.5 * x + normal();
+                            let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                            1.0 + 0.35 * sign + 0.03 * x
+                        })
+                        .collect();
+                    let m = estimator(&xs);
+                    (m.mean - 1.0) / m.stderr.expect("enough values")
+                })
+                .collect();
+            mean_std(&zs).std
+        };
+        let pairs = zs(|xs| series_mean(xs).0, &mut normal);
+        assert!((0.75..=1.35).contains(&pairs), "pairs: {pairs}");
+        let plain = zs(mean_stderr, &mut normal);
+        assert!(plain < 0.75, "the clamped AR(1): {plain}");
+    }
+
     /// The mean of independent figures: s/√n widened by Student's t on
     /// n − 1 degrees of freedom; one figure has no error.
     #[test]

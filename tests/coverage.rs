@@ -89,7 +89,19 @@ fn z_scores(values: &[(f64, f64)]) -> Vec<f64> {
 /// Problems with the runs at one condition, printed as it goes.
 fn check(freq_hz: f64, gamma: f64) -> Vec<String> {
     let runs: Vec<Run> = (FIRST_SEED..FIRST_SEED + RUNS)
-        .map(|seed| run(seed, freq_hz, gamma))
+        .map(|seed| {
+            let r = run(seed, freq_hz, gamma);
+            println!(
+                "{freq_hz} Hz, Gamma {gamma}, seed {seed}: DEM {:.5e} +- {:.2e} J, measured {:.5e} +- {:.2e} J, {} cycles, {}",
+                r.dem.0,
+                r.dem.1,
+                r.measured.0,
+                r.measured.1,
+                r.cycles,
+                if r.steady { "steady" } else { "NOT shown steady" }
+            );
+            r
+        })
         .collect();
     let mut problems = Vec::new();
     for (what, values) in [

@@ -237,6 +237,10 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
     }
     print_dem(&s.dem);
     print_measured(s);
+    if s.ensemble.is_some() {
+        println!("  wrote {}", dir.display());
+        return;
+    }
     println!(
         "  speed {:.2} M particle-steps/s ({} thread{}); wall time: {} {:.1} s, drive {:.1} s, rig and measurement {:.2} s",
         s.particle_steps_per_s / 1e6,
@@ -343,11 +347,12 @@ fn print_ensemble(e: &EnsembleSummary) {
         );
     }
     println!(
-        "    wall time {:.1} s for {} beds on {} thread{}",
+        "    wall time {:.1} s for {} beds on {} thread{} (settling included), {:.2} M particle-steps/s",
         e.wall_time_s,
         e.beds,
         e.threads,
-        if e.threads == 1 { "" } else { "s" }
+        if e.threads == 1 { "" } else { "s" },
+        e.particle_steps_per_s / 1e6
     );
 }
 

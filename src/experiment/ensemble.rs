@@ -270,6 +270,9 @@ pub struct EnsembleSummary {
     /// Wall time of the whole ensemble (s), and the threads it stepped on.
     pub wall_time_s: f64,
     pub threads: usize,
+    /// Every bed's particles × drive steps over `wall_time_s`: the
+    /// ensemble's speed (a bed's own figure counts its waits for the others).
+    pub particle_steps_per_s: f64,
     pub rows: Vec<BedRow>,
 }
 
@@ -454,6 +457,11 @@ fn summarise(
         steady_first_cycle: first.dem.steady_first_cycle,
         wall_time_s,
         threads,
+        particle_steps_per_s: runs
+            .iter()
+            .map(|r| r.summary.n_particles as f64 * r.summary.steps as f64)
+            .sum::<f64>()
+            / wall_time_s.max(f64::MIN_POSITIVE),
         rows,
     }
 }
