@@ -45,13 +45,22 @@ fn the_reference_record_reads_without_a_warning() {
     let s = a["spectrum_freq_hz"].as_f64().expect("spectrum");
     assert!((s - 40.0).abs() < 0.02, "{s}");
     assert_eq!(a["dropped_samples"], 0);
-    // The semicolon export has no metadata: its --freq 40 agrees with its spectrum.
+    // The semicolon export has no metadata: its --freq 40 agrees with its
+    // spectrum; it names no rig, so the calibration's rig cannot be checked
+    // against it, and it says so (a plain lab CSV analysed with another
+    // rig's table would otherwise read 4.5 % off in silence).
     let semi = reference("trace-semicolon.csv");
     let (b, err) = analyze(&dir, &[&semi, "--freq", "40", "--calibration", &cal]);
     assert_eq!(
         err.matches("warning").count(),
-        1,
-        "only the efficiency: {err}"
+        2,
+        "the efficiency and the unchecked rig: {err}"
+    );
+    assert!(
+        err.contains(
+            "the calibration's rig cannot be checked against the record's: the record names no rig"
+        ),
+        "{err}"
     );
     assert_eq!(b["drive_freq_source"], "given");
     assert_eq!(b["power_w"], a["power_w"]);

@@ -112,7 +112,10 @@ fn an_ensemble_is_the_same_on_one_and_two_threads() {
             ensemble["threads"].as_u64(),
             Some(threads.parse().expect("n"))
         );
-        let ensemble = without_keys(ensemble.take(), &["wall_time_s", "threads"]);
+        let ensemble = without_keys(
+            ensemble.take(),
+            &["wall_time_s", "threads", "particle_steps_per_s"],
+        );
         let beds = std::fs::read(dir.path(&format!("{out_dir}/beds.csv"))).expect("beds.csv");
         let record = std::fs::read(dir.path(&format!("{out_dir}/trace.csv"))).expect("trace");
         runs.push((s, ensemble, beds, record));

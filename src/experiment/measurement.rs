@@ -30,9 +30,9 @@ use crate::dem::World;
 use crate::drive::Drive;
 use crate::experiment::damper::window_mean;
 use crate::experiment::damper::{
-    DriveJudge, DriveOutcome, DrivePlan, NoObserver, Progress, StepObserver, run_drive_judged,
+    DriveJudge, DriveOutcome, DrivePlan, NoObserver, OneBed, Progress, StepObserver,
+    run_drive_judged,
 };
-use crate::experiment::ensemble::EnsembleJudge;
 use crate::experiment::record::{TruthRecorder, TruthSamples};
 use crate::rig::{Daq, DaqReport, RigSpec, Shaker, ShakerKind, ShakerReport, transducer_force_n};
 use crate::rig::{EnclosureMotion, Kinematics};
@@ -184,7 +184,7 @@ pub fn run_measured_shake_observed(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeExperiment, SceneError> {
     let e_max_j = setup.drive.e_max_j(world.particles.total_mass_kg());
-    let judge = EnsembleJudge::new(scene.drive_length(), e_max_j, 1, 1);
+    let judge = OneBed::new(scene.drive_length(), e_max_j);
     run_measured_shake_judged(scene, world, setup, observer, progress, (&judge, 0))
 }
 

@@ -15,6 +15,7 @@ pub mod bed_spread;
 pub mod damper;
 pub mod drop;
 pub mod ensemble;
+pub mod ensemble_summary;
 pub mod fill;
 pub mod host_decay;
 pub mod host_frf;

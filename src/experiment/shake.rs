@@ -33,10 +33,11 @@ use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::drive::Drive;
 use crate::experiment::bed_cache::BedSource;
+use crate::experiment::damper::OneBed;
 use crate::experiment::damper::{
     DriveJudge, DriveOutcome, Observers, Progress, Steadiness, StepObserver,
 };
-use crate::experiment::ensemble::{EnsembleJudge, EnsembleSummary};
+use crate::experiment::ensemble_summary::EnsembleSummary;
 use crate::experiment::measurement::{
     Measured, ShakeExperiment, ShakeSetup, run_measured_shake_judged,
 };
@@ -510,7 +511,7 @@ pub fn run_shake_on_bed(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
     let e_max_j = setup.drive.e_max_j(bed.world.particles.total_mass_kg());
-    let judge = EnsembleJudge::new(scene.drive_length(), e_max_j, 1, 1);
+    let judge = OneBed::new(scene.drive_length(), e_max_j);
     run_shake_on_bed_judged(scene, bed, setup, observers, progress, (&judge, 0))
 }
 

@@ -1,0 +1,142 @@
+//! What an ensemble of beds says about the damper
+//! ([`crate::experiment::ensemble`]): its figures, each the mean over the
+//! beds with the error of their spread (Student's t on `N − 1` degrees of
+//! freedom, [`crate::stats::ensemble_mean`]), the rule's verdict, one row a
+//! bed (`beds.csv`), and the words for a window not shown steady. Apart
+//! from the runner so that a shake's summary can carry it.
+
+use serde::Serialize;
+
+use crate::experiment::damper::Steadiness;
+use crate::stats::{MeanStderr, ensemble_mean};
+
+/// An ensemble's figure: the mean over the beds and its one-sigma error
+/// from their spread (Student's t on `beds − 1` degrees of freedom).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct EnsembleFigure {
+    pub mean: f64,
+    /// `None` for one bed: its spread is not known.
+    pub stderr: Option<f64>,
+    /// Sample standard deviation of the beds' figures (0 for one bed).
+    pub spread: f64,
+}
+
+impl EnsembleFigure {
+    /// The figure of `values`, one per bed.
+    pub fn of(values: &[f64]) -> Self {
+        let m: MeanStderr = ensemble_mean(values);
+        EnsembleFigure {
+            mean: m.mean,
+            stderr: m.stderr,
+            spread: crate::stats::mean_std(values).std,
+        }
+    }
+}
+
+/// One bed of an ensemble, as `beds.csv` and the summary list it.
+#[derive(Debug, Clone, Serialize)]
+pub struct BedRow {
+    pub bed: u32,
+    pub seed: u64,
+    pub dem_energy_per_cycle_j: f64,
+    /// This bed's window error (J): what one bed alone would claim.
+    pub dem_window_stderr_j: Option<f64>,
+    pub dem_efficiency: f64,
+    pub measured_energy_per_cycle_j: f64,
+    pub measured_stderr_j: Option<f64>,
+    pub measured_efficiency: f64,
+    /// The bed's energy per cycle alternates (period 2).
+    pub alternates: bool,
+    /// Drift across the window, of the mean (its own window judged alone).
+    pub drift_rel: Option<f64>,
+    pub drift_stderr_rel: Option<f64>,
+}
+
+/// What an ensemble says about the damper.
+#[derive(Debug, Clone, Serialize)]
+pub struct EnsembleSummary {
+    pub beds: usize,
+    /// Energy dissipated per cycle (J), DEM truth, over the beds.
+    pub dem_energy_per_cycle_j: EnsembleFigure,
+    pub dem_efficiency: EnsembleFigure,
+    /// Yang's method on each bed's rig record (J), over the beds.
+    pub measured_energy_per_cycle_j: EnsembleFigure,
+    pub measured_efficiency: EnsembleFigure,
+    /// The steady rule's verdict on the ensemble (error of the beds'
+    /// spread, drift and warm-up of their mean series).
+    pub steadiness: Steadiness,
+    pub cycles: u32,
+    pub steady_first_cycle: u32,
+    /// Wall time of the whole ensemble (s), and the threads it stepped on.
+    pub wall_time_s: f64,
+    pub threads: usize,
+    /// Every bed's particles × drive steps over `wall_time_s`: the
+    /// ensemble's speed (a bed's own figure counts its waits for the others).
+    pub particle_steps_per_s: f64,
+    pub rows: Vec<BedRow>,
+}
+
+impl EnsembleSummary {
+    /// `beds.csv`: one row per bed.
+    pub fn beds_csv(&self) -> String {
+        let mut out = String::from(
+            "bed,seed,dem_energy_per_cycle_j,dem_window_stderr_j,dem_efficiency,measured_energy_per_cycle_j,measured_stderr_j,measured_efficiency,alternates,drift_rel,drift_stderr_rel\n",
+        );
+        let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
+        for r in &self.rows {
+            out.push_str(&format!(
+                "{},{},{:e},{},{:e},{:e},{},{:e},{},{},{}\n",
+                r.bed,
+                r.seed,
+                r.dem_energy_per_cycle_j,
+                opt(r.dem_window_stderr_j),
+                r.dem_efficiency,
+                r.measured_energy_per_cycle_j,
+                opt(r.measured_stderr_j),
+                r.measured_efficiency,
+                r.alternates,
+                opt(r.drift_rel),
+                opt(r.drift_stderr_rel),
+            ));
+        }
+        out
+    }
+}
+
+/// Why a window is not shown steady, in words.
+pub fn unsteady_reasons(s: &Steadiness, first_cycle: u32) -> String {
+    let mut why = Vec::new();
+    if let (Some(d), Some(e)) = (s.drift_rel, s.drift_stderr_rel)
+        && d.abs() > 2.0 * e
+    {
+        why.push(format!(
+            "the mean energy per cycle drifts by {:+.2} % +- {:.2} % across the window",
+            100.0 * d,
+            100.0 * e
+        ));
+    }
+    if s.warming_up(first_cycle) {
+        why.push(match s.warm_up_cycles {
+            Some(d) if s.warm_up_open => format!(
+                "the warm-up may not be over (MSER-5's least lies at cycle {d}, the end of the half of the drive it searches)"
+            ),
+            Some(d) => format!(
+                "the warm-up (MSER-5) runs to cycle {d}, past the window's start at {first_cycle}"
+            ),
+            None => "the warm-up could not be told".to_string(),
+        });
+    }
+    match (s.stderr_rel, s.window_part_rel) {
+        (Some(r), Some(w)) => why.push(format!(
+            "the error of the mean is {:.2} %, {:.2} % of it from the beds' windows",
+            100.0 * r,
+            100.0 * w
+        )),
+        (Some(r), None) => why.push(format!(
+            "the error of the mean is {:.2} % (the windows' part not known)",
+            100.0 * r
+        )),
+        _ => why.push("the error of the mean is not known".to_string()),
+    }
+    why.join("; ")
+}
