@@ -744,8 +744,10 @@ mod tests {
         let mut out = vec![LedgerSnapshot::default()];
         for k in 0..cycles {
             total += e(k);
-            let mut s = LedgerSnapshot::default();
-            s.time_s = (k + 1) as f64 * 0.025;
+            let mut s = LedgerSnapshot {
+                time_s: (k + 1) as f64 * 0.025,
+                ..LedgerSnapshot::default()
+            };
             s.flows.work_in_j = total;
             s.flows.dissipated.pp_normal = total;
             out.push(s);
