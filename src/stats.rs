@@ -513,7 +513,6 @@ mod tests {
         ];
         for (n, rho) in cases {
             let spread = z_spread(n, rho, 2000, |xs| mean_stderr(xs).stderr);
-            eprintln!("n {n} rho {rho}: {spread}");
             assert!(
                 (0.75..=1.35).contains(&spread),
                 "n {n}, rho {rho}: z spread {spread}"

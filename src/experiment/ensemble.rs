@@ -146,13 +146,6 @@ impl DriveJudge for EnsembleJudge {
         bed: usize,
         snapshots: &[LedgerSnapshot],
     ) -> Result<Option<Verdict>, SceneError> {
-        if self.beds == 1 {
-            let (done, latest) = verdict(self.length, &[snapshots], self.e_max_j);
-            let mut st = self.state();
-            st.latest = latest;
-            st.verdict = done;
-            return Ok(done);
-        }
         let mut st = self.state();
         if let Some(why) = &st.failed {
             return Err(SceneError::Ensemble(why.clone()));
