@@ -314,7 +314,7 @@ fn print_ensemble(e: &EnsembleSummary) {
         fig(&e.measured_efficiency, 3)
     );
     println!(
-        "    (+- : one sigma of the mean over the beds, from their spread ({:.2} % of the mean), Student's t on {} degrees of freedom)",
+        "    (+- : one sigma of the mean over the beds, from their spread ({:.2} % of the mean), Student's t on {} degrees of freedom, never less than the beds' own windows' errors make it)",
         100.0 * e.dem_efficiency.spread / e.dem_efficiency.mean.abs().max(f64::MIN_POSITIVE),
         e.beds.saturating_sub(1)
     );

@@ -29,6 +29,7 @@ pub use crate::experiment::ensemble_summary::{
     BedRow, EnsembleFigure, EnsembleSummary, unsteady_reasons,
 };
 use crate::experiment::measurement::ShakeSetup;
+use crate::experiment::settle::SettledBed;
 use crate::experiment::shake::{ShakeRun, run_shake_on_bed_judged};
 use crate::scene::{DriveLength, Scene, SceneError};
 use crate::validation::require;
@@ -43,6 +44,30 @@ pub const DEFAULT_BEDS: u32 = 6;
 
 /// Most beds one ensemble drives.
 pub const MAX_BEDS: u32 = 64;
+
+/// Where an ensemble's beds come from.
+pub trait BedProvider: Sync {
+    /// Bed `k` (0-based) of the ensemble, settled from `scene` (whose seed
+    /// is already the bed's, [`bed_seed`]).
+    fn bed(
+        &self,
+        scene: &Scene,
+        k: u32,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<SettledBed, SceneError>;
+}
+
+/// Each bed settled, or read from the bed cache.
+impl BedProvider for BedSource {
+    fn bed(
+        &self,
+        scene: &Scene,
+        _k: u32,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<SettledBed, SceneError> {
+        self.settle(scene, progress)
+    }
+}
 
 /// Seed of bed `k` (0-based) of an ensemble of seed `seed`: `seed` itself
 /// for the first bed (so a one-bed run is the bed of `--seed`), then
@@ -219,7 +244,7 @@ pub struct EnsembleRun {
 pub fn run_ensemble_shake(
     scene: &Scene,
     setup: &ShakeSetup,
-    source: &BedSource,
+    source: &dyn BedProvider,
     beds: u32,
     threads: usize,
     observers: &mut [&mut dyn StepObserver],
@@ -255,7 +280,7 @@ pub fn run_ensemble_shake(
             armed: true,
         };
         let s = bed_scene(k);
-        let result = source.settle(&s, progress).and_then(|bed| {
+        let result = source.bed(&s, k, progress).and_then(|bed| {
             run_shake_on_bed_judged(
                 &s,
                 &bed,
@@ -342,17 +367,53 @@ fn summarise(
             }
         })
         .collect();
-    let col = |f: fn(&BedRow) -> f64| EnsembleFigure::of(&rows.iter().map(f).collect::<Vec<_>>());
+    // Each figure with its beds' own window errors (an efficiency's is its
+    // energy's, scaled alike).
+    let col = |f: fn(&BedRow) -> f64, err: fn(&BedRow) -> Option<f64>| {
+        let values: Vec<f64> = rows.iter().map(f).collect();
+        let errors: Vec<Option<f64>> = rows.iter().map(err).collect();
+        EnsembleFigure::of(&values, &errors)
+    };
+    fn scaled(e: Option<f64>, figure: f64, energy: f64) -> Option<f64> {
+        e.map(|e| {
+            if energy == 0.0 {
+                0.0
+            } else {
+                e * (figure / energy).abs()
+            }
+        })
+    }
     let first = &runs[0].summary;
     let steadiness = judge
         .final_verdict()
         .map_or(first.dem.steadiness, |v| v.steadiness);
     EnsembleSummary {
         beds: runs.len(),
-        dem_energy_per_cycle_j: col(|r| r.dem_energy_per_cycle_j),
-        dem_efficiency: col(|r| r.dem_efficiency),
-        measured_energy_per_cycle_j: col(|r| r.measured_energy_per_cycle_j),
-        measured_efficiency: col(|r| r.measured_efficiency),
+        dem_energy_per_cycle_j: col(|r| r.dem_energy_per_cycle_j, |r| r.dem_window_stderr_j),
+        dem_efficiency: col(
+            |r| r.dem_efficiency,
+            |r| {
+                scaled(
+                    r.dem_window_stderr_j,
+                    r.dem_efficiency,
+                    r.dem_energy_per_cycle_j,
+                )
+            },
+        ),
+        measured_energy_per_cycle_j: col(
+            |r| r.measured_energy_per_cycle_j,
+            |r| r.measured_stderr_j,
+        ),
+        measured_efficiency: col(
+            |r| r.measured_efficiency,
+            |r| {
+                scaled(
+                    r.measured_stderr_j,
+                    r.measured_efficiency,
+                    r.measured_energy_per_cycle_j,
+                )
+            },
+        ),
         steadiness,
         cycles: first.cycles,
         steady_first_cycle: first.dem.steady_first_cycle,

@@ -8,10 +8,12 @@
 use serde::Serialize;
 
 use crate::experiment::damper::Steadiness;
-use crate::stats::{MeanStderr, ensemble_mean};
+use crate::stats::{MeanStderr, ensemble_mean, ensemble_mean_floored};
 
 /// An ensemble's figure: the mean over the beds and its one-sigma error
-/// from their spread (Student's t on `beds − 1` degrees of freedom).
+/// from their spread (Student's t on `beds − 1` degrees of freedom), never
+/// less than the beds' own window errors make it
+/// ([`crate::stats::ensemble_mean_floored`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct EnsembleFigure {
     pub mean: f64,
@@ -22,9 +24,14 @@ pub struct EnsembleFigure {
 }
 
 impl EnsembleFigure {
-    /// The figure of `values`, one per bed.
-    pub fn of(values: &[f64]) -> Self {
-        let m: MeanStderr = ensemble_mean(values);
+    /// The figure of `values`, one per bed, each with its own window's
+    /// error where known (the error is floored only if every bed's is).
+    pub fn of(values: &[f64], window_stderrs: &[Option<f64>]) -> Self {
+        let windows: Option<Vec<f64>> = window_stderrs.iter().copied().collect();
+        let m: MeanStderr = match windows {
+            Some(w) if w.len() == values.len() => ensemble_mean_floored(values, &w),
+            _ => ensemble_mean(values),
+        };
         EnsembleFigure {
             mean: m.mean,
             stderr: m.stderr,
