@@ -82,6 +82,13 @@ pub struct SweepArgs {
     /// with `vlab sweep merge`.
     #[arg(long, value_name = "I/N", value_parser = shard)]
     shard: Option<Shard>,
+    /// Independent beds each condition drives together, seeds derived from
+    /// each of --seeds as `vlab shake --beds` derives them: a row's figures
+    /// are then their mean and its +- their spread's; with one bed the +- is
+    /// its window's and leaves out how far another packing reads
+    /// (sweep.csv's `se_from` says which). Costs N times one bed.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    beds: u32,
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
@@ -181,7 +188,8 @@ fn sweep_plan(a: &SweepArgs) -> Result<SweepPlan> {
     .set(true, "freq_hz", "--freq")
     .set(true, "gamma", "--gamma")
     .set(true, "seeds", "--seeds")
-    .set(true, "fill_ratio", "--fill-ratio");
+    .set(true, "fill_ratio", "--fill-ratio")
+    .set(true, "beds", "--beds");
     let scene = Scene::load_or_thesis(a.scene.as_deref())?;
     let scene = SceneOverrides {
         cycles: a.cycles,
@@ -202,6 +210,7 @@ fn sweep_plan(a: &SweepArgs) -> Result<SweepPlan> {
         fill_ratios: a.fill_ratios.clone(),
         orientations: a.orientation.clone(),
         beds: a.cache.source(&mut |n| eprintln!("{n}")),
+        ensemble_beds: a.beds,
     };
     plan.validate()
         .map_err(|e| flags.name_flags(e.into()))
@@ -292,7 +301,7 @@ fn plus_minus(se: f64) -> String {
     if se.is_finite() {
         format!("{se:.3}")
     } else {
-        "n/a  ".into()
+        "not known".into()
     }
 }
 
@@ -340,17 +349,20 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
             format!(", shard {}", h.shard)
         }
     );
-    println!("  fill   orientation  freq    Gamma   efficiency (DEM +- se)  measured  phase");
+    println!(
+        "  fill   orientation  freq    Gamma   efficiency (DEM +- se)  +- from    measured  phase"
+    );
     for s in &summary {
         if s.status == RowStatus::Ok {
             println!(
-                "  {:.3}  {:<11}  {:>5}  {:>6}   {:.3} +- {}          {:.3}     {}",
+                "  {:.3}  {:<11}  {:>5}  {:>6}   {:.3} +- {:<9}       {:<9}  {:.3}     {}",
                 s.fill_ratio,
                 s.orientation.as_str(),
                 s.freq_hz,
                 s.gamma,
                 s.efficiency,
                 plus_minus(s.efficiency_se),
+                s.se_from,
                 s.efficiency_measured,
                 phase_name(s.phase)
             );
@@ -364,6 +376,11 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
                 s.status.as_str()
             );
         }
+    }
+    if summary.iter().any(|s| s.se_from == "window") {
+        println!(
+            "  (+- from window: one bed's cycles alone, which leaves out how far another packing of the damper reads (at 40 Hz, Gamma 20 the beds spread twice as far as a window claims; docs/accuracy.md); --beds N or several --seeds measure it)"
+        );
     }
     print_peaks(&series_peaks(file));
     println!("  wrote {}", dir.join("sweep.csv").display());

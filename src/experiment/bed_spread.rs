@@ -48,6 +48,10 @@ pub enum BedToBed {
     Measured { rel: f64, beds: u32 },
     /// Not measured for this damper or condition: the +- is the window's.
     NotMeasured,
+    /// Measured by the run itself: the figure is the mean over `beds`
+    /// independent beds and its +- their spread's
+    /// ([`crate::stats::ensemble_mean_floored`]).
+    Ensemble { beds: u32 },
 }
 
 impl BedToBed {
@@ -55,7 +59,7 @@ impl BedToBed {
     pub fn rel(&self) -> f64 {
         match *self {
             BedToBed::Measured { rel, .. } => rel,
-            BedToBed::NotMeasured => 0.0,
+            BedToBed::NotMeasured | BedToBed::Ensemble { .. } => 0.0,
         }
     }
 
@@ -67,6 +71,9 @@ impl BedToBed {
                 100.0 * rel,
                 freq_hz,
                 gamma
+            ),
+            BedToBed::Ensemble { beds } => format!(
+                "the +- is the spread of the {beds} beds run here (Student's t), at {freq_hz} Hz, Gamma {gamma}"
             ),
             BedToBed::NotMeasured => {
                 let measured: Vec<String> = THESIS_BED_SPREAD

@@ -26,6 +26,7 @@ use serde::Serialize;
 use super::bed_cache::BedSource;
 use super::bed_spread::{BedToBed, is_thesis_damper};
 use super::host_test::{Damper, HostRun, HostTest, run_host_test};
+use crate::experiment::ensemble::bed_seed;
 use crate::host::Excitation;
 use crate::rig::{ACCEL_CHANNEL, FORCE_CHANNEL};
 use crate::scene::{Scene, SceneError};
@@ -33,6 +34,7 @@ use crate::signals::SignalsError;
 use crate::signals::structural::{
     Frf, HalfPower, Window, half_power, power_input_corrected_w, sine_component, welch_frf,
 };
+use crate::stats::{ensemble_mean, ensemble_mean_floored, windows_part};
 use crate::validation::{Bound, InvalidParameter, count_in, in_range};
 
 /// Where the bed-to-bed part of the power-input estimate was measured: the
@@ -90,6 +92,11 @@ pub struct SteppedSine {
     pub force_n: f64,
     pub settle_cycles: u32,
     pub record_cycles: u32,
+    /// Independent beds run at every frequency (seeds
+    /// [`crate::experiment::ensemble::bed_seed`] of the scene's): each
+    /// point is their mean and its +- their spread's. 1: one bed, its +-
+    /// the record's and the bed-to-bed part where [`bed_to_bed`] knows it.
+    pub beds: u32,
 }
 
 impl SteppedSine {
@@ -132,6 +139,13 @@ impl SteppedSine {
             "cycles",
             4,
             Some(10_000),
+        )?;
+        count_in(
+            "beds",
+            self.beds,
+            "",
+            1,
+            Some(crate::experiment::ensemble::MAX_BEDS),
         )?;
         Ok(())
     }
@@ -455,6 +469,51 @@ fn measure_point(
     })
 }
 
+/// The point of an ensemble of beds at one frequency: every figure the
+/// mean over the beds, the damper's power with the error of their spread,
+/// never less than their records' errors make it
+/// ([`crate::stats::ensemble_mean_floored`]; the spread's alone where a
+/// record's error is not known); steady when every bed is; the beds'
+/// steps summed, the longest bed's wall time.
+fn ensemble_point(each: &[FrfPoint]) -> FrfPoint {
+    let n = each.len() as f64;
+    let mean = |f: fn(&FrfPoint) -> f64| each.iter().map(f).sum::<f64>() / n;
+    let powers: Vec<f64> = each.iter().map(|p| p.damper_power_w).collect();
+    let records: Vec<f64> = each
+        .iter()
+        .map(|p| p.damper_power_record_stderr_w)
+        .collect();
+    let spread = if records.iter().all(|e| e.is_finite()) {
+        ensemble_mean_floored(&powers, &records)
+    } else {
+        ensemble_mean(&powers)
+    };
+    FrfPoint {
+        freq_hz: each[0].freq_hz,
+        receptance_re: mean(|p| p.receptance_re),
+        receptance_im: mean(|p| p.receptance_im),
+        amplitude_m: mean(|p| p.amplitude_m),
+        gamma: mean(|p| p.gamma),
+        true_amplitude_m: mean(|p| p.true_amplitude_m),
+        power_input_w: mean(|p| p.power_input_w),
+        host_storage_w: mean(|p| p.host_storage_w),
+        damper_power_w: spread.mean,
+        damper_power_stderr_w: spread.stderr.unwrap_or(f64::NAN),
+        damper_power_record_stderr_w: windows_part(&records, each.len()),
+        bed_to_bed: BedToBed::Ensemble {
+            beds: each.len() as u32,
+        },
+        true_input_w: mean(|p| p.true_input_w),
+        true_host_w: mean(|p| p.true_host_w),
+        true_damper_work_w: mean(|p| p.true_damper_work_w),
+        true_damper_w: mean(|p| p.true_damper_w),
+        host_energy_drift_w: mean(|p| p.host_energy_drift_w),
+        steady: each.iter().all(|p| p.steady),
+        steps: each.iter().map(|p| p.steps).sum(),
+        wall_time_s: each.iter().map(|p| p.wall_time_s).fold(0.0, f64::max),
+    }
+}
+
 /// Runs the stepped sine `plan` of `test` (its excitation replaced by each
 /// sine), the frequencies in parallel, each from the same settled bed.
 pub fn run_stepped_sine(
@@ -466,9 +525,23 @@ pub fn run_stepped_sine(
 ) -> Result<SteppedSineResult, SceneError> {
     plan.validate()?;
     let started = crate::clock::Stopwatch::start();
-    // Settle (or read) the bed once, before the frequencies share it.
+    // Without particles there is one system, however many beds are asked.
+    let bed_count = if test.damper == Damper::Particles {
+        plan.beds
+    } else {
+        1
+    };
+    let bed_scene = |k: u32| {
+        let mut s = scene.clone();
+        s.simulation.seed = bed_seed(scene.simulation.seed, k);
+        s
+    };
+    // Settle (or read) the beds once, before the frequencies share them.
     if test.damper == Damper::Particles {
-        beds.settle(scene, &mut |_| {})?;
+        (0..bed_count)
+            .into_par_iter()
+            .map(|k| beds.settle(&bed_scene(k), &mut |_| {}).map(|_| ()))
+            .collect::<Result<Vec<()>, SceneError>>()?;
     }
     let g = scene.simulation.gravity_mps2;
     let points: Vec<FrfPoint> = plan
@@ -483,12 +556,29 @@ pub fn run_stepped_sine(
             };
             t.start_steady = true;
             t.duration_s = f64::from(plan.settle_cycles + plan.record_cycles) * period;
-            let run = run_host_test(scene, beds, &t, &mut |_| {})?;
-            let mut point = measure_point(&run, &t, *f, f64::from(plan.settle_cycles) * period, g)?;
-            point.bed_to_bed = bed_to_bed(scene, &t, plan, *f);
-            point.damper_power_stderr_w = point
-                .damper_power_record_stderr_w
-                .hypot(point.bed_to_bed.rel() * point.damper_power_w);
+            let each: Vec<FrfPoint> = (0..bed_count)
+                .into_par_iter()
+                .map(|k| {
+                    let t = HostTest {
+                        noise_seed: bed_seed(t.noise_seed, k),
+                        ..t.clone()
+                    };
+                    let run = run_host_test(&bed_scene(k), beds, &t, &mut |_| {})?;
+                    measure_point(&run, &t, *f, f64::from(plan.settle_cycles) * period, g)
+                })
+                .collect::<Result<_, SceneError>>()?;
+            let point = if each.len() > 1 {
+                ensemble_point(&each)
+            } else {
+                let mut point = each.into_iter().next().ok_or_else(|| {
+                    SceneError::Ensemble("a stepped-sine point without a bed".into())
+                })?;
+                point.bed_to_bed = bed_to_bed(scene, &t, plan, *f);
+                point.damper_power_stderr_w = point
+                    .damper_power_record_stderr_w
+                    .hypot(point.bed_to_bed.rel() * point.damper_power_w);
+                point
+            };
             done(&point);
             Ok(point)
         })
@@ -581,6 +671,7 @@ mod tests {
             force_n: 2.0,
             settle_cycles: 0,
             record_cycles: 20,
+            beds: 1,
         };
         let result = run_stepped_sine(&Scene::thesis(), &BedSource::Settle, &test, &plan, &|_| {})
             .expect("runs");
@@ -647,6 +738,55 @@ mod tests {
         );
     }
 
+    /// An ensemble's point: the mean of its beds, the damper power's +-
+    /// from their spread (Student's t on n − 1), never below their records'
+    /// errors, and labelled as measured by the run.
+    #[test]
+    fn an_ensemble_point_is_the_mean_of_its_beds_with_their_spread() {
+        let bed = |power_w: f64, record_w: f64| FrfPoint {
+            freq_hz: 44.0,
+            receptance_re: power_w,
+            receptance_im: -power_w,
+            amplitude_m: 1e-4,
+            gamma: 5.5,
+            true_amplitude_m: 1e-4,
+            power_input_w: power_w,
+            host_storage_w: 0.0,
+            damper_power_w: power_w,
+            damper_power_stderr_w: record_w,
+            damper_power_record_stderr_w: record_w,
+            bed_to_bed: BedToBed::NotMeasured,
+            true_input_w: power_w,
+            true_host_w: 0.0,
+            true_damper_work_w: power_w,
+            true_damper_w: power_w,
+            host_energy_drift_w: 0.0,
+            steady: true,
+            steps: 10,
+            wall_time_s: 1.0,
+        };
+        let apart = [bed(0.040, 0.0001), bed(0.044, 0.0001), bed(0.036, 0.0001)];
+        let p = ensemble_point(&apart);
+        let spread = crate::stats::ensemble_mean(&[0.040, 0.044, 0.036]);
+        assert!((p.damper_power_w - 0.040).abs() < 1e-15);
+        assert_eq!(Some(p.damper_power_stderr_w), spread.stderr);
+        assert!((p.receptance_re - 0.040).abs() < 1e-15);
+        assert_eq!(p.bed_to_bed, BedToBed::Ensemble { beds: 3 });
+        assert_eq!(p.steps, 30);
+        let agreeing = [bed(0.040, 0.002), bed(0.0401, 0.002), bed(0.0399, 0.002)];
+        let p = ensemble_point(&agreeing);
+        let own = 0.002 * 3f64.sqrt() / 3.0;
+        assert!((p.damper_power_stderr_w - own).abs() < 1e-15, "{p:?}");
+        let unsteady = [
+            bed(0.040, 0.0001),
+            FrfPoint {
+                steady: false,
+                ..bed(0.041, 0.0001)
+            },
+        ];
+        assert!(!ensemble_point(&unsteady).steady);
+    }
+
     /// The bed-to-bed part is the table's only for the thesis damper (any
     /// seed) on the built-in host at the measured force, frequency and
     /// plan; a dashpot, another frequency, plan or damper has none.
@@ -658,6 +798,7 @@ mod tests {
             force_n: 5.0,
             settle_cycles: 30,
             record_cycles: 20,
+            beds: 1,
         };
         let mut scene = Scene::thesis();
         scene.simulation.seed = 17;

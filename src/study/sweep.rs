@@ -38,6 +38,7 @@ use serde::{Serialize, Serializer};
 
 use crate::atomic_write::write_atomic;
 use crate::experiment::bed_cache::BedSource;
+use crate::experiment::ensemble::{BedProvider, EnsembleFigure, bed_seed, run_ensemble_shake};
 use crate::experiment::measurement::{CalibrationSource, ShakeSetup};
 use crate::experiment::settle::SettledBed;
 use crate::experiment::shake::{check_record_window, resolve_rig, run_shake_on_bed, shake_drive};
@@ -272,6 +273,11 @@ pub struct SweepPlan {
     pub orientations: Vec<Orientation>,
     /// Where the settled beds come from (the bed cache, or settle each).
     pub beds: BedSource,
+    /// Beds each condition drives as an ensemble
+    /// ([`crate::experiment::ensemble`]): 1 is one bed, whose +- is its
+    /// window's; more give each row the mean over the beds with the error
+    /// of their spread.
+    pub ensemble_beds: u32,
 }
 
 impl SweepPlan {
@@ -350,6 +356,7 @@ impl SweepPlan {
         nonempty("freq_hz", self.freqs_hz.len())?;
         nonempty("gamma", self.gammas.len())?;
         nonempty("seeds", self.seeds.len())?;
+        crate::experiment::ensemble::check_beds(self.ensemble_beds).map_err(SweepError::from)?;
         for &g in &self.gammas {
             crate::validation::positive("gamma", g, "")?;
         }
@@ -385,8 +392,15 @@ impl SweepPlan {
         let rig = RigSpec::from_name_or_path(&self.rig)
             .map(|r| format!("{r:?}"))
             .unwrap_or_else(|_| self.rig.clone());
+        // One bed a condition keeps the fingerprint sweeps had before
+        // ensembles.
+        let beds = if self.ensemble_beds > 1 {
+            format!("\nbeds {}", self.ensemble_beds)
+        } else {
+            String::new()
+        };
         fingerprint(&format!(
-            "{}\n{}\n{rig}\n{:?}",
+            "{}\n{}\n{rig}\n{:?}{beds}",
             env!("CARGO_PKG_VERSION"),
             self.scene.to_toml(),
             self.shaker
@@ -417,6 +431,7 @@ impl SweepPlan {
             inner_length_m: self.scene.enclosure.inner_length_m,
             scene_fill_ratio: self.scene.fill_ratio(),
             gravity_mps2: self.scene.simulation.gravity_mps2,
+            beds: self.ensemble_beds,
         }
     }
 }
@@ -530,9 +545,12 @@ pub struct SweepRow {
     pub status: RowStatus,
     /// The rig's reason for `unreachable`, the error for `failed`.
     pub note: String,
-    /// DEM efficiency over the steady cycles (eq. 6.8).
+    /// DEM efficiency over the steady cycles (eq. 6.8), the mean over the
+    /// beds of an ensemble.
     pub efficiency: f64,
-    /// Its standard error from the cycle-to-cycle spread.
+    /// Its one-sigma error: one bed's from its cycle-to-cycle spread, an
+    /// ensemble's from its beds' spread ([`SeFrom`] says which); NaN where
+    /// not known.
     pub efficiency_se: f64,
     /// Efficiency the rig measured (Yang's method, phase-corrected) and its
     /// standard error over blocks of two periods (NaN below two blocks).
@@ -541,6 +559,9 @@ pub struct SweepRow {
     /// DEM energy dissipated per steady cycle (J) and its standard error.
     pub energy_per_cycle_j: f64,
     pub energy_per_cycle_se_j: f64,
+    /// Beds the row's figures are the mean of (1 in files written before
+    /// ensembles); with one the errors are its window's.
+    pub beds: u32,
     pub e_max_j: f64,
     /// The bed's apparent mass: the particles' force on the enclosure in
     /// phase with its acceleration, at the drive frequency, over the steady
@@ -570,7 +591,42 @@ pub struct SweepRow {
     pub wall_time_s: f64,
 }
 
+/// How a row's +- is known (`se_from` in `sweep.csv`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SeFrom {
+    /// One bed's window: how far its own cycles scatter, not how far
+    /// another packing of the damper would read (`docs/accuracy.md`).
+    Window,
+    /// The spread of the beds of an ensemble (Student's t).
+    Beds,
+    /// Not known: a window too short to tell.
+    NotKnown,
+}
+
+impl SeFrom {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SeFrom::Window => "window",
+            SeFrom::Beds => "beds",
+            SeFrom::NotKnown => "not_known",
+        }
+    }
+}
+
 impl SweepRow {
+    /// How the row's +- is known; none for a row without figures.
+    pub fn se_from(&self) -> Option<SeFrom> {
+        if self.status != RowStatus::Ok {
+            None
+        } else if !self.efficiency_se.is_finite() {
+            Some(SeFrom::NotKnown)
+        } else if self.beds > 1 {
+            Some(SeFrom::Beds)
+        } else {
+            Some(SeFrom::Window)
+        }
+    }
+
     fn empty(condition: Condition, status: RowStatus, note: String) -> Self {
         SweepRow {
             condition,
@@ -582,6 +638,7 @@ impl SweepRow {
             efficiency_measured_se: f64::NAN,
             energy_per_cycle_j: f64::NAN,
             energy_per_cycle_se_j: f64::NAN,
+            beds: 0,
             e_max_j: f64::NAN,
             apparent_mass_kg: f64::NAN,
             steadiness_rel: f64::NAN,
@@ -611,11 +668,11 @@ fn reachability(plan: &SweepPlan, c: &Condition) -> Result<(), String> {
 }
 
 /// Runs condition `c` on its settled `bed` (or reports it unreachable).
-pub fn run_condition(plan: &SweepPlan, bed: &SettledBed, c: &Condition) -> SweepRow {
+pub fn run_condition(plan: &SweepPlan, beds: &dyn BedProvider, c: &Condition) -> SweepRow {
     if let Err(why) = reachability(plan, c) {
         return SweepRow::empty(*c, RowStatus::Unreachable, why);
     }
-    match try_condition(plan, bed, c) {
+    match try_condition(plan, beds, c) {
         Ok(row) => row,
         Err(e) => SweepRow::empty(*c, RowStatus::Failed, e.to_string()),
     }
@@ -623,7 +680,7 @@ pub fn run_condition(plan: &SweepPlan, bed: &SettledBed, c: &Condition) -> Sweep
 
 fn try_condition(
     plan: &SweepPlan,
-    bed: &SettledBed,
+    beds: &dyn BedProvider,
     c: &Condition,
 ) -> Result<SweepRow, SceneError> {
     let started = Stopwatch::start();
@@ -645,7 +702,25 @@ fn try_condition(
     );
     let dt = scene.drive_dt_s(&drive);
     let mut observer = PhaseObserver::new(&drive, dt, sample_from, clearance);
-    let run = run_shake_on_bed(&scene, bed, &setup, &mut [&mut observer], &mut |_| {})?;
+    // The phase indicators, the shares and the apparent mass are the first
+    // bed's; the efficiencies and the energy the ensemble's.
+    let (run, ensemble) = if plan.ensemble_beds > 1 {
+        let e = run_ensemble_shake(
+            &scene,
+            &setup,
+            beds,
+            plan.ensemble_beds,
+            1,
+            &mut [&mut observer],
+            &mut |_| {},
+        )?;
+        let ensemble = e.first.summary.ensemble.clone();
+        (e.first, ensemble)
+    } else {
+        let bed = beds.bed(&scene, 0, &mut |_| {})?;
+        let run = run_shake_on_bed(&scene, &bed, &setup, &mut [&mut observer], &mut |_| {})?;
+        (run, None)
+    };
     let s = &run.summary;
     let impacts = collective_impacts(
         &run.experiment.truth,
@@ -654,19 +729,38 @@ fn try_condition(
         s.particle_mass_kg,
     );
     let ind = observer.indicators(&impacts, s.steady_start_s);
-    let st = &s.dem.steadiness;
+    let st = ensemble
+        .as_ref()
+        .map_or(&s.dem.steadiness, |e| &e.steadiness);
     let pc = &s.dem.dissipated_per_cycle_j;
     let total = pc.total();
+    let figure = |one: (f64, Option<f64>), all: Option<EnsembleFigure>| {
+        all.map_or(one, |f| (f.mean, f.stderr))
+    };
+    let e = ensemble.as_ref();
+    let efficiency = figure(
+        (s.dem.efficiency, s.dem.efficiency_stderr),
+        e.map(|e| e.dem_efficiency),
+    );
+    let measured = figure(
+        (s.measured.efficiency, s.measured.efficiency_stderr),
+        e.map(|e| e.measured_efficiency),
+    );
+    let energy = figure(
+        (s.dem.energy_per_cycle_j, s.dem.energy_per_cycle_stderr_j),
+        e.map(|e| e.dem_energy_per_cycle_j),
+    );
     Ok(SweepRow {
         condition: *c,
         status: RowStatus::Ok,
         note: String::new(),
-        efficiency: s.dem.efficiency,
-        efficiency_se: s.dem.efficiency_stderr.unwrap_or(f64::NAN),
-        efficiency_measured: s.measured.efficiency,
-        efficiency_measured_se: s.measured.efficiency_stderr.unwrap_or(f64::NAN),
-        energy_per_cycle_j: s.dem.energy_per_cycle_j,
-        energy_per_cycle_se_j: s.dem.energy_per_cycle_stderr_j.unwrap_or(f64::NAN),
+        efficiency: efficiency.0,
+        efficiency_se: efficiency.1.unwrap_or(f64::NAN),
+        efficiency_measured: measured.0,
+        efficiency_measured_se: measured.1.unwrap_or(f64::NAN),
+        energy_per_cycle_j: energy.0,
+        energy_per_cycle_se_j: energy.1.unwrap_or(f64::NAN),
+        beds: plan.ensemble_beds,
         e_max_j: s.dem.e_max_j,
         apparent_mass_kg: run
             .experiment
@@ -742,6 +836,8 @@ pub struct SweepHeader {
     pub inner_length_m: f64,
     pub scene_fill_ratio: f64,
     pub gravity_mps2: f64,
+    /// Beds each condition drove (1 in files written before ensembles).
+    pub beds: u32,
 }
 
 impl SweepHeader {
@@ -775,6 +871,7 @@ impl SweepHeader {
         let _ = writeln!(t, "# inner_length_m: {}", self.inner_length_m);
         let _ = writeln!(t, "# scene_fill_ratio: {}", self.scene_fill_ratio);
         let _ = writeln!(t, "# gravity_mps2: {}", self.gravity_mps2);
+        let _ = writeln!(t, "# beds: {}", self.beds);
         t
     }
 
@@ -843,6 +940,11 @@ impl SweepHeader {
             inner_length_m: num("inner_length_m")?,
             scene_fill_ratio: num("scene_fill_ratio")?,
             gravity_mps2: num("gravity_mps2")?,
+            beds: if lines.contains_key("beds") {
+                whole("beds")? as u32
+            } else {
+                1
+            },
         })
     }
 }
@@ -857,10 +959,16 @@ fn parse_orientation(s: &str) -> Option<Orientation> {
 
 /// Columns a sweep file written before they existed may lack; they read as
 /// NaN or empty.
-const LATER_COLUMNS: [&str; 3] = ["efficiency_measured_se", "steady", "apparent_mass_kg"];
+const LATER_COLUMNS: [&str; 5] = [
+    "efficiency_measured_se",
+    "steady",
+    "apparent_mass_kg",
+    "beds",
+    "se_from",
+];
 
 /// Column names of `sweep.csv`, units in the names.
-pub const COLUMNS: [&str; 36] = [
+pub const COLUMNS: [&str; 38] = [
     "fill_ratio",
     "orientation",
     "freq_hz",
@@ -873,6 +981,8 @@ pub const COLUMNS: [&str; 36] = [
     "efficiency_measured_se",
     "energy_per_cycle_j",
     "energy_per_cycle_se_j",
+    "beds",
+    "se_from",
     "e_max_j",
     "apparent_mass_kg",
     "steadiness_rel",
@@ -917,6 +1027,8 @@ fn row_record(r: &SweepRow) -> Vec<String> {
         f(r.efficiency_measured_se),
         f(r.energy_per_cycle_j),
         f(r.energy_per_cycle_se_j),
+        r.beds.to_string(),
+        r.se_from().map_or("", SeFrom::as_str).into(),
         f(r.e_max_j),
         f(r.apparent_mass_kg),
         f(r.steadiness_rel),
@@ -1060,6 +1172,13 @@ fn parse_row(cells: &RowCells) -> Result<SweepRow, SweepError> {
         efficiency_measured_se: f("efficiency_measured_se")?,
         energy_per_cycle_j: f("energy_per_cycle_j")?,
         energy_per_cycle_se_j: f("energy_per_cycle_se_j")?,
+        // Rows written before ensembles are of one bed (`se_from` is read
+        // back from the figures, [`SweepRow::se_from`]).
+        beds: if cells.cell("beds").is_empty() {
+            u32::from(status == RowStatus::Ok)
+        } else {
+            u("beds")? as u32
+        },
         e_max_j: f("e_max_j")?,
         apparent_mass_kg: f("apparent_mass_kg")?,
         steadiness_rel: f("steadiness_rel")?,
@@ -1221,7 +1340,7 @@ pub fn run_sweep(
     on_event(SweepEvent::Started {
         total: conditions.len(),
         already_done,
-        beds: bed_keys.len(),
+        beds: bed_keys.len() * plan.ensemble_beds as usize,
     });
     file.write(&path)?;
     let progress = Progress {
@@ -1275,22 +1394,28 @@ fn open_sweep_file(
     Ok(old)
 }
 
-/// Settled beds by [`Condition::bed_key`], one per condition of `bed_keys`,
-/// settled in parallel. A bed that cannot be settled is a fault of the scene,
-/// not of a condition: the sweep stops (the rows so far stay in the file).
+/// Settled beds by [`Condition::bed_key`] and bed of the ensemble
+/// (0-based), the ensemble's beds of each condition of `bed_keys`, settled
+/// in parallel. A bed that cannot be settled is a fault of the scene, not
+/// of a condition: the sweep stops (the rows so far stay in the file).
 fn settle_beds(
     plan: &SweepPlan,
     bed_keys: &[Condition],
     on_event: &(dyn Fn(SweepEvent) + Sync),
-) -> Result<HashMap<BedKey, SettledBed>, SweepError> {
-    let beds: Vec<Result<SettledBed, SceneError>> = bed_keys
+) -> Result<SettledBeds, SweepError> {
+    let jobs: Vec<(Condition, u32)> = bed_keys
+        .iter()
+        .flat_map(|c| (0..plan.ensemble_beds).map(move |k| (*c, k)))
+        .collect();
+    let beds: Vec<Result<SettledBed, SceneError>> = jobs
         .par_iter()
         .with_max_len(1)
-        .map(|c| {
-            let scene = plan.scene_for(c)?;
+        .map(|(c, k)| {
+            let mut scene = plan.scene_for(c)?;
+            scene.simulation.seed = bed_seed(c.seed, *k);
             let bed = plan.beds.settle(&scene, &mut |_| {})?;
             on_event(SweepEvent::BedSettled {
-                seed: c.seed,
+                seed: scene.simulation.seed,
                 wall_time_s: bed.wall_time_s,
                 from_cache: bed.from_cache,
                 warnings: &bed.warnings,
@@ -1299,10 +1424,37 @@ fn settle_beds(
         })
         .collect();
     let mut by_key = HashMap::new();
-    for (c, bed) in bed_keys.iter().zip(beds) {
-        by_key.insert(c.bed_key(), bed?);
+    for ((c, k), bed) in jobs.iter().zip(beds) {
+        by_key.insert((c.bed_key(), *k), bed?);
     }
-    Ok(by_key)
+    Ok(SettledBeds(by_key))
+}
+
+/// The settled beds of a sweep, by [`Condition::bed_key`] and bed of the
+/// ensemble.
+struct SettledBeds(HashMap<(BedKey, u32), SettledBed>);
+
+/// The beds of one condition's ensemble, settled before the sweep ran.
+struct ConditionBeds<'a> {
+    beds: &'a SettledBeds,
+    key: BedKey,
+}
+
+impl BedProvider for ConditionBeds<'_> {
+    fn bed(
+        &self,
+        scene: &Scene,
+        k: u32,
+        _progress: &mut dyn FnMut(crate::experiment::damper::Progress),
+    ) -> Result<SettledBed, SceneError> {
+        self.beds.0.get(&(self.key, k)).cloned().ok_or_else(|| {
+            SceneError::Ensemble(format!(
+                "bed {} (seed {}) was not settled",
+                k + 1,
+                scene.simulation.seed
+            ))
+        })
+    }
 }
 
 /// Conditions of a shard finished (rows in the file) and in all.
@@ -1317,7 +1469,7 @@ struct Progress {
 /// `path` as it comes.
 fn run_conditions(
     plan: &SweepPlan,
-    beds: &HashMap<BedKey, SettledBed>,
+    beds: &SettledBeds,
     mut jobs: Vec<Condition>,
     file: SweepFile,
     path: &Path,
@@ -1340,10 +1492,14 @@ fn run_conditions(
         error: None,
     });
     jobs.par_iter().with_max_len(1).for_each(|c| {
-        let row = match beds.get(&c.bed_key()) {
-            Some(bed) => run_condition(plan, bed, c),
-            None => SweepRow::empty(*c, RowStatus::Failed, "no bed".into()),
-        };
+        let row = run_condition(
+            plan,
+            &ConditionBeds {
+                beds,
+                key: c.bed_key(),
+            },
+            c,
+        );
         let mut s = shared.lock().unwrap_or_else(|e| e.into_inner());
         s.done += 1;
         s.cost_done += c.cost();
@@ -1472,6 +1628,10 @@ pub struct ConditionSummary {
     /// spread, never less than their own cycle-to-cycle errors imply; one
     /// seed's own error when there is one.
     pub efficiency_se: f64,
+    /// How `efficiency_se` is known: `seeds` (the seeds' spread), `beds`
+    /// (one seed's ensemble), `window` (one bed's window alone: not how
+    /// far another packing reads), `not_known`; empty without an ok row.
+    pub se_from: &'static str,
     pub efficiency_measured: f64,
     /// Mean apparent mass over seeds, kg (NaN where the file lacks it).
     pub apparent_mass_kg: f64,
@@ -1561,6 +1721,12 @@ pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
                         n,
                         efficiency: eff,
                         efficiency_se: se,
+                        se_from: match ok.as_slice() {
+                            [] => "",
+                            _ if !se.is_finite() => SeFrom::NotKnown.as_str(),
+                            [one] => one.se_from().map_or("", SeFrom::as_str),
+                            _ => "seeds",
+                        },
                         efficiency_measured: mean(|r| r.efficiency_measured),
                         apparent_mass_kg: mean(|r| r.apparent_mass_kg),
                         phase,
@@ -1605,6 +1771,7 @@ mod tests {
             fill_ratios: vec![],
             orientations: vec![],
             beds: BedSource::Settle,
+            ensemble_beds: 1,
         }
     }
 
@@ -1661,6 +1828,85 @@ mod tests {
         let mut r = plan();
         r.scene.drive.cycles = CyclesSpec::Count(9);
         assert_ne!(p.protocol_id(), r.protocol_id());
+        let mut e = plan();
+        e.ensemble_beds = 6;
+        assert_ne!(p.protocol_id(), e.protocol_id());
+    }
+
+    /// Every ok row says how its +- is known, in the file and in the
+    /// summary: one bed's window, an ensemble's beds, the seeds' spread, or
+    /// not known; a file written before ensembles reads as one bed.
+    #[test]
+    fn a_row_says_how_its_error_is_known() {
+        let p = plan();
+        let c = p.conditions()[0];
+        let mut one = SweepRow::empty(c, RowStatus::Ok, String::new());
+        one.beds = 1;
+        one.efficiency = 0.8;
+        one.efficiency_se = 0.004;
+        assert_eq!(one.se_from(), Some(SeFrom::Window));
+        let ensemble = SweepRow {
+            beds: 6,
+            ..one.clone()
+        };
+        assert_eq!(ensemble.se_from(), Some(SeFrom::Beds));
+        let short = SweepRow {
+            efficiency_se: f64::NAN,
+            ..one.clone()
+        };
+        assert_eq!(short.se_from(), Some(SeFrom::NotKnown));
+        let far = SweepRow::empty(p.conditions()[1], RowStatus::Unreachable, "far".into());
+        assert_eq!(far.se_from(), None);
+        let record = row_record(&ensemble);
+        let at = |name: &str| COLUMNS.iter().position(|c| *c == name).expect("a column");
+        assert_eq!(record[at("beds")], "6");
+        assert_eq!(record[at("se_from")], "beds");
+
+        let mut file = SweepFile {
+            header: p.header(Shard::ALL),
+            rows: vec![ensemble],
+        };
+        let seed_two = Condition { seed: 2, ..c };
+        file.rows.push(SweepRow {
+            condition: seed_two,
+            ..one.clone()
+        });
+        let by_seeds = summarise(&file);
+        assert_eq!(by_seeds[0].se_from, "seeds");
+        file.rows.truncate(1);
+        assert_eq!(summarise(&file)[0].se_from, "beds");
+
+        // An old file: no `# beds:` line, no beds or se_from column.
+        let dir = std::env::temp_dir().join(format!("vlab-sweep-old-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("sweep.csv");
+        file.rows = vec![one];
+        file.write(&path).expect("write");
+        let text = std::fs::read_to_string(&path).expect("read");
+        let drop = [at("beds"), at("se_from")];
+        let old: String = text
+            .lines()
+            .filter(|l| !l.starts_with("# beds:"))
+            .map(|l| {
+                if l.starts_with('#') {
+                    return format!("{l}\n");
+                }
+                let cells: Vec<&str> = l.split(',').collect();
+                let kept: Vec<&str> = cells
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| !drop.contains(k))
+                    .map(|(_, c)| *c)
+                    .collect();
+                format!("{}\n", kept.join(","))
+            })
+            .collect();
+        std::fs::write(&path, old).expect("write the old file");
+        let back = SweepFile::read(&path).expect("an old file reads");
+        assert_eq!(back.header.beds, 1);
+        assert_eq!(back.rows[0].beds, 1);
+        assert_eq!(back.rows[0].se_from(), Some(SeFrom::Window));
+        std::fs::remove_dir_all(dir).ok();
     }
 
     #[test]

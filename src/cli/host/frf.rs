@@ -44,6 +44,13 @@ pub struct FrfArgs {
     /// Stepped sine: cycles measured at each frequency.
     #[arg(long = "record-cycles", value_name = "N", default_value = "20")]
     record_cycles: u32,
+    /// Stepped sine: independent beds run at every frequency (seeds derived
+    /// from --seed as `vlab shake --beds` derives them), each point their
+    /// mean and its +- their spread; with one bed the +- is the record's,
+    /// and the bed-to-bed part is added only where it was measured. Costs N
+    /// times one bed.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    beds: u32,
     /// Periodic random instead: LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED (H1, H2,
     /// coherence over --duration-s, the first period dropped).
     #[arg(long, value_name = "KEY", conflicts_with = "freqs")]
@@ -91,6 +98,7 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
         force_n: a.force_n,
         settle_cycles: a.settle_cycles,
         record_cycles: a.record_cycles,
+        beds: a.beds,
     };
     if a.random.is_none() {
         plan.validate().map_err(|e| {
@@ -98,6 +106,7 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
                 "record_cycles" => "--record-cycles",
                 "settle_cycles" => "--settle-cycles",
                 "force_n" => "--force-n",
+                "beds" => "--beds",
                 _ => "--freq",
             };
             anyhow::Error::from(e.renamed(flag))
@@ -167,6 +176,12 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
 /// bed-to-bed part where it was measured.
 fn error_note(points: &[vlab::experiment::host_frf::FrfPoint]) -> String {
     use vlab::experiment::bed_spread::BedToBed;
+    if let Some(BedToBed::Ensemble { beds }) = points.first().map(|p| p.bed_to_bed) {
+        return format!(
+            "  the damper's +- is one sigma of the mean over the {beds} beds run at each frequency, from their spread (Student's t on {} degrees of freedom), never less than their records' errors make it",
+            beds.saturating_sub(1)
+        );
+    }
     let measured: Vec<String> = points
         .iter()
         .filter_map(|p| match p.bed_to_bed {
@@ -175,7 +190,7 @@ fn error_note(points: &[vlab::experiment::host_frf::FrfPoint]) -> String {
                 100.0 * rel,
                 p.freq_hz
             )),
-            BedToBed::NotMeasured => None,
+            BedToBed::NotMeasured | BedToBed::Ensemble { .. } => None,
         })
         .collect();
     let record = "the damper's +- is one sigma from the record's periods, each balanced for the host's stored energy";
