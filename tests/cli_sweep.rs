@@ -403,3 +403,67 @@ fn vlab_vtk(path: &Path) -> (usize, Vec<String>, f64) {
         .map_or(0.0, |a| a.values.iter().sum());
     (vtk.n_points, names, rate)
 }
+
+/// `--beds 2` drives every condition as an ensemble of two beds: its rows
+/// say so (`beds` 2, `se_from` beds, the header's `# beds: 2`), the table
+/// says where each +- comes from; one bed's rows say `window`, or
+/// `not_known` for a window too short.
+#[test]
+fn a_sweep_of_ensembles_says_how_its_errors_are_known() {
+    let dir = Scratch::new("sweep-beds");
+    dir.write("tiny.toml", TINY_SCENE);
+    let sweep = |beds: &str, out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "sweep",
+            "--freq",
+            "40",
+            "--gamma",
+            "3",
+            "--scene",
+            "tiny.toml",
+            "--beds",
+            beds,
+            "--out",
+            out,
+        ];
+        args.extend_from_slice(extra);
+        vlab(&dir.0, &args)
+    };
+    let two = sweep("2", "two", &[]);
+    assert!(two.status.success(), "{}", stderr(&two));
+    let text = std::fs::read_to_string(dir.path("two/sweep.csv")).expect("sweep.csv");
+    assert!(text.contains("\n# beds: 2\n"), "{text}");
+    let header = text
+        .lines()
+        .find(|l| !l.starts_with('#'))
+        .expect("a header row");
+    let names: Vec<&str> = header.split(',').collect();
+    let row: Vec<&str> = text.lines().last().expect("a row").split(',').collect();
+    let cell = |name: &str| row[names.iter().position(|n| *n == name).expect(name)];
+    assert_eq!((cell("beds"), cell("se_from")), ("2", "beds"), "{text}");
+    let table = String::from_utf8_lossy(&two.stdout);
+    assert!(
+        table.contains("+- from") && table.contains(" beds "),
+        "{table}"
+    );
+
+    // One bed's 2 kept cycles have no error: not known; its 16 have the
+    // window's, said to leave out other packings.
+    let short = sweep("1", "short", &[]);
+    assert!(short.status.success(), "{}", stderr(&short));
+    let table = String::from_utf8_lossy(&short.stdout);
+    assert!(
+        table.contains("+- not known") && table.contains("not_known"),
+        "{table}"
+    );
+    let one = sweep("1", "one", &["--cycles", "20", "--steady-cycles", "16"]);
+    assert!(one.status.success(), "{}", stderr(&one));
+    let table = String::from_utf8_lossy(&one.stdout);
+    assert!(
+        table.contains(" window ") && table.contains("leaves out how far another packing"),
+        "{table}"
+    );
+    let refused = sweep("0", "none", &[]);
+    assert!(!refused.status.success());
+    assert!(stderr(&refused).contains("--beds"), "{}", stderr(&refused));
+}

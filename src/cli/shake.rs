@@ -279,7 +279,22 @@ fn energy(value_j: f64, error_j: Option<f64>) -> String {
 
 /// An efficiency and its error as the summary prints them.
 fn efficiency(value: f64, error: Option<f64>) -> String {
-    with_error(format!("{value:.3}"), error.map(|e| format!("{e:.3}")), "")
+    let d = efficiency_decimals(error);
+    with_error(
+        format!("{value:.d$}"),
+        error.map(|e| format!("{e:.d$}")),
+        "",
+    )
+}
+
+/// Decimals for an efficiency with error `error`: 3, or as many as show
+/// the error's first significant digit (at 80 Hz, Gamma 38 the efficiency
+/// is 0.066 and its error 0.0004, which three decimals print as 0.000).
+fn efficiency_decimals(error: Option<f64>) -> usize {
+    match error {
+        Some(e) if e > 0.0 && e < 0.001 => ((-e.log10()).floor() as usize + 1).clamp(3, 8),
+        _ => 3,
+    }
 }
 
 /// The ensemble: the damper's figures with the beds' spread, and each bed.
@@ -304,14 +319,14 @@ fn print_ensemble(e: &EnsembleSummary) {
         e.cycles,
         e.cycles
     );
-    let fig = |f: &vlab::experiment::ensemble::EnsembleFigure, digits: usize| match f.stderr {
-        Some(err) => format!("{:.digits$} +- {:.digits$}", f.mean, err),
-        None => format!("{:.digits$} (+- not known)", f.mean),
+    let fig = |f: &vlab::experiment::ensemble::EnsembleFigure| match f.stderr {
+        Some(_) => efficiency(f.mean, f.stderr),
+        None => format!("{:.3} (+- not known)", f.mean),
     };
     println!(
         "    damping efficiency, DEM truth {}   measured {}",
-        fig(&e.dem_efficiency, 3),
-        fig(&e.measured_efficiency, 3)
+        fig(&e.dem_efficiency),
+        fig(&e.measured_efficiency)
     );
     println!(
         "    (+- : one sigma of the mean over the beds, from their spread ({:.2} % of the mean), Student's t on {} degrees of freedom, never less than the beds' own windows' errors make it)",
@@ -333,12 +348,13 @@ fn print_ensemble(e: &EnsembleSummary) {
         }
     );
     println!("    bed  seed        efficiency DEM (its window's +-)   measured");
+    let d = efficiency_decimals(e.dem_efficiency.stderr);
     for r in &e.rows {
         let window = r.dem_window_stderr_j.map_or("not known".to_string(), |j| {
-            format!("{:.3}", j / r.dem_energy_per_cycle_j * r.dem_efficiency)
+            format!("{:.d$}", j / r.dem_energy_per_cycle_j * r.dem_efficiency)
         });
         println!(
-            "    {:>3}  {:<10}  {:.3} (+- {window}){}   {:.3}",
+            "    {:>3}  {:<10}  {:.d$} (+- {window}){}   {:.d$}",
             r.bed,
             r.seed,
             r.dem_efficiency,
@@ -478,4 +494,18 @@ fn print_measured(s: &ShakeSummary) {
         100.0 * m.uncorrected_error_vs_dem_rel,
         100.0 * m.predicted_leak_per_cycle_j / d.energy_per_cycle_j
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An error below a thousandth keeps its first significant digit; the
+    /// usual three decimals otherwise.
+    #[test]
+    fn a_small_error_is_printed_with_a_digit() {
+        assert_eq!(efficiency(0.066, Some(0.0004)), "0.0660 +- 0.0004");
+        assert_eq!(efficiency(0.842, Some(0.004)), "0.842 +- 0.004");
+        assert_eq!(efficiency(0.5, Some(0.0)), "0.500 +- 0.000");
+    }
 }
