@@ -210,8 +210,8 @@ pub struct DriveOutcome {
     /// Dissipated energy per cycle in the steady window (J), thesis eq. 6.9.
     pub energy_per_cycle_j: f64,
     /// The same as the mean of the window's cycles, with the window's own
-    /// one-sigma error ([`mean_stderr`]; the bed-to-bed part is added where
-    /// it is known, [`crate::experiment::bed_spread`]).
+    /// one-sigma error ([`mean_stderr`]; how far other beds read is the
+    /// ensemble's to say, [`crate::experiment::ensemble`]).
     pub energy_per_cycle: MeanStderr,
     /// Per-cycle dissipation by source in the steady window (J).
     pub dissipated_per_cycle: Dissipation,
