@@ -25,7 +25,7 @@
 //! The figures it printed are in `docs/accuracy.md` ("Coverage").
 
 use vlab::experiment::bed_cache::BedSource;
-use vlab::experiment::ensemble::{DEFAULT_BEDS, run_ensemble_shake};
+use vlab::experiment::ensemble::{DEFAULT_BEDS, run_ensemble_shake, unsteady_reasons};
 use vlab::experiment::measurement::{CalibrationSource, ShakeSetup};
 use vlab::experiment::shake::{resolve_rig, shake_drive};
 use vlab::scene::Scene;
@@ -42,6 +42,8 @@ struct Run {
     measured: (f64, f64),
     cycles: u32,
     steady: bool,
+    /// Why a run was not shown steady (empty if it was).
+    why: String,
 }
 
 fn run(seed: u64, freq_hz: f64, gamma: f64) -> Run {
@@ -73,6 +75,11 @@ fn run(seed: u64, freq_hz: f64, gamma: f64) -> Run {
         measured: figure(s.measured_energy_per_cycle_j),
         cycles: s.cycles,
         steady: s.steadiness.reached,
+        why: if s.steadiness.reached {
+            String::new()
+        } else {
+            unsteady_reasons(&s.steadiness, s.steady_first_cycle)
+        },
     }
 }
 
@@ -99,7 +106,11 @@ fn condition(freq_hz: f64, gamma: f64) -> (Vec<f64>, Vec<f64>) {
                 r.measured.0,
                 r.measured.1,
                 r.cycles,
-                if r.steady { "steady" } else { "NOT shown steady" }
+                if r.steady {
+                    "steady".to_string()
+                } else {
+                    format!("NOT shown steady: {}", r.why)
+                }
             );
             r
         })
