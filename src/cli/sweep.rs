@@ -469,10 +469,11 @@ mod tests {
     use super::*;
 
     /// An efficiency without an error estimate (one seed, a window under 16
-    /// cycles) prints "n/a", never "NaN"; one with an estimate prints it.
+    /// cycles) prints "not known", never "NaN"; one with an estimate prints
+    /// it.
     #[test]
-    fn an_error_that_is_not_known_prints_as_n_a() {
-        assert_eq!(plus_minus(f64::NAN).trim(), "n/a");
+    fn an_error_that_is_not_known_prints_as_not_known() {
+        assert_eq!(plus_minus(f64::NAN).trim(), "not known");
         assert_eq!(plus_minus(0.0123), "0.012");
     }
 }

@@ -647,7 +647,11 @@ impl Scene {
     /// Total particle mass (kg): of the spheres, or of the bodies, each the
     /// mass of the union of its sub-spheres (eq. 4.1).
     pub fn particle_mass_kg(&self) -> f64 {
-        self.particles.count as f64 * self.contact_scale().mass_kg
+        let each_kg = match self.particle_body() {
+            Ok(Some(b)) => b.template.mass_kg,
+            _ => sphere_mass_kg(self.radius_m(), self.particle_material().density_kgm3),
+        };
+        self.particles.count as f64 * each_kg
     }
 
     /// One particle as the DEM takes it when the particles are not spheres
