@@ -726,3 +726,34 @@ fn round_trip_through_lammps_agrees_with_vlab() {
         s.measured.error_vs_record_rel
     );
 }
+
+/// What the deck cannot translate is refused before a bed is poured (a
+/// bed of prolates took 30 s and more to pour and settle before its
+/// refusal): a shape's key, and a run of fewer than 3 cycles. Nothing is
+/// written, and the message names the key the user gave.
+#[test]
+fn an_export_it_cannot_write_is_refused_before_any_pour() {
+    let dir = Scratch::new("export-refusals");
+    dir.write(
+        "prolate.toml",
+        "[particles]\ncount = 90\nshape = \"prolate\"\naspect_ratio = 1.5\nequivalent_diameter_m = 0.0076\n",
+    );
+    let refused = |args: &[&str], key: &str| {
+        let mut all = vec!["export", "lammps", "--freq", "40", "--gamma", "10"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--out", "deck"]);
+        let o = vlab(&dir.0, &all);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{args:?} was exported");
+        assert!(err.contains(key), "{args:?}: {err}");
+        assert!(
+            !err.contains("pouring") && !err.contains("settl"),
+            "{args:?} poured first: {err}"
+        );
+        assert!(!dir.path("deck").exists(), "{args:?} left a folder");
+    };
+    refused(&["--scene", "prolate.toml"], "particles.aspect_ratio");
+    refused(&["--cycles", "2", "--steady-cycles", "2"], "--cycles");
+    let thesis = LammpsExport::for_scene(&Scene::thesis(), 40.0, 10.0);
+    assert!(thesis.is_ok(), "{thesis:?}");
+}

@@ -127,7 +127,11 @@ fn scene_json_describes_a_prolate_body() {
     // The bed weighs 90 bodies, not 90 of the least mass a contact meets
     // (0.0119 kg, 48 % of it, before).
     let total = p["total_mass_kg"].as_f64().expect("total mass");
-    assert!((total / (90.0 * m) - 1.0).abs() < 1e-12, "{total} against {}", 90.0 * m);
+    assert!(
+        (total / (90.0 * m) - 1.0).abs() < 1e-12,
+        "{total} against {}",
+        90.0 * m
+    );
     assert!((total - 0.0246).abs() < 0.0005, "{total}");
     let radii: Vec<f64> = b["sub_sphere_radii_m"]
         .as_array()

@@ -149,23 +149,45 @@ impl LammpsExport {
     /// against. `vlab shake`'s `summary.json` says how many cycles the scene
     /// took in vlab (`cycles`, `steady_cycles`), to give as `--cycles` and
     /// `--steady-cycles`.
+    ///
+    /// Everything the deck will refuse is refused here, before a bed is
+    /// poured (30 s and more for bodies): the cycles, and every scene key
+    /// the deck does not translate.
     pub fn for_scene(scene: &Scene, freq_hz: f64, gamma: f64) -> Result<Self, SceneError> {
-        shake_drive(scene, freq_hz, gamma)?;
-        let (cycles, steady_cycles) = match scene.drive_length() {
+        let drive = shake_drive(scene, freq_hz, gamma)?;
+        // The keys a refusal names: those the scene (or its flags) set.
+        let (cycles, steady_cycles, keys) = match scene.drive_length() {
             DriveLength::Fixed {
                 cycles,
                 steady_cycles,
-            } => (cycles, steady_cycles),
-            DriveLength::UntilSteady { min_cycles, .. } => {
-                (min_cycles, min_cycles - transient_cycles(min_cycles))
-            }
+            } => (
+                cycles,
+                steady_cycles,
+                ["drive.cycles", "drive.steady_cycles"],
+            ),
+            DriveLength::UntilSteady { min_cycles, .. } => (
+                min_cycles,
+                min_cycles - transient_cycles(min_cycles),
+                ["drive.min_cycles"; 2],
+            ),
         };
-        Ok(LammpsExport {
+        let export = LammpsExport {
             freq_hz,
             gamma,
             cycles,
             steady_cycles,
-        })
+        };
+        export.check(keys)?;
+        scene_key_uses(scene, &export, scene.drive_dt_s(&drive))?;
+        Ok(export)
+    }
+
+    /// The run's cycles: at least [`MIN_EXPORT_CYCLES`], a window of 2 to
+    /// all of them; a refusal names `keys` (cycles, window).
+    fn check(&self, keys: [&str; 2]) -> Result<(), SceneError> {
+        count_in(keys[0], self.cycles, "", MIN_EXPORT_CYCLES, None)?;
+        count_in(keys[1], self.steady_cycles, "", 2, Some(self.cycles))?;
+        Ok(())
     }
 }
 
@@ -424,14 +446,7 @@ pub fn lammps_deck(
     export: &LammpsExport,
 ) -> Result<LammpsDeck, SceneError> {
     let drive = shake_drive(scene, export.freq_hz, export.gamma)?;
-    count_in("cycles", export.cycles, "", MIN_EXPORT_CYCLES, None)?;
-    count_in(
-        "steady_cycles",
-        export.steady_cycles,
-        "",
-        2,
-        Some(export.cycles),
-    )?;
+    export.check(["cycles", "steady_cycles"])?;
     let particles = &*bed.world.particles.by_id();
     let plan = DeckPlan::new(scene, bed, export, &drive)?;
     let data = packing_data(&plan, particles);
