@@ -287,6 +287,11 @@ fn efficiency(value: f64, error: Option<f64>) -> String {
     )
 }
 
+/// "1 degree of freedom", "5 degrees of freedom".
+pub(crate) fn degrees_of_freedom(dof: usize) -> String {
+    format!("{dof} degree{} of freedom", if dof == 1 { "" } else { "s" })
+}
+
 /// Decimals for an efficiency with error `error`: 3, or as many as show
 /// the error's first significant digit (at 80 Hz, Gamma 38 the efficiency
 /// is 0.066 and its error 0.0004, which three decimals print as 0.000).
@@ -329,9 +334,9 @@ fn print_ensemble(e: &EnsembleSummary) {
         fig(&e.measured_efficiency)
     );
     println!(
-        "    (+- : one sigma of the mean over the beds, from their spread ({:.2} % of the mean), Student's t on {} degrees of freedom, never less than the beds' own windows' errors make it)",
+        "    (+- : one sigma of the mean over the beds, from their spread ({:.2} % of the mean), Student's t on {}, never less than the beds' own windows' errors make it)",
         100.0 * e.dem_efficiency.spread / e.dem_efficiency.mean.abs().max(f64::MIN_POSITIVE),
-        e.beds.saturating_sub(1)
+        degrees_of_freedom(e.beds.saturating_sub(1))
     );
     let drift = match (st.drift_rel, st.drift_stderr_rel) {
         (Some(r), Some(err)) => format!("{:+.2} % +- {:.2} %", 100.0 * r, 100.0 * err),
@@ -507,5 +512,7 @@ mod tests {
         assert_eq!(efficiency(0.066, Some(0.0004)), "0.0660 +- 0.0004");
         assert_eq!(efficiency(0.842, Some(0.004)), "0.842 +- 0.004");
         assert_eq!(efficiency(0.5, Some(0.0)), "0.500 +- 0.000");
+        assert_eq!(degrees_of_freedom(1), "1 degree of freedom");
+        assert_eq!(degrees_of_freedom(5), "5 degrees of freedom");
     }
 }

@@ -178,8 +178,8 @@ fn error_note(points: &[vlab::experiment::host_frf::FrfPoint]) -> String {
     use vlab::experiment::bed_spread::BedToBed;
     if let Some(BedToBed::Ensemble { beds }) = points.first().map(|p| p.bed_to_bed) {
         return format!(
-            "  the damper's +- is one sigma of the mean over the {beds} beds run at each frequency, from their spread (Student's t on {} degrees of freedom), never less than their records' errors make it",
-            beds.saturating_sub(1)
+            "  the damper's +- is one sigma of the mean over the {beds} beds run at each frequency, from their spread (Student's t on {}), never less than their records' errors make it",
+            crate::cli::shake::degrees_of_freedom(beds.saturating_sub(1) as usize)
         );
     }
     let measured: Vec<String> = points
