@@ -130,7 +130,8 @@ fn thesis_scene_ledger_closes_and_record_agrees() {
     let csv = std::fs::read_to_string(dir.path("run/beds.csv")).expect("beds.csv");
     assert_eq!(csv.lines().count(), 3, "{csv}");
     assert!(
-        stdout.contains("ensemble of 2 beds") && stdout.contains("Student's t on 1 degrees"),
+        stdout.contains("ensemble of 2 beds")
+            && stdout.contains("Student's t on 1 degree of freedom"),
         "{stdout}"
     );
 

@@ -145,6 +145,11 @@ pub fn run_test(scene: &Scene, test: &HostTest, cache: NoCacheArg, quiet: bool) 
     let beds = cache.source(&mut |n| progress.warn(n));
     let run = run_host_test(scene, &beds, test, &mut |p| progress.update(p))
         .context("running the damper on its host");
+    if let Ok(r) = &run {
+        for w in &r.warnings {
+            progress.warn(&format!("host: warning: {}", w.text));
+        }
+    }
     progress.finish();
     run
 }

@@ -152,7 +152,7 @@ impl SteppedSine {
 }
 
 /// One stepped-sine point: the lab's measurement and the truth.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FrfPoint {
     pub freq_hz: f64,
     /// Receptance at the damper per force at the drive (m/N), from the lab's
@@ -202,6 +202,9 @@ pub struct FrfPoint {
     pub steady: bool,
     pub steps: u64,
     pub wall_time_s: f64,
+    /// The record's warnings (a channel clipped at its full scale: the
+    /// point reads low), each bed's once.
+    pub warnings: Vec<String>,
 }
 
 impl FrfPoint {
@@ -466,6 +469,7 @@ fn measure_point(
         steady: storage.abs() <= 0.05 * power.abs(),
         steps: run.steps,
         wall_time_s: run.wall_time_s,
+        warnings: run.warnings.iter().map(|w| w.text.clone()).collect(),
     })
 }
 
@@ -511,6 +515,15 @@ fn ensemble_point(each: &[FrfPoint]) -> FrfPoint {
         steady: each.iter().all(|p| p.steady),
         steps: each.iter().map(|p| p.steps).sum(),
         wall_time_s: each.iter().map(|p| p.wall_time_s).fold(0.0, f64::max),
+        warnings: each
+            .iter()
+            .enumerate()
+            .flat_map(|(k, p)| {
+                p.warnings
+                    .iter()
+                    .map(move |w| format!("bed {}: {w}", k + 1))
+            })
+            .collect(),
     }
 }
 
@@ -764,6 +777,7 @@ mod tests {
             steady: true,
             steps: 10,
             wall_time_s: 1.0,
+            warnings: Vec::new(),
         };
         let apart = [bed(0.040, 0.0001), bed(0.044, 0.0001), bed(0.036, 0.0001)];
         let p = ensemble_point(&apart);

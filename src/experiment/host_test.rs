@@ -21,6 +21,7 @@
 //! a solid, a known linear dashpot).
 
 use crate::clock::Stopwatch;
+use crate::warning::RunWarning;
 
 use serde::Serialize;
 
@@ -202,6 +203,10 @@ pub struct HostRun {
     pub dt_s: f64,
     pub steps: u64,
     pub wall_time_s: f64,
+    /// What the lab's record cannot be trusted for: a channel clipped at
+    /// its ADC's full scale (an overloaded accelerometer reads low, and
+    /// everything measured from it with it).
+    pub warnings: Vec<RunWarning>,
 }
 
 /// Samples the host and the bed at the rig's clock: the kinematics and the
@@ -414,7 +419,7 @@ pub fn run_host_test(
         .collect(),
         ..TraceMetadata::default()
     };
-    let (trace, _) = daq.finish(metadata)?;
+    let (trace, daq_report) = daq.finish(metadata)?;
     let damper_dissipated_j = record.damper_dissipated_j.last().copied().unwrap_or(0.0);
     Ok(HostRun {
         record,
@@ -429,6 +434,7 @@ pub fn run_host_test(
         dt_s: dt,
         steps,
         wall_time_s: started.elapsed().as_secs_f64(),
+        warnings: daq_report.clipping_warnings(),
     })
 }
 
@@ -498,5 +504,28 @@ mod tests {
         // The record holds every sample of the rig's clock.
         assert_eq!(r.time_s.len(), 16_000, "{}", r.time_s.len());
         assert!((r.time_s[1] - r.time_s[0] - 25e-6).abs() < 1e-12);
+    }
+
+    /// An overload is said: at 8 N and 40 Hz, its resonance, the empty
+    /// plate-40hz host swings past the accelerometer's full scale (Γ about
+    /// 230, 2 250 against 1 961 m/s^2) and the record is clipped, which the
+    /// run reports (the report was dropped, and a clipped empty host read
+    /// low in silence); at 3 N it is within range and nothing is said.
+    #[test]
+    fn a_clipped_record_says_so() {
+        let scene = Scene::thesis();
+        let run_at = |force: &str| {
+            let mut t = test_of(Damper::Empty, &format!("sine:40:{force}"), 0.3);
+            t.start_steady = true;
+            run_host_test(&scene, &BedSource::Settle, &t, &mut |_| {}).expect("runs")
+        };
+        let loud = run_at("8");
+        assert!(
+            loud.warnings.iter().any(|w| w.text.contains("clipped")),
+            "{:?}",
+            loud.warnings
+        );
+        let quiet = run_at("3");
+        assert!(quiet.warnings.is_empty(), "{:?}", quiet.warnings);
     }
 }

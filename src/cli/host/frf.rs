@@ -275,6 +275,17 @@ fn report(
             };
             println!("           +- not known: {why}; more --record-cycles");
         }
+        for w in &p.warnings {
+            eprintln!("warning: {} Hz: {w}", p.freq_hz);
+        }
+        for (what, other) in [("the empty host", empty), ("the solid mass", solid)] {
+            for w in other.points.get(k).map_or(&[][..], |q| &q.warnings[..]) {
+                eprintln!(
+                    "warning: {} Hz, {what} (the comparison, and the dB against it): {w}",
+                    p.freq_hz
+                );
+            }
+        }
         if !p.steady {
             println!(
                 "           not steady: the host's stored energy moved by {:.4} W over the record ({:+.1} % of the input; booked in the balance, but the damper is not at its steady state: more --settle-cycles)",
