@@ -111,8 +111,10 @@ pub struct Steadiness {
     /// at least 1 % of `E_max` per cycle).
     pub balance_rel: f64,
     /// One-sigma error of the window's mean energy per cycle / its mean (of
-    /// 1 % of `E_max` for a bed that dissipates next to nothing); `None` for a
-    /// window too short to tell ([`crate::stats::MIN_SERIES_VALUES`] cycles).
+    /// 1 % of `E_max` for a bed that dissipates next to nothing): one bed's
+    /// from its cycles, an ensemble's from its beds' spread never below
+    /// their windows' ([`EnsembleError`]); `None` for a window too short to
+    /// tell ([`crate::stats::MIN_SERIES_VALUES`] cycles).
     pub stderr_rel: Option<f64>,
     /// Drift of the energy per cycle across the window (the fitted slope
     /// times the window's cycles, of the same denominator), and its one-sigma

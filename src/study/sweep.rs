@@ -599,6 +599,9 @@ pub enum SeFrom {
     Window,
     /// The spread of the beds of an ensemble (Student's t).
     Beds,
+    /// The spread of several seeds' rows, in a summary over seeds
+    /// ([`seeds_stderr`]).
+    Seeds,
     /// Not known: a window too short to tell.
     NotKnown,
 }
@@ -608,6 +611,7 @@ impl SeFrom {
         match self {
             SeFrom::Window => "window",
             SeFrom::Beds => "beds",
+            SeFrom::Seeds => "seeds",
             SeFrom::NotKnown => "not_known",
         }
     }
@@ -1725,7 +1729,7 @@ pub fn summarise(file: &SweepFile) -> Vec<ConditionSummary> {
                             [] => "",
                             _ if !se.is_finite() => SeFrom::NotKnown.as_str(),
                             [one] => one.se_from().map_or("", SeFrom::as_str),
-                            _ => "seeds",
+                            _ => SeFrom::Seeds.as_str(),
                         },
                         efficiency_measured: mean(|r| r.efficiency_measured),
                         apparent_mass_kg: mean(|r| r.apparent_mass_kg),
