@@ -7,7 +7,7 @@
 
 use serde::Serialize;
 
-use crate::experiment::damper::Steadiness;
+use crate::experiment::damper::{DRIFT_FLOOR_REL, Steadiness};
 use crate::stats::{MeanStderr, ensemble_mean, ensemble_mean_floored};
 
 /// An ensemble's figure: the mean over the beds and its one-sigma error
@@ -113,14 +113,21 @@ impl EnsembleSummary {
 /// Why a window is not shown steady, in words.
 pub fn unsteady_reasons(s: &Steadiness, first_cycle: u32) -> String {
     let mut why = Vec::new();
-    if let (Some(d), Some(e)) = (s.drift_rel, s.drift_stderr_rel)
-        && d.abs() > 2.0 * e
-    {
-        why.push(format!(
-            "the mean energy per cycle drifts by {:+.2} % +- {:.2} % across the window",
-            100.0 * d,
-            100.0 * e
-        ));
+    if let (Some(d), Some(e)) = (s.drift_rel, s.drift_stderr_rel) {
+        if s.drifts() {
+            why.push(format!(
+                "the mean energy per cycle drifts by {:+.2} % +- {:.2} % across the window",
+                100.0 * d,
+                100.0 * e
+            ));
+        } else if !s.drift_shown_small() {
+            why.push(format!(
+                "the drift across the window, {:+.2} % +- {:.2} %, is not shown small (within twice the error of the mean, or {:.0} %, at two of its errors)",
+                100.0 * d,
+                100.0 * e,
+                100.0 * DRIFT_FLOOR_REL
+            ));
+        }
     }
     if s.warming_up(first_cycle) {
         why.push(match s.warm_up_cycles {

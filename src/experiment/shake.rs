@@ -33,9 +33,9 @@ use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::drive::Drive;
 use crate::experiment::bed_cache::BedSource;
-use crate::experiment::damper::OneBed;
 use crate::experiment::damper::{
-    DriveJudge, DriveOutcome, Observers, Progress, Steadiness, StepObserver,
+    DRIFT_FLOOR_REL, DriveJudge, DriveOutcome, Observers, OneBed, Progress, Steadiness,
+    StepObserver,
 };
 use crate::experiment::ensemble_summary::EnsembleSummary;
 use crate::experiment::measurement::{
@@ -334,7 +334,7 @@ impl DemTruth {
             )));
         } else if s.capped {
             w.push(RunWarning::advising(format!(
-                "the drive stopped at its cap of {} cycles without reaching a steady state: over the last {} cycles the enclosure's work and the dissipation differ by {:+.2} %, the energy per cycle has an error of {} and drifts by {} (the first two should be within drive.balance_rel and drive.stderr_rel, the drift within two of its errors); the figures are those of an unsteady bed",
+                "the drive stopped at its cap of {} cycles without reaching a steady state: over the last {} cycles the enclosure's work and the dissipation differ by {:+.2} %, the energy per cycle has an error of {} and drifts by {} (the first two should be within drive.balance_rel and drive.stderr_rel, the drift shown within twice the error, or {:.0} %, at two of its errors); the figures are those of an unsteady bed",
                 self.cycles,
                 self.cycles - self.steady_first_cycle,
                 100.0 * s.balance_rel,
@@ -342,7 +342,8 @@ impl DemTruth {
                 match (s.drift_rel, s.drift_stderr_rel) {
                     (Some(d), Some(e)) => format!("{:+.2} % +- {:.2} %", 100.0 * d, 100.0 * e),
                     _ => "an unknown amount".to_string(),
-                }
+                },
+                100.0 * DRIFT_FLOOR_REL
             ), FileKey("drive.max_cycles")));
         } else if !s.reached && self.steadiness_rel.abs() > 0.01 {
             w.push(RunWarning::advising(format!(
