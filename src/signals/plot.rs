@@ -886,7 +886,7 @@ impl Figure for HeatFigure<'_> {
                     .pos(Pos::new(HPos::Left, VPos::Center)),
             ))?;
         }
-        self.draw_colour_bar(&bar)?;
+        draw_colour_bar(&bar, self.0.value_range, &self.0.value_label, &HEAT_BAR)?;
         root.present()?;
         Ok(())
     }
@@ -1066,52 +1066,6 @@ impl HeatFigure<'_> {
         }
         Ok(())
     }
-
-    /// The colour bar in `bar`: the scale, its frame, five value ticks and
-    /// the value's name.
-    fn draw_colour_bar<DB: DrawingBackend>(&self, bar: &DrawingArea<DB, Shift>) -> DrawResult
-    where
-        DB::ErrorType: 'static,
-    {
-        let (lo, hi) = self.0.value_range;
-        let (_, bh) = bar.dim_in_pixel();
-        let (top, bottom) = (60i32, bh as i32 - 100);
-        let steps = 100;
-        for k in 0..steps {
-            let t0 = k as f64 / steps as f64;
-            let y_a = bottom - ((bottom - top) as f64 * t0) as i32;
-            let y_b = bottom - ((bottom - top) as f64 * (t0 + 1.0 / steps as f64)) as i32;
-            bar.draw(&Rectangle::new(
-                [(10, y_b - 1), (40, y_a)],
-                viridis(t0).filled(),
-            ))?;
-        }
-        bar.draw(&Rectangle::new(
-            [(10, top), (40, bottom)],
-            BLACK.stroke_width(1),
-        ))?;
-        for k in 0..=4 {
-            let t = k as f64 / 4.0;
-            let y = bottom - ((bottom - top) as f64 * t) as i32;
-            bar.draw(&Text::new(
-                format!("{:.2}", lo + t * (hi - lo)),
-                (46, y),
-                ("sans-serif", 13)
-                    .into_font()
-                    .color(&BLACK)
-                    .pos(Pos::new(HPos::Left, VPos::Center)),
-            ))?;
-        }
-        bar.draw(&Text::new(
-            self.0.value_label.clone(),
-            (10, top - 24),
-            ("sans-serif", 14)
-                .into_font()
-                .color(&BLACK)
-                .pos(Pos::new(HPos::Left, VPos::Center)),
-        ))?;
-        Ok(())
-    }
 }
 
 /// One panel of a [`PanelStrip`]: circles in data units, over a rectangle.
@@ -1188,7 +1142,7 @@ impl Figure for StripFigure<'_> {
         for (area, panel) in areas.iter().zip(&s.panels) {
             self.draw_panel(area, panel)?;
         }
-        self.draw_colour_bar(&bar)?;
+        draw_colour_bar(&bar, self.0.value_range, &self.0.value_label, &STRIP_BAR)?;
         for (k, line) in s.footnote.lines().enumerate() {
             foot.draw(&Text::new(
                 line.to_string(),
@@ -1247,52 +1201,96 @@ impl StripFigure<'_> {
         }))?;
         Ok(())
     }
+}
 
-    /// The colour bar in `bar`: the scale, its frame, five value ticks and
-    /// the value's name.
-    fn draw_colour_bar<DB: DrawingBackend>(&self, bar: &DrawingArea<DB, Shift>) -> DrawResult
-    where
-        DB::ErrorType: 'static,
-    {
-        let (lo, hi) = self.0.value_range;
-        let (_, bh) = bar.dim_in_pixel();
-        let (top, bottom) = (30i32, bh as i32 - 20);
-        let steps = 100;
-        for k in 0..steps {
-            let t0 = k as f64 / steps as f64;
-            let y_a = bottom - ((bottom - top) as f64 * t0) as i32;
-            let y_b = bottom - ((bottom - top) as f64 * (t0 + 1.0 / steps as f64)) as i32;
-            bar.draw(&Rectangle::new(
-                [(10, y_b - 1), (35, y_a)],
-                viridis(t0).filled(),
-            ))?;
-        }
+/// Where a colour bar sits in its area (pixels) and its fonts' sizes.
+struct ColourBarLayout {
+    /// The scale's top edge, and its bottom edge's distance from the
+    /// area's bottom.
+    top: i32,
+    bottom_margin: i32,
+    /// The scale's right edge (its left is at 10) and where the ticks start.
+    right: i32,
+    tick_x: i32,
+    tick_font: u32,
+    /// The name's left edge, and its height above the scale's top.
+    label_x: i32,
+    label_above: i32,
+    label_font: u32,
+}
+
+/// The heat map's colour bar.
+const HEAT_BAR: ColourBarLayout = ColourBarLayout {
+    top: 60,
+    bottom_margin: 100,
+    right: 40,
+    tick_x: 46,
+    tick_font: 13,
+    label_x: 10,
+    label_above: 24,
+    label_font: 14,
+};
+
+/// The panel strip's colour bar.
+const STRIP_BAR: ColourBarLayout = ColourBarLayout {
+    top: 30,
+    bottom_margin: 20,
+    right: 35,
+    tick_x: 40,
+    tick_font: 12,
+    label_x: 5,
+    label_above: 16,
+    label_font: 13,
+};
+
+/// The colour bar in `bar`: the viridis scale over `(lo, hi)`, its frame,
+/// five value ticks and the value's name `label`.
+fn draw_colour_bar<DB: DrawingBackend>(
+    bar: &DrawingArea<DB, Shift>,
+    (lo, hi): (f64, f64),
+    label: &str,
+    at: &ColourBarLayout,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let (_, bh) = bar.dim_in_pixel();
+    let (top, bottom) = (at.top, bh as i32 - at.bottom_margin);
+    let steps = 100;
+    for k in 0..steps {
+        let t0 = k as f64 / steps as f64;
+        let y_a = bottom - ((bottom - top) as f64 * t0) as i32;
+        let y_b = bottom - ((bottom - top) as f64 * (t0 + 1.0 / steps as f64)) as i32;
         bar.draw(&Rectangle::new(
-            [(10, top), (35, bottom)],
-            BLACK.stroke_width(1),
+            [(10, y_b - 1), (at.right, y_a)],
+            viridis(t0).filled(),
         ))?;
-        for k in 0..=4 {
-            let t = k as f64 / 4.0;
-            let y = bottom - ((bottom - top) as f64 * t) as i32;
-            bar.draw(&Text::new(
-                format!("{:.2}", lo + t * (hi - lo)),
-                (40, y),
-                ("sans-serif", 12)
-                    .into_font()
-                    .color(&BLACK)
-                    .pos(Pos::new(HPos::Left, VPos::Center)),
-            ))?;
-        }
+    }
+    bar.draw(&Rectangle::new(
+        [(10, top), (at.right, bottom)],
+        BLACK.stroke_width(1),
+    ))?;
+    for k in 0..=4 {
+        let t = k as f64 / 4.0;
+        let y = bottom - ((bottom - top) as f64 * t) as i32;
         bar.draw(&Text::new(
-            self.0.value_label.clone(),
-            (5, top - 16),
-            ("sans-serif", 13)
+            format!("{:.2}", lo + t * (hi - lo)),
+            (at.tick_x, y),
+            ("sans-serif", at.tick_font)
                 .into_font()
                 .color(&BLACK)
                 .pos(Pos::new(HPos::Left, VPos::Center)),
         ))?;
-        Ok(())
     }
+    bar.draw(&Text::new(
+        label.to_string(),
+        (at.label_x, top - at.label_above),
+        ("sans-serif", at.label_font)
+            .into_font()
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Left, VPos::Center)),
+    ))?;
+    Ok(())
 }
 
 #[cfg(test)]
