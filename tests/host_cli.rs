@@ -95,3 +95,44 @@ fn a_dashpot_decay_writes_its_record_and_recovers_its_loss_factor() {
     let want = 2.0 * (0.003 + 15.0 / (2.0 * (31_582.734_f64 * 0.5).sqrt()));
     assert!((eta / want - 1.0).abs() < 0.01, "{eta} against {want}");
 }
+
+#[test]
+fn a_prediction_outside_the_map_says_so() {
+    // The reference map (signals/reference/host-map) reaches Gamma 30 at
+    // 36-44 Hz: 5 N on plate-40hz stays inside it (Gamma 4.6-16.6), 8 N
+    // drives 39 Hz to Gamma 32.7, above it.
+    let dir = Scratch::new("host-cli-predict");
+    let map = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/signals/reference/host-map/sweep.csv"
+    );
+    let run = |force: &str| {
+        let args = [
+            "host",
+            "predict",
+            "--map",
+            map,
+            "--freq",
+            "36,39,40",
+            "--force-n",
+            force,
+            "--out",
+            force,
+        ];
+        let out = vlab(&dir.0, &args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let j = common::json(&dir.path(&format!("{force}/predict.json")));
+        (
+            stderr(&out),
+            j["warnings"].as_array().expect("warnings").len(),
+        )
+    };
+    let (err, n) = run("5");
+    assert!(n == 0 && !err.contains("warning"), "{err}");
+    let (err, n) = run("8");
+    assert_eq!(n, 1, "{err}");
+    assert!(
+        err.contains("warning: Gamma 32.7 lies above the map's highest point at 39 Hz, Gamma 30"),
+        "{err}"
+    );
+}

@@ -168,6 +168,35 @@ impl DissipationMap {
         )
     }
 
+    /// Why the map cannot answer at `freq_hz` and `gamma` from its own
+    /// points, if it cannot: a frequency outside its columns, or a `Γ`
+    /// above the highest point of the columns either side (where the model
+    /// holds that point's efficiency). `None` inside, and below the lowest
+    /// point, where the model's fall to `Γ = 1` is part of it.
+    pub fn outside(&self, freq_hz: f64, gamma: f64) -> Option<String> {
+        let n = self.freqs_hz.len();
+        let (lo, hi) = (self.freqs_hz[0], self.freqs_hz[n - 1]);
+        let span = (hi - lo).max(1e-9 * hi);
+        if freq_hz < lo - 1e-9 * span || freq_hz > hi + 1e-9 * span {
+            return Some(if n == 1 {
+                format!("{freq_hz} Hz is not the map's frequency ({lo} Hz)")
+            } else {
+                format!("{freq_hz} Hz lies outside the map's {lo}-{hi} Hz")
+            });
+        }
+        let i = self.freqs_hz.partition_point(|f| *f <= freq_hz).max(1) - 1;
+        let near = [i, (i + 1).min(n - 1)];
+        let top = near
+            .iter()
+            .map(|&c| self.columns[c][self.columns[c].len() - 1].gamma)
+            .fold(f64::INFINITY, f64::min);
+        (gamma > top * 1.0001).then(|| {
+            format!(
+                "Gamma {gamma:.1} lies above the map's highest point at {freq_hz} Hz, Gamma {top}: the model holds that point's efficiency"
+            )
+        })
+    }
+
     /// The equivalent damper at `freq_hz` and displacement amplitude
     /// `amplitude_m` at the damper.
     pub fn damper_at(&self, freq_hz: f64, amplitude_m: f64) -> EquivalentDamper {
@@ -372,6 +401,39 @@ mod tests {
         let g15 = 1.5 * 9.81 / (w * w);
         assert!((map.damper_at(f, g15).efficiency - 0.4).abs() < 1e-12);
         assert!(map.damper_at(60.0, x).extrapolated);
+    }
+
+    /// The map says where it cannot answer: above the top Γ of the columns
+    /// either side of the frequency (the lower of the two where they
+    /// differ) and outside its frequencies; below its lowest Γ, inside its
+    /// frequencies, it can (the fall to Γ = 1 is the model's).
+    #[test]
+    fn the_map_says_where_it_cannot_answer() {
+        let points: Vec<MapPoint> = [(35.0, 30.0), (45.0, 40.0)]
+            .iter()
+            .flat_map(|&(f, top)| {
+                [2.0, top].map(|g| MapPoint {
+                    freq_hz: f,
+                    gamma: g,
+                    efficiency: 0.5,
+                    efficiency_se: 0.01,
+                    apparent_mass_kg: None,
+                })
+            })
+            .collect();
+        let map = DissipationMap::new(&points, 0.03, 9.81).expect("valid");
+        assert_eq!(map.outside(40.0, 29.9), None);
+        assert_eq!(map.outside(40.0, 1.5), None);
+        assert_eq!(map.outside(45.0, 40.0), None);
+        let above = map.outside(39.0, 40.1).expect("above Gamma 30");
+        assert!(
+            above.contains("Gamma 40.1") && above.contains("Gamma 30"),
+            "{above}"
+        );
+        assert!(map.outside(45.0, 41.0).is_some());
+        let off = map.outside(50.0, 10.0).expect("outside 35-45 Hz");
+        assert!(off.contains("35-45 Hz"), "{off}");
+        assert!(map.outside(34.0, 10.0).is_some());
     }
 
     #[test]

@@ -130,9 +130,19 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
         }
     };
     let beds = a.common.cache.source(&mut |n| eprintln!("{n}"));
-    let measured = made.keep_if_ok(
+    let mut measured = made.keep_if_ok(
         run_stepped_sine(&scene, &beds, &test, &plan, &done).context("the stepped sine"),
     )?;
+    if let Some((map, _)) = &maps {
+        for p in &mut measured.points {
+            if let Some(why) = map.outside(p.freq_hz, p.gamma) {
+                p.warnings.push(format!(
+                    "the DEM drove the damper to Gamma {:.1}, where the map cannot answer: {why}; the map's prediction and Yang's map W at this point are guesses",
+                    p.gamma
+                ));
+            }
+        }
+    }
     // The comparisons a lab makes: the host without particles and with
     // their mass as a solid (linear, a second each).
     let compare = |damper: Damper| -> Result<SteppedSineResult> {

@@ -112,6 +112,13 @@ pub fn run(a: PredictArgs) -> Result<()> {
             roots
         ));
     }
+    let warnings: Vec<String> = points
+        .iter()
+        .filter_map(|(p, _)| map.outside(p.freq_hz, p.damper.gamma))
+        .collect();
+    for w in &warnings {
+        eprintln!("warning: {w} (a prediction outside the map is a guess; extend the sweep)");
+    }
     if let Some(dir) = &a.out {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
         write_text(&dir.join("predict.csv"), &csv)?;
@@ -121,6 +128,7 @@ pub fn run(a: PredictArgs) -> Result<()> {
             "source": if a.yang { "yang" } else { "dem" },
             "force_n": a.force_n,
             "elapsed_ms": elapsed_ms,
+            "warnings": warnings,
             "points": points.iter().map(|(p, r)| serde_json::json!({"response": p, "roots": r})).collect::<Vec<_>>(),
         });
         write_text(
