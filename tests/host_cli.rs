@@ -10,7 +10,7 @@ use common::{Scratch, stderr, vlab};
 #[test]
 fn wrong_host_input_is_refused_and_leaves_nothing() {
     let dir = Scratch::new("host-cli");
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 8] = [
         (
             &["host", "decay", "--damper", "dashpot:-1", "--out", "out"],
             "damper dashpot = -1 N s/m: must be in (0, 1000000]",
@@ -47,6 +47,14 @@ fn wrong_host_input_is_refused_and_leaves_nothing() {
         (
             &["host", "decay", "--host", "no-such-host", "--out", "out"],
             "no built-in rig 'no-such-host'",
+        ),
+        // The host commands set their own length (--duration-s, the
+        // stepped sine's cycles): the shaker's drive length is not offered.
+        (
+            &[
+                "host", "frf", "--freq", "40", "--cycles", "30", "--out", "out",
+            ],
+            "unexpected argument '--cycles'",
         ),
     ];
     for (args, wanted) in cases {

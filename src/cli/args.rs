@@ -137,22 +137,13 @@ pub fn threads(s: &str) -> Result<usize, InvalidParameter> {
     vlab::validation::count_in(FLAG, v, "", 1, None)
 }
 
-/// Scene options shared by the commands that run the damper.
+/// The bed's options: the scene, and what of it a flag may change short of
+/// the drive's length (the host commands, whose length is their own).
 #[derive(Debug, Clone, Args)]
-pub struct SceneArgs {
+pub struct BedArgs {
     /// Scene file (TOML) merged over the built-in thesis scene.
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
-    /// Drive cycles in all, fixing the count [scene default: run until steady:
-    /// input work and dissipation within 1 %, error of the energy per cycle
-    /// below 1 % and no trend over the window (at least 16 cycles), at most
-    /// 400 cycles].
-    #[arg(long)]
-    pub cycles: Option<u32>,
-    /// Last cycles kept as the steady window; alone, the steady rule's
-    /// transient cycles then this many [scene default: 5 of --cycles].
-    #[arg(long)]
-    pub steady_cycles: Option<u32>,
     /// Gravity relative to the drive axis [scene default: vertical].
     #[arg(long, value_enum)]
     pub orientation: Option<Orientation>,
@@ -165,30 +156,65 @@ pub struct SceneArgs {
     pub dt_s: Option<f64>,
 }
 
+impl BedArgs {
+    /// The scene (built-in or file) with the command-line overrides applied and
+    /// everything validated; a refusal names the flag or the key at fault.
+    pub fn resolve(&self) -> Result<Scene> {
+        self.resolve_with(None, None)
+    }
+
+    fn resolve_with(&self, cycles: Option<u32>, steady_cycles: Option<u32>) -> Result<Scene> {
+        let scene = Scene::load_or_thesis(self.scene.as_deref())?;
+        let overrides = SceneOverrides {
+            cycles,
+            steady_cycles,
+            orientation: self.orientation,
+            seed: self.seed,
+            dt_s: self.dt_s,
+        };
+        let flags = FlagKeys::drive(
+            cycles.is_some(),
+            steady_cycles.is_some(),
+            self.dt_s.is_some(),
+        );
+        overrides
+            .apply(scene)
+            .map_err(|e| flags.name_flags(e.into()))
+    }
+}
+
+/// Scene options shared by the commands that drive the damper on the
+/// shaker: the bed's, and the drive's length.
+#[derive(Debug, Clone, Args)]
+pub struct SceneArgs {
+    #[command(flatten)]
+    pub bed: BedArgs,
+    /// Drive cycles in all, fixing the count [scene default: run until steady:
+    /// input work and dissipation within 1 %, error of the energy per cycle
+    /// below 1 % and the drift across the window shown small (at least 16
+    /// cycles), at most 400 cycles].
+    #[arg(long)]
+    pub cycles: Option<u32>,
+    /// Last cycles kept as the steady window; alone, the steady rule's
+    /// transient cycles then this many [scene default: 5 of --cycles].
+    #[arg(long)]
+    pub steady_cycles: Option<u32>,
+}
+
 impl SceneArgs {
     /// The scene keys these flags set.
     pub fn flags(&self) -> FlagKeys {
         FlagKeys::drive(
             self.cycles.is_some(),
             self.steady_cycles.is_some(),
-            self.dt_s.is_some(),
+            self.bed.dt_s.is_some(),
         )
     }
 
     /// The scene (built-in or file) with the command-line overrides applied and
     /// everything validated; a refusal names the flag or the key at fault.
     pub fn resolve(&self) -> Result<Scene> {
-        let scene = Scene::load_or_thesis(self.scene.as_deref())?;
-        let overrides = SceneOverrides {
-            cycles: self.cycles,
-            steady_cycles: self.steady_cycles,
-            orientation: self.orientation,
-            seed: self.seed,
-            dt_s: self.dt_s,
-        };
-        overrides
-            .apply(scene)
-            .map_err(|e| self.flags().name_flags(e.into()))
+        self.bed.resolve_with(self.cycles, self.steady_cycles)
     }
 }
 

@@ -60,7 +60,7 @@ pub struct HostTestArgs {
     #[arg(long, value_name = "KIND", default_value = "particles", value_parser = parse_damper)]
     pub damper: Damper,
     #[command(flatten)]
-    pub scene: args::SceneArgs,
+    pub scene: args::BedArgs,
     /// The rig whose channels record the test: its accelerometer at the
     /// damper, its force transducer at the drive point.
     #[arg(long, value_name = "NAME|FILE", default_value = vlab::rig::DEFAULT_RIG)]
