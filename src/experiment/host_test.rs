@@ -434,7 +434,7 @@ pub fn run_host_test(
         dt_s: dt,
         steps,
         wall_time_s: started.elapsed().as_secs_f64(),
-        warnings: daq_report.clipping_warnings(),
+        warnings: daq_report.level_warnings(),
     })
 }
 
@@ -527,5 +527,25 @@ mod tests {
         );
         let quiet = run_at("3");
         assert!(quiet.warnings.is_empty(), "{:?}", quiet.warnings);
+    }
+
+    /// A record too faint for the ADC is said too: the empty plate-40hz
+    /// host at 5 Hz under 0.05 N moves its accelerometer by a few codes
+    /// of the 16-bit converter, below [`crate::rig::daq::LOW_LEVEL_CODES`];
+    /// at 40 Hz under 3 N it spans thousands and nothing is said.
+    #[test]
+    fn a_record_of_a_few_codes_says_so() {
+        let scene = Scene::thesis();
+        let mut t = test_of(Damper::Empty, "sine:5:0.05", 0.6);
+        t.start_steady = true;
+        let faint = run_host_test(&scene, &BedSource::Settle, &t, &mut |_| {}).expect("runs");
+        assert!(
+            faint
+                .warnings
+                .iter()
+                .any(|w| w.text.contains("acceleration") && w.text.contains("ADC codes from zero")),
+            "{:?}",
+            faint.warnings
+        );
     }
 }

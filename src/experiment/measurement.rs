@@ -260,7 +260,7 @@ pub fn run_measured_shake_judged(
         MeasuredBy {
             source,
             achieved_gamma: shaker_report.achieved_gamma,
-            clipping: daq_report.clipping_warnings(),
+            clipping: daq_report.level_warnings(),
         },
     );
     Ok(ShakeExperiment {

@@ -788,7 +788,7 @@ fn measure_replay(
         calibration: calibration_source,
         n_periods: corrected.n_periods,
         rig: rig.name.clone(),
-        clipping: [pushed.daq.clipping_warnings(), calibration_warnings].concat(),
+        clipping: [pushed.daq.level_warnings(), calibration_warnings].concat(),
     };
     Ok((measured, calibration))
 }

@@ -26,6 +26,11 @@ pub const ACCEL_CHANNEL: &str = "acceleration";
 /// Name of the force channel in the trace.
 pub const FORCE_CHANNEL: &str = "force";
 
+/// Fewest ADC codes a channel's largest sample should span from zero
+/// before [`DaqReport::low_level_warnings`] warns: 32 codes, where one
+/// code's uniform error (`q / √12`) is about 1 % of the peak.
+pub const LOW_LEVEL_CODES: f64 = 32.0;
+
 /// What the DAQ saw, for the caller's report.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DaqReport {
@@ -54,12 +59,47 @@ pub struct ChannelReport {
     pub peak_fraction_of_full_scale: f64,
     /// ADC full scale in the channel's physical unit.
     pub full_scale: f64,
+    /// Largest |ADC input| in ADC codes (steps of the converter), of
+    /// `2^(bits − 1)` from zero to full scale.
+    pub peak_codes: f64,
 }
 
 impl DaqReport {
     /// True when any sample was clipped.
     pub fn any_clipped(&self) -> bool {
         self.channels.iter().any(|c| c.clipped > 0)
+    }
+
+    /// What the record's levels say against it: [`Self::clipping_warnings`]
+    /// and [`Self::low_level_warnings`].
+    pub fn level_warnings(&self) -> Vec<RunWarning> {
+        [self.clipping_warnings(), self.low_level_warnings()].concat()
+    }
+
+    /// One sentence per channel whose largest sample is fewer than
+    /// [`LOW_LEVEL_CODES`] ADC codes from zero: its quantisation steps are a
+    /// large part of the signal and what is read from it can be off by
+    /// percents (a host's acceleration at 5 Hz, 1-4 codes, read the
+    /// receptance 4 % high). None for an ideal ADC.
+    pub fn low_level_warnings(&self) -> Vec<RunWarning> {
+        if self.ideal_adc {
+            return Vec::new();
+        }
+        self.channels
+            .iter()
+            .filter(|c| c.peak_codes < LOW_LEVEL_CODES)
+            .map(|c| {
+                format!(
+                    "{}: the largest sample is {:.1} ADC codes from zero (full scale {:.4} {} over {:.0} codes): the converter's steps are a large part of the signal and what is read from it may be off by percents; raise the conditioner gain in the rig file or the drive amplitude",
+                    c.name,
+                    c.peak_codes,
+                    c.full_scale,
+                    c.unit,
+                    c.peak_codes / c.peak_fraction_of_full_scale.max(f64::MIN_POSITIVE)
+                )
+                .into()
+            })
+            .collect()
     }
 
     /// One sentence per clipped channel, for a loud warning (of two ways
@@ -239,6 +279,8 @@ impl Daq {
                     clipped: c.clipped(),
                     peak_fraction_of_full_scale: c.peak_fraction_of_full_scale(),
                     full_scale: c.full_scale_units(),
+                    peak_codes: c.peak_fraction_of_full_scale()
+                        * 2f64.powi(self.spec.daq.bits as i32 - 1),
                 })
                 .collect(),
             ideal_adc: self.spec.daq.ideal_adc,
