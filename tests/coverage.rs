@@ -2,21 +2,25 @@
 //! runs, at conditions nobody tuned it to? The default job (the thesis
 //! damper through the thesis rig, an ensemble of
 //! `vlab::experiment::ensemble::DEFAULT_BEDS` beds run until the ensemble is
-//! steady) is run 12 times with new seeds (501-512, each run's beds derived
+//! steady) is run 12 times with new seeds (601-612, each run's beds derived
 //! from its seed) at each of three conditions drawn at random from the
 //! thesis grid (20, 40, 80, 160 Hz × Γ 1-40, Γ ≤ 12 at 20 Hz; Python's
-//! `random.Random(34)`, leaving out the conditions the rule was designed on,
-//! 40 Hz Γ 20, 20 Hz Γ 12, 40 Hz Γ 10, 40 Hz Γ 3 and 160 Hz Γ 10): 80 Hz
-//! Γ 38, 20 Hz Γ 4 and 20 Hz Γ 7. None has a long-run reference, so each
-//! run's z-score is taken against the mean of all runs,
+//! `random.Random(35)`, leaving out the conditions the rules were designed
+//! on, 40 Hz Γ 20, 20 Hz Γ 12, 40 Hz Γ 10, 40 Hz Γ 3, 160 Hz Γ 10, and those
+//! of the first draw, `random.Random(34)`, whose runs showed that a drift
+//! not told from noise is not a steady bed: 80 Hz Γ 38, 20 Hz Γ 4 and
+//! 20 Hz Γ 7): 80 Hz Γ 9, 80 Hz Γ 10 and 80 Hz Γ 28. None has a long-run
+//! reference, so each run's z-score is taken against the mean of all runs,
 //! `(x_i − mean) / (+-)_i · √(n / (n − 1))` (the factor undoes the shrinkage
 //! of a deviation from a mean that includes the run itself), for the DEM's
 //! energy per cycle and the measured one (Yang's method). An honest
-//! one-sigma +- gives z-scores with a standard deviation of about 1 (the test
-//! asks 0.75-1.35) and about 68 % of them within 1 (the test asks 5 to 11
-//! of 12, the binomial's 98 % range).
+//! one-sigma +- gives z-scores with a standard deviation of about 1 and
+//! about 68 % of them within 1 (the bands the test asks are at
+//! [`the_printed_error_covers_independent_runs_where_nobody_tuned`]).
 //!
-//! Long (about an hour on 2 cores), so ignored by `cargo test`; run it with
+//! Long (about two and a half hours on 2 cores: at 80 Hz, Γ 9 the runs
+//! drive to their cap of 400 cycles, about 4 minutes each), so ignored by
+//! `cargo test`; run it with
 //!
 //! ```sh
 //! cargo test --release --test coverage -- --ignored --nocapture
@@ -33,7 +37,7 @@ use vlab::stats::mean_std;
 
 /// Runs per condition, and the first run's seed.
 const RUNS: u64 = 12;
-const FIRST_SEED: u64 = 501;
+const FIRST_SEED: u64 = 601;
 
 /// One run's ensemble figures: DEM and measured energy per cycle with
 /// their +-, the cycles it drove and whether it was shown steady.
@@ -174,11 +178,11 @@ fn judge(
 /// (Student's t on 5 degrees of freedom has long tails; simulated), one
 /// 1.5 times too small about 1 in 10.
 #[test]
-#[ignore = "about an hour and a half on 2 cores; run with --ignored"]
+#[ignore = "about two and a half hours on 2 cores; run with --ignored"]
 fn the_printed_error_covers_independent_runs_where_nobody_tuned() {
     let mut problems = Vec::new();
     let (mut dem, mut measured) = (Vec::new(), Vec::new());
-    for (freq_hz, gamma) in [(80.0, 38.0), (20.0, 4.0), (20.0, 7.0)] {
+    for (freq_hz, gamma) in [(80.0, 9.0), (80.0, 10.0), (80.0, 28.0)] {
         let (d, m) = condition(freq_hz, gamma);
         for (what, zs) in [("DEM", &d), ("measured", &m)] {
             let label = format!("{freq_hz} Hz, Gamma {gamma}, {what}");
