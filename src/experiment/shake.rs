@@ -334,7 +334,7 @@ impl DemTruth {
             )));
         } else if s.capped {
             w.push(RunWarning::advising(format!(
-                "the drive stopped at its cap of {} cycles without reaching a steady state: over the last {} cycles the enclosure's work and the dissipation differ by {:+.2} %, the energy per cycle has an error of {} and drifts by {} (the first two should be within drive.balance_rel and drive.stderr_rel, the drift shown within twice the error, or {:.0} %, at two of its errors); the figures are those of an unsteady bed",
+                "the drive stopped at its cap of {} cycles without reaching a steady state: over the last {} cycles the enclosure's work and the dissipation differ by {:+.2} %, the energy per cycle has an error of {} and drifts by {} (the first two should be within drive.balance_rel and drive.stderr_rel, the drift within two of its errors and, for an ensemble, shown within twice the error, or {:.0} %, at two of its errors); the figures are those of an unsteady bed",
                 self.cycles,
                 self.cycles - self.steady_first_cycle,
                 100.0 * s.balance_rel,
