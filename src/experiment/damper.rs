@@ -417,7 +417,8 @@ pub fn ensemble_steadiness(
     // One bed's drift cannot be shown small: its window's noise puts the
     // drift's error at about 3.5 of the mean's, so a noisy bed would drive
     // to the cap every time (at 40 Hz, Γ 10 and Γ 40 one bed did, where it
-    // had stopped at 40-120 cycles). Its figure claims only its own window
+    // stops at 99 cycles without this criterion). Its figure claims only
+    // its own window
     // ([`Steadiness::beds`]); the ensemble's, which claims the damper, must
     // show its drift small.
     let drift_ok = beds.len() == 1 || s.drift_shown_small();

@@ -184,11 +184,17 @@ impl DissipationMap {
                 format!("{freq_hz} Hz lies outside the map's {lo}-{hi} Hz")
             });
         }
+        // The columns the model reads at this frequency: one where it sits on
+        // a column, else the two either side.
         let i = self.freqs_hz.partition_point(|f| *f <= freq_hz).max(1) - 1;
-        let near = [i, (i + 1).min(n - 1)];
+        let on_column = (freq_hz - self.freqs_hz[i]).abs() <= 1e-9 * span;
+        let near = if on_column || i + 1 >= n {
+            i..=i
+        } else {
+            i..=i + 1
+        };
         let top = near
-            .iter()
-            .map(|&c| self.columns[c][self.columns[c].len() - 1].gamma)
+            .map(|c| self.columns[c][self.columns[c].len() - 1].gamma)
             .fold(f64::INFINITY, f64::min);
         (gamma > top * 1.0001).then(|| {
             format!(
@@ -217,7 +223,7 @@ impl DissipationMap {
                 a.0 + w * (b.0 - a.0),
                 a.1 + w * (b.1 - a.1),
                 a.2 + w * (b.2 - a.2),
-                a.3 || b.3,
+                a.3 || (w > 0.0 && b.3),
             )
         };
         let (lo, hi) = (self.freqs_hz[0], self.freqs_hz[n - 1]);
@@ -425,6 +431,7 @@ mod tests {
         assert_eq!(map.outside(40.0, 29.9), None);
         assert_eq!(map.outside(40.0, 1.5), None);
         assert_eq!(map.outside(45.0, 40.0), None);
+        assert_eq!(map.outside(35.0, 30.0), None);
         let above = map.outside(39.0, 40.1).expect("above Gamma 30");
         assert!(
             above.contains("Gamma 40.1") && above.contains("Gamma 30"),
