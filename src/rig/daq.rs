@@ -60,8 +60,9 @@ pub struct ChannelReport {
     /// ADC full scale in the channel's physical unit.
     pub full_scale: f64,
     /// Largest |ADC input| in ADC codes (steps of the converter), of
-    /// `2^(bits − 1)` from zero to full scale.
+    /// `full_scale_codes` (`2^(bits − 1)`) from zero to full scale.
     pub peak_codes: f64,
+    pub full_scale_codes: f64,
 }
 
 impl DaqReport {
@@ -95,7 +96,7 @@ impl DaqReport {
                     c.peak_codes,
                     c.full_scale,
                     c.unit,
-                    c.peak_codes / c.peak_fraction_of_full_scale.max(f64::MIN_POSITIVE)
+                    c.full_scale_codes
                 )
                 .into()
             })
@@ -267,6 +268,7 @@ impl Daq {
         trace.add_channel(FORCE_CHANNEL, "N", cut(&self.force))?;
         trace.metadata = self.metadata(metadata);
         let channels = [&self.accel, &self.force];
+        let full_scale_codes = 2f64.powi(self.spec.daq.bits as i32 - 1);
         let report = DaqReport {
             samples: trace.len(),
             sample_rate_hz: self.spec.daq.sample_rate_hz,
@@ -279,8 +281,8 @@ impl Daq {
                     clipped: c.clipped(),
                     peak_fraction_of_full_scale: c.peak_fraction_of_full_scale(),
                     full_scale: c.full_scale_units(),
-                    peak_codes: c.peak_fraction_of_full_scale()
-                        * 2f64.powi(self.spec.daq.bits as i32 - 1),
+                    peak_codes: c.peak_fraction_of_full_scale() * full_scale_codes,
+                    full_scale_codes,
                 })
                 .collect(),
             ideal_adc: self.spec.daq.ideal_adc,
