@@ -18,9 +18,9 @@
 //! about 68 % of them within 1 (the bands the test asks are at
 //! [`the_printed_error_covers_independent_runs_where_nobody_tuned`]).
 //!
-//! Long (about two and a half hours on 2 cores: at 80 Hz, Γ 9 the runs
-//! drive to their cap of 400 cycles, about 4 minutes each), so ignored by
-//! `cargo test`; run it with
+//! Long (about two hours on 2 cores: at 80 Hz, Γ 9 the runs drive to
+//! their cap of 400 cycles, about 4 minutes each), so ignored by `cargo
+//! test`; run it with
 //!
 //! ```sh
 //! cargo test --release --test coverage -- --ignored --nocapture
@@ -178,7 +178,7 @@ fn judge(
 /// (Student's t on 5 degrees of freedom has long tails; simulated), one
 /// 1.5 times too small about 1 in 10.
 #[test]
-#[ignore = "about two and a half hours on 2 cores; run with --ignored"]
+#[ignore = "about two hours on 2 cores; run with --ignored"]
 fn the_printed_error_covers_independent_runs_where_nobody_tuned() {
     let mut problems = Vec::new();
     let (mut dem, mut measured) = (Vec::new(), Vec::new());
