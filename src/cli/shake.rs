@@ -387,7 +387,7 @@ fn print_dem(d: &DemTruth) {
         d.steady_first_cycle + 1,
         d.cycles,
         d.cycles,
-        if st.reached && st.beds == 1 && !st.drift_shown_small() {
+        if st.reached && !st.drift_asked_small() && !st.drift_shown_small() {
             // One bed is not asked to show its drift small (its error is
             // about 3.5 of its mean's; see damper::ensemble_steadiness).
             "steady as far as one bed tells: no drift told from its noise, none shown small (--beds 6 can)"

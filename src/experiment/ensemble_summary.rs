@@ -120,7 +120,7 @@ pub fn unsteady_reasons(s: &Steadiness, first_cycle: u32) -> String {
                 100.0 * d,
                 100.0 * e
             ));
-        } else if s.beds > 1 && !s.drift_shown_small() {
+        } else if s.drift_asked_small() && !s.drift_shown_small() {
             why.push(format!(
                 "the drift across the window, {:+.2} % +- {:.2} %, is not shown small (within twice the error of the mean, or {:.0} %, at two of its errors)",
                 100.0 * d,
