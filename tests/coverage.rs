@@ -29,9 +29,8 @@
 //! The figures it printed are in `docs/accuracy.md` ("Coverage").
 
 use vlab::experiment::bed_cache::BedSource;
-use vlab::experiment::ensemble::{DEFAULT_BEDS, run_ensemble_shake, unsteady_reasons};
-use vlab::experiment::measurement::{CalibrationSource, ShakeSetup};
-use vlab::experiment::shake::{resolve_rig, shake_drive};
+use vlab::experiment::ensemble::{DEFAULT_BEDS, unsteady_reasons};
+use vlab::experiment::shake_plan::{ShakePlan, ShakeRequest};
 use vlab::scene::Scene;
 use vlab::stats::mean_std;
 
@@ -53,24 +52,19 @@ struct Run {
 fn run(seed: u64, freq_hz: f64, gamma: f64) -> Run {
     let mut scene = Scene::thesis();
     scene.simulation.seed = seed;
-    let drive = shake_drive(&scene, freq_hz, gamma).expect("a valid drive");
-    let setup = ShakeSetup {
-        rig: resolve_rig("thesis-shaker", None, &drive).expect("the thesis rig"),
-        drive,
-        noise_seed: seed,
-        calibration: CalibrationSource::OnTheFly,
-    };
-    let e = run_ensemble_shake(
-        &scene,
-        &setup,
-        &BedSource::Settle,
-        DEFAULT_BEDS,
-        rayon::current_num_threads(),
-        &mut [],
-        &mut |_| {},
-    )
-    .expect("the default job runs");
-    let s = e.first.summary.ensemble.expect("an ensemble");
+    // The default command's plan: `vlab shake --freq F --gamma G --seed N`.
+    let mut request = ShakeRequest::new(scene, freq_hz, gamma);
+    request.beds = DEFAULT_BEDS;
+    let e = ShakePlan::new(request)
+        .expect("a valid request")
+        .run(
+            &BedSource::Settle,
+            rayon::current_num_threads(),
+            &mut [],
+            &mut |_| {},
+        )
+        .expect("the default job runs");
+    let s = e.run.summary.ensemble.expect("an ensemble");
     let figure = |f: vlab::experiment::ensemble::EnsembleFigure| {
         (f.mean, f.stderr.expect("an ensemble has an error"))
     };

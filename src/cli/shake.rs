@@ -10,14 +10,9 @@ use clap::Args;
 use vlab::atomic_write::OutputDir;
 use vlab::drive::Drive;
 use vlab::experiment::damper::StepObserver;
-use vlab::experiment::ensemble::{
-    DEFAULT_BEDS, EnsembleSummary, check_beds, run_ensemble_shake, unsteady_reasons,
-};
-use vlab::experiment::measurement::{CalibrationSource, ShakeSetup, check_given_calibration};
-use vlab::experiment::shake::{
-    DemTruth, ShakeSummary, check_record_window, default_out_dir, percent_or_unknown, resolve_rig,
-    shake_drive,
-};
+use vlab::experiment::ensemble::{DEFAULT_BEDS, EnsembleSummary, unsteady_reasons};
+use vlab::experiment::shake::{DemTruth, ShakeSummary, default_out_dir, percent_or_unknown};
+use vlab::experiment::shake_plan::{RequestField, ShakePlan, ShakeRequest};
 use vlab::export::snapshots::PhaseSnapshots;
 use vlab::export::vtk_dump::VtkDump;
 use vlab::rig::ShakerKind;
@@ -88,20 +83,21 @@ pub struct ShakeArgs {
     pub cache: NoCacheArg,
 }
 
-/// Runs the command: the scene, drive and rig from the flags, the observers
-/// `--dump` and `--snapshots` ask for, the library's shake, and what it prints.
+/// Runs the command: the plan from the flags, the observers `--dump` and
+/// `--snapshots` ask for, the library's shake, and what it prints.
 pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
-    let (scene, setup) = setup(&a)?;
+    let plan = plan(&a)?;
+    let (scene, drive) = (&plan.scene, &plan.setup.drive);
     let out_dir = a
         .out
         .clone()
-        .unwrap_or_else(|| default_out_dir(&scene, &setup.drive));
+        .unwrap_or_else(|| default_out_dir(scene, drive));
     let made = OutputDir::prepare(&out_dir)
         .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
-    let mut dump = vtk_dump(&a, &scene, &setup.drive)?;
+    let mut dump = vtk_dump(&a, scene, drive)?;
     let mut snaps = a
         .snapshots
-        .then(|| PhaseSnapshots::new(setup.drive.freq_hz(), 0.0));
+        .then(|| PhaseSnapshots::new(drive.freq_hz(), 0.0));
     let mut progress = ProgressLine::new("shake", quiet);
     let beds = a.cache.source(&mut |n| progress.warn(n));
     let mut observers: Vec<&mut dyn StepObserver> = Vec::new();
@@ -111,20 +107,17 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     if let Some(s) = snaps.as_mut() {
         observers.push(s);
     }
-    let result = run_ensemble_shake(
-        &scene,
-        &setup,
-        &beds,
-        a.beds,
-        rayon::current_num_threads(),
-        &mut observers,
-        &mut |p| progress.update(p),
-    )
-    .map(|e| e.first)
-    .context("running the damper through the rig");
+    let result = plan
+        .run(
+            &beds,
+            rayon::current_num_threads(),
+            &mut observers,
+            &mut |p| progress.update(p),
+        )
+        .context("running the damper through the rig");
     progress.finish();
     let mut shake = made.keep_if_ok(result)?;
-    shake.write(&out_dir, &scene, &setup)?;
+    shake.write(&out_dir)?;
     if let (Some(d), Some(dir)) = (dump, &a.dump) {
         let files = d.finish()?;
         progress.note(&format!(
@@ -134,44 +127,43 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
         ));
     }
     if let Some(sn) = &snaps {
-        plot_snapshots(sn, &scene, &setup.drive, &out_dir)?;
+        plot_snapshots(sn, scene, drive, &out_dir)?;
     }
-    for w in &shake.summary.warnings {
+    for w in &shake.summary().warnings {
         progress.warn(&format!("warning: {w}"));
     }
     if a.json {
         print!("{}", shake.summary_json());
     } else {
-        print_summary(&shake.summary, &out_dir);
+        print_summary(shake.summary(), &out_dir);
     }
     Ok(())
 }
 
-/// The scene and the shake's setup from the flags: the drive, checked once
-/// here ([`shake_drive`]), the rig that can drive it, its record window, the
-/// noise seed and the phase calibration; refusals name the flags.
-fn setup(a: &ShakeArgs) -> Result<(Scene, ShakeSetup)> {
-    check_beds(a.beds).context("--beds")?;
+/// The shake's plan from the flags ([`ShakePlan::new`] checks it whole); a
+/// refusal names the flag it is about.
+fn plan(a: &ShakeArgs) -> Result<ShakePlan> {
     let flags = a.scene.flags().set(true, "freq_hz", "--freq");
     let mut scene = a.scene.resolve()?;
     if let Some(d) = a.duration_s {
         scene.set_record_length(d, a.freq_hz);
     }
-    let drive = shake_drive(&scene, a.freq_hz, a.gamma).map_err(|e| flags.name_flags(e.into()))?;
-    let rig = resolve_rig(&a.rig, a.shaker, &drive).with_context(|| format!("--rig {}", a.rig))?;
-    check_record_window(&scene, drive.freq_hz(), rig.daq.sample_rate_hz)
-        .map_err(|e| flags.name_flags(e.into()))?;
-    let calibration = args::calibration_source(a.calibration.as_deref())?;
-    if let CalibrationSource::Given(table, _) = &calibration {
-        check_given_calibration(table, &rig.name, drive.freq_hz()).context("--calibration")?;
-    }
-    let setup = ShakeSetup {
-        rig,
-        drive,
-        noise_seed: a.noise_seed.unwrap_or(scene.simulation.seed),
-        calibration,
+    let request = ShakeRequest {
+        scene,
+        freq_hz: a.freq_hz,
+        gamma: a.gamma,
+        rig: a.rig.clone(),
+        shaker: a.shaker,
+        noise_seed: a.noise_seed,
+        calibration: args::calibration_source(a.calibration.as_deref())?,
+        beds: a.beds,
     };
-    Ok((scene, setup))
+    ShakePlan::new(request).map_err(|e| match e.field {
+        RequestField::Beds => anyhow::Error::new(e.error).context("--beds"),
+        RequestField::Rig => anyhow::Error::new(e.error).context(format!("--rig {}", a.rig)),
+        RequestField::Calibration => anyhow::Error::new(e.error).context("--calibration"),
+        RequestField::Drive | RequestField::Record => flags.name_flags(e.error.into()),
+    })
 }
 
 /// The ParaView dump `--dump` asks for (its folder made), if any.

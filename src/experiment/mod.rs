@@ -3,7 +3,8 @@
 //! `bed_cache`), ensembles of beds driven and judged together (`ensemble`),
 //! the bed-to-bed part of a host test's error (`bed_spread`), the DEM
 //! truth recorder (`record`), the shake through the rig and
-//! its measurement by Yang's method (`shake`, `measurement`), the drop test
+//! its measurement by Yang's method (`shake`, `measurement`), one shape
+//! for a shake whoever asks for it, request, plan and outcome (`shake_plan`), the drop test
 //! (`drop`), the single collision (`impact`), a body pressed onto a plate
 //! (`press`), the replay of another code's
 //! record (`replay`) and the damper on a host structure (`host_test`), its free decay
@@ -27,4 +28,5 @@ pub mod record;
 pub mod replay;
 pub mod settle;
 pub mod shake;
+pub mod shake_plan;
 pub mod shear_box;

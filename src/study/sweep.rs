@@ -5,7 +5,7 @@
 //! A sweep is a [`SweepPlan`]: a base scene, a rig, and lists of values. Its
 //! conditions come in one canonical order (fill ratio, orientation,
 //! frequency, Γ, seed: the last varies fastest). Each condition is the shake
-//! `vlab shake` runs ([`run_shake_on_bed`]: the same settling, drive protocol,
+//! `vlab shake` runs (its [`ShakePlan`]: the same settling, drive protocol,
 //! rig and on-the-fly phase calibration), so a sweep row and a `shake` of the
 //! same condition give the same numbers. Beds are settled once per seed, fill
 //! ratio and orientation and driven at every frequency and amplitude.
@@ -38,10 +38,10 @@ use serde::{Serialize, Serializer};
 
 use crate::atomic_write::write_atomic;
 use crate::experiment::bed_cache::BedSource;
-use crate::experiment::ensemble::{BedProvider, EnsembleFigure, bed_seed, run_ensemble_shake};
-use crate::experiment::measurement::{CalibrationSource, ShakeSetup};
+use crate::experiment::ensemble::{BedProvider, EnsembleFigure, bed_seed};
 use crate::experiment::settle::SettledBed;
-use crate::experiment::shake::{check_record_window, resolve_rig, run_shake_on_bed, shake_drive};
+use crate::experiment::shake::{check_record_window, resolve_rig, shake_drive};
+use crate::experiment::shake_plan::{ShakePlan, ShakeRequest};
 use crate::rig::{RigFile, RigSpec, ShakerKind};
 use crate::scene::{CyclesSpec, Orientation, Scene, SceneError};
 use crate::study::phases::{
@@ -689,14 +689,15 @@ fn try_condition(
 ) -> Result<SweepRow, SceneError> {
     let started = Stopwatch::start();
     let scene = plan.scene_for(c)?;
-    let drive = shake_drive(&scene, c.freq_hz, c.gamma)?;
-    let rig = resolve_rig(&plan.rig, plan.shaker, &drive)?;
-    let setup = ShakeSetup {
-        rig,
-        drive,
-        noise_seed: scene.simulation.seed,
-        calibration: CalibrationSource::OnTheFly,
-    };
+    // The shake `vlab shake` plans for the same flags (the noise the bed's).
+    let shake = ShakePlan::new(ShakeRequest {
+        rig: plan.rig.clone(),
+        shaker: plan.shaker,
+        beds: plan.ensemble_beds,
+        ..ShakeRequest::new(scene.clone(), c.freq_hz, c.gamma)
+    })
+    .map_err(|e| e.error)?;
+    let drive = shake.setup.drive;
     // Sample the bed from the earliest cycle the steady window can begin at.
     let sample_from = f64::from(scene.drive_length().min_transient_cycles()) / c.freq_hz;
     let clearance = effective_clearance_m(
@@ -708,23 +709,8 @@ fn try_condition(
     let mut observer = PhaseObserver::new(&drive, dt, sample_from, clearance);
     // The phase indicators, the shares and the apparent mass are the first
     // bed's; the efficiencies and the energy the ensemble's.
-    let (run, ensemble) = if plan.ensemble_beds > 1 {
-        let e = run_ensemble_shake(
-            &scene,
-            &setup,
-            beds,
-            plan.ensemble_beds,
-            1,
-            &mut [&mut observer],
-            &mut |_| {},
-        )?;
-        let ensemble = e.first.summary.ensemble.clone();
-        (e.first, ensemble)
-    } else {
-        let bed = beds.bed(&scene, 0, &mut |_| {})?;
-        let run = run_shake_on_bed(&scene, &bed, &setup, &mut [&mut observer], &mut |_| {})?;
-        (run, None)
-    };
+    let run = shake.run(beds, 1, &mut [&mut observer], &mut |_| {})?.run;
+    let ensemble = run.summary.ensemble.clone();
     let s = &run.summary;
     let impacts = collective_impacts(
         &run.experiment.truth,

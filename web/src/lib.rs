@@ -16,9 +16,10 @@ use std::cell::RefCell;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use vlab::dem::World;
+use vlab::experiment::bed_cache::BedSource;
 use vlab::experiment::damper::{Kinematics, Progress, StepObserver};
-use vlab::experiment::measurement::{CalibrationSource, ShakeSetup};
-use vlab::experiment::shake::{ShakeSummary, resolve_rig, run_shake_observed, shake_drive};
+use vlab::experiment::shake::ShakeSummary;
+use vlab::experiment::shake_plan::{ShakePlan, ShakeRequest};
 use vlab::export::snapshots::{in_slice, side_view};
 use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::signals::hysteresis::force_loop;
@@ -167,15 +168,10 @@ pub fn lab_scene(req: &LabRequest) -> Result<Scene, String> {
 /// Runs the lab of `req`, telling `tell` how it goes; the errors are the
 /// library's refusals, worded with the scene key and its valid range.
 pub fn run_lab(req: &LabRequest, tell: &mut dyn FnMut(&LabEvent)) -> Result<LabResult, String> {
-    let scene = lab_scene(req)?;
-    let drive = shake_drive(&scene, req.freq_hz, req.gamma).map_err(|e| e.to_string())?;
-    let rig = resolve_rig(&req.rig, None, &drive).map_err(|e| e.to_string())?;
-    let setup = ShakeSetup {
-        rig,
-        drive,
-        noise_seed: scene.simulation.seed,
-        calibration: CalibrationSource::OnTheFly,
-    };
+    let mut request = ShakeRequest::new(lab_scene(req)?, req.freq_hz, req.gamma);
+    request.rig = req.rig.clone();
+    let plan = ShakePlan::new(request).map_err(|e| e.to_string())?;
+    let (scene, drive) = (&plan.scene, &plan.setup.drive);
     let radius_m = 0.5 * scene.enclosure.inner_diameter_m;
     tell(&LabEvent::Setup {
         orientation: scene.enclosure.orientation.as_str(),
@@ -195,8 +191,11 @@ pub fn run_lab(req: &LabRequest, tell: &mut dyn FnMut(&LabEvent)) -> Result<LabR
             sim_time_s: p.sim_time_s,
         })
     };
-    let run = run_shake_observed(&scene, &setup, &mut [&mut frames], &mut progress)
+    // One bed on the page's one thread: the numbers of `vlab shake --beds 1`.
+    let outcome = plan
+        .run(&BedSource::Settle, 1, &mut [&mut frames], &mut progress)
         .map_err(|e| e.to_string())?;
+    let run = outcome.run;
     let e = &run.experiment;
     let analysis = analyse_trace(
         &e.trace,
@@ -207,7 +206,7 @@ pub fn run_lab(req: &LabRequest, tell: &mut dyn FnMut(&LabEvent)) -> Result<LabR
         },
     )
     .map_err(|e| e.to_string())?;
-    let e_max_j = setup.drive.e_max_j(run.summary.particle_mass_kg);
+    let e_max_j = plan.setup.drive.e_max_j(run.summary.particle_mass_kg);
     let (yang, record) = yang_steps(&e.trace, &analysis, e_max_j)?;
     Ok(LabResult {
         summary: run.summary,
