@@ -5,8 +5,9 @@
 //!
 //! Needs the `wasm32-unknown-unknown` target (`rustup target add
 //! wasm32-unknown-unknown`) and Chromium (`apt-get install chromium`, or
-//! `VLAB_CHROMIUM=/path/to/chrome`); without either the test says it skipped
-//! and passes, so CI needs neither.
+//! `VLAB_CHROMIUM=/path/to/chrome`); without either it fails on CI (the `CI`
+//! variable set; .ci/run installs both) and elsewhere says what is missing
+//! and passes.
 //!
 //! What must agree, and how well:
 //! - exactly: the spheres, their mass, the time step, the number of steps,
@@ -175,15 +176,25 @@ fn number(v: &Value, key: &str) -> f64 {
         .unwrap_or_else(|| panic!("{key} is not a number in {v}"))
 }
 
+/// Says what is missing and lets the test pass, outside CI; on CI (the
+/// `CI` variable set; .ci/run installs both) fails.
+fn skip_outside_ci(missing: &str) {
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "{missing}: needed on CI (.ci/run installs it)"
+    );
+    eprintln!("skipped: {missing}");
+}
+
 #[test]
 fn the_browser_lab_runs_a_shake_and_agrees_with_the_cli() {
     let Some(chromium) = chromium() else {
-        eprintln!("skipped: no Chromium (apt-get install chromium, or set VLAB_CHROMIUM)");
+        skip_outside_ci("no Chromium (apt-get install chromium, or set VLAB_CHROMIUM)");
         return;
     };
     if !wasm_target_installed() {
-        eprintln!(
-            "skipped: the wasm32-unknown-unknown target is not installed (rustup target add wasm32-unknown-unknown)"
+        skip_outside_ci(
+            "the wasm32-unknown-unknown target is not installed (rustup target add wasm32-unknown-unknown)",
         );
         return;
     }

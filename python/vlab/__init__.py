@@ -1,0 +1,81 @@
+"""vlab in Python: the virtual granular-damper laboratory's shake as a function.
+
+    >>> import vlab
+    >>> r = vlab.shake(freq_hz=40, gamma=20)          # about 80 s on 2 cores
+    >>> r.efficiency                                  # (value, one-sigma error)
+    >>> acc = r.channel("acceleration")               # numpy array, m/s^2
+    >>> r.summary["ensemble"]["beds"]
+
+`shake` plans and runs what `vlab shake` runs (the same checks, the same
+numbers for the same scene and seed; the thesis damper of Terzioglu's PhD
+thesis, University of Sheffield, 2023, driven through the thesis rig and
+measured by Yang's method). Its keyword arguments are the command's flags:
+`beds`, `seed`, `scene` (a scene file), `orientation`, `cycles`,
+`steady_cycles`, `rig`, `noise_seed`, `calibration` (a table from
+`vlab calibrate`), and `threads`, `cache` (the command line's bed cache) and
+`progress` (a callable given phase, fraction and cycle as the run goes).
+Bad values raise `ValueError` naming the value, its unit and its range,
+before any work is done.
+"""
+
+import json
+
+from . import _vlab
+
+__all__ = ["shake", "Shake", "DEFAULT_BEDS"]
+
+DEFAULT_BEDS = _vlab.DEFAULT_BEDS
+
+
+class Shake:
+    """A finished shake: its figures, the rig's record and the DEM's truth.
+
+    `efficiency`, `measured_efficiency`, `energy_per_cycle_j` and
+    `measured_energy_per_cycle_j` are `(value, one-sigma error)` pairs, the
+    error `None` where it is not known: the ensemble's for several beds, the
+    bed's own window's for one (which says nothing of another packing).
+    """
+
+    def __init__(self, inner):
+        self._inner = inner
+        self.summary = json.loads(inner.summary_json)
+
+    efficiency = property(lambda self: self._inner.efficiency)
+    measured_efficiency = property(lambda self: self._inner.measured_efficiency)
+    energy_per_cycle_j = property(lambda self: self._inner.energy_per_cycle_j)
+    measured_energy_per_cycle_j = property(
+        lambda self: self._inner.measured_energy_per_cycle_j
+    )
+    warnings = property(lambda self: self._inner.warnings)
+    sample_rate_hz = property(lambda self: self._inner.sample_rate_hz)
+
+    @property
+    def channels(self):
+        """The record's channels, `{name: unit}`."""
+        return dict(self._inner.channels)
+
+    def channel(self, name):
+        """The samples of channel `name` in its unit (numpy array)."""
+        return self._inner.channel(name)
+
+    def time_s(self):
+        """Each sample's time from the drive's start, s (numpy array)."""
+        return self._inner.time_s()
+
+    def dissipated_per_cycle_j(self):
+        """The first bed's dissipation in each drive cycle, J (numpy array)."""
+        return self._inner.dissipated_per_cycle_j()
+
+    def write(self, out):
+        """Writes what `vlab shake` writes into folder `out`."""
+        self._inner.write(out)
+
+    def __repr__(self):
+        return repr(self._inner)
+
+
+def shake(freq_hz=40.0, gamma=20.0, **options):
+    """Drives the damper at `freq_hz` (Hz) and `gamma` (peak acceleration / g)
+    and measures it, as `vlab shake --freq F --gamma G` does; returns a Shake.
+    """
+    return Shake(_vlab.shake(freq_hz, gamma, **options))

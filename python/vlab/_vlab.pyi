@@ -1,0 +1,51 @@
+"""Type stubs of the compiled half of vlab (python/src/lib.rs)."""
+
+from os import PathLike
+from typing import Callable, Optional, Union
+
+import numpy as np
+import numpy.typing as npt
+
+DEFAULT_BEDS: int
+
+Figure = tuple[float, Optional[float]]
+
+class Shake:
+    @property
+    def summary_json(self) -> str: ...
+    @property
+    def efficiency(self) -> Figure: ...
+    @property
+    def measured_efficiency(self) -> Figure: ...
+    @property
+    def energy_per_cycle_j(self) -> Figure: ...
+    @property
+    def measured_energy_per_cycle_j(self) -> Figure: ...
+    @property
+    def warnings(self) -> list[str]: ...
+    @property
+    def sample_rate_hz(self) -> float: ...
+    @property
+    def channels(self) -> list[tuple[str, str]]: ...
+    def channel(self, name: str) -> npt.NDArray[np.float64]: ...
+    def time_s(self) -> npt.NDArray[np.float64]: ...
+    def dissipated_per_cycle_j(self) -> npt.NDArray[np.float64]: ...
+    def write(self, out: Union[str, PathLike[str]]) -> None: ...
+
+def shake(
+    freq_hz: float = 40.0,
+    gamma: float = 20.0,
+    *,
+    beds: int = ...,
+    seed: Optional[int] = None,
+    scene: Union[str, PathLike[str], None] = None,
+    orientation: Optional[str] = None,
+    cycles: Optional[int] = None,
+    steady_cycles: Optional[int] = None,
+    rig: str = "thesis-shaker",
+    noise_seed: Optional[int] = None,
+    calibration: Union[str, PathLike[str], None] = None,
+    threads: Optional[int] = None,
+    cache: bool = True,
+    progress: Optional[Callable[[str, float, int], object]] = None,
+) -> Shake: ...
