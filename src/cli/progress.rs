@@ -42,10 +42,9 @@ impl ProgressLine {
             0.0
         };
         let line = format!(
-            "{}: {} {:5.1} %  t = {:.4} s simulated  {:.1} M particle-steps/s",
+            "{}: {}  t = {:.4} s simulated  {:.1} M particle-steps/s",
             self.label,
-            p.phase,
-            100.0 * p.fraction.min(1.0),
+            how_far(&p),
             p.sim_time_s,
             rate
         );
@@ -78,5 +77,46 @@ impl ProgressLine {
             self.finish();
             eprintln!("{text}");
         }
+    }
+}
+
+/// How far a phase is, in words: a drive that runs until steady by its
+/// cycles and its error so far (a percentage of the cycle cap would read as
+/// a run that stopped at 6 % when it stopped because it was steady); any
+/// other phase by its fraction done.
+fn how_far(p: &Progress) -> String {
+    if p.until_steady && p.fraction < 1.0 {
+        let error = p
+            .steadiness
+            .and_then(|s| s.stderr_rel)
+            .map_or(String::new(), |r| {
+                format!("; error of the mean so far {:.2} %", 100.0 * r)
+            });
+        return format!("driving, cycle {} (until steady{error})", p.cycle);
+    }
+    format!("{} {:5.1} %", p.phase, 100.0 * p.fraction.min(1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_drive_until_steady_tells_its_cycle_not_a_share_of_the_cap() {
+        let p = Progress {
+            phase: "driving",
+            fraction: 23.0 / 400.0,
+            cycle: 23,
+            until_steady: true,
+            ..Progress::default()
+        };
+        let said = how_far(&p);
+        assert!(said.contains("cycle 23") && !said.contains('%'), "{said}");
+        let fixed = Progress {
+            until_steady: false,
+            fraction: 0.5,
+            ..p
+        };
+        assert_eq!(how_far(&fixed), "driving  50.0 %");
     }
 }

@@ -386,6 +386,7 @@ pub fn run_host_test(
                 wall_time_s: started.elapsed().as_secs_f64(),
                 cycle: 0,
                 steadiness: None,
+                until_steady: false,
             });
         }
     }
