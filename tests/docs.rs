@@ -472,7 +472,7 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
         100.0 * error
     );
     quote(format!(
-        "would dissipate: {:.3} J here, so {e:.3} J is {eta:.2}.",
+        "(½ M (2V)² = 2 M V² a blow): {:.3} J here, so {e:.3} J is {eta:.2}.",
         num(&dem["e_max_j"]),
     ));
 
@@ -503,9 +503,26 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
         ],
     );
     quote(format!(
-        "all of them give the same {:.4} W, {:.4e} J per cycle",
+        "the third), they give the same {:.4} W, {:.4e} J per cycle",
         num(&tdms["power_w"]),
         num(&tdms["energy_per_cycle_j"])
+    ));
+    let uncalibrated = json_output(
+        dir,
+        &[
+            "analyze",
+            &format!("{reference_dir}/trace-semicolon.csv"),
+            "--freq",
+            "40",
+            "--delimiter",
+            ";",
+            "--decimal-comma",
+            "--json",
+        ],
+    );
+    quote(format!(
+        "the second, without `--calibration`, reads {:.4} W",
+        num(&uncalibrated["power_w"])
     ));
     let cor = json_output(
         dir,

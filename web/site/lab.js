@@ -267,7 +267,7 @@ function showResult(r) {
     `Discrete Fourier transform of force and acceleration over whole periods; at each harmonic k the velocity is V<sub>k</sub> = A<sub>k</sub> / (j ω<sub>k</sub>), ω<sub>1</sub> = ${w.toFixed(1)} rad/s.`,
     `Complex power P = ½ Σ Re(F<sub>k</sub> V<sub>k</sub>*), each harmonic in the table below${y.force_polarity_reversed ? " (the force read as the gauge's reaction and was negated)" : ""}.`,
     `The rig's phase error, ${(1000 * y.phase_correction_rad).toFixed(2)} mrad at the drive (measured on the empty enclosure), is subtracted from each phase: P = ${y.power_w.toFixed(4)} W.`,
-    `Energy per cycle E = P / f = ${y.energy_per_cycle_j.toFixed(5)} J; the most the drive could give the particles per cycle is E<sub>max</sub> = ${y.e_max_j.toFixed(5)} J, so the efficiency is E / E<sub>max</sub> = ${y.efficiency.toFixed(4)}.`,
+    `Energy per cycle E = P / f = ${y.energy_per_cycle_j.toFixed(5)} J; the scale E<sub>max</sub> = 4 M (Γ g / ω)² = ${y.e_max_j.toFixed(5)} J (thesis eq. 6.10: the particles' mass M meeting the enclosure fully plastically twice a cycle at a relative speed of twice its peak speed; a scale, not a bound), so the efficiency is E / E<sub>max</sub> = ${y.efficiency.toFixed(4)}.`,
     `Check: the force-displacement loop encloses ${y.loop_energy_per_cycle_j.toFixed(5)} J per cycle, the same sum before the phase correction (${m.uncorrected_energy_per_cycle_j.toFixed(5)} J).`,
   ];
   $("steps").innerHTML = steps.map((t) => `<li>${t}</li>`).join("");
@@ -287,7 +287,7 @@ function showResult(r) {
   ];
   $("result-table").tBodies[0].innerHTML = rows.map((row, i) =>
     `<tr>${row.map((cell) => i === 0 ? `<th>${cell}</th>` : `<td>${cell}</td>`).join("")}</tr>`).join("");
-  $("notes").textContent = "± is one standard error from the cycle-to-cycle spread of the measured cycles and the bed-to-bed spread (docs/uncertainty.md); a few cycles give a rough figure. The first cycles are a transient and are not measured.";
+  $("notes").textContent = "± is one standard error of this bed's window, from the spread of its measured cycles; it leaves out how far another packing of the same damper lies, which vlab shake --beds 6 measures (docs/accuracy.md). Under 16 cycles it is not known. The first cycles are a transient and are not measured.";
   $("method").hidden = false;
   $("results").hidden = false;
   $("result-json").textContent = JSON.stringify({
