@@ -898,3 +898,23 @@ fn copy_dir(from: &Path, to: &Path) {
         }
     }
 }
+
+/// The figures docs/maps.md shows are what its command draws today, byte
+/// for byte (`vlab plot signals/reference/sweep-steady/sweep.csv --out
+/// docs/figures`): a change to the plots fails here until the figures are
+/// redrawn, so the chapter cannot show a plot vlab no longer makes.
+#[test]
+fn the_maps_figures_are_what_their_command_draws() {
+    let dir = Scratch::new("figures");
+    let sweep = root().join("signals/reference/sweep-steady/sweep.csv");
+    let sweep = sweep.to_string_lossy();
+    vlab_output(&dir, &["plot", &sweep, "--out", "drawn"]);
+    for name in ["efficiency.png", "efficiency.svg", "map.png", "map.svg"] {
+        let drawn = std::fs::read(dir.path(&format!("drawn/{name}"))).expect("drawn");
+        let shown = std::fs::read(root().join("docs/figures").join(name)).expect("shown");
+        assert!(
+            drawn == shown,
+            "docs/figures/{name} is not what `vlab plot` draws now: redraw it with `vlab plot signals/reference/sweep-steady/sweep.csv --out docs/figures`"
+        );
+    }
+}
