@@ -11,7 +11,7 @@
 
 use std::path::PathBuf;
 
-use numpy::PyArray1;
+use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::{PyKeyError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
@@ -22,8 +22,10 @@ use vlab::experiment::ensemble::{DEFAULT_BEDS, EnsembleFigure};
 use vlab::experiment::ensemble_summary::EnsembleSummary;
 use vlab::experiment::measurement::CalibrationSource;
 use vlab::experiment::shake_plan::{ShakeOutcome, ShakePlan, ShakeRequest};
+use vlab::rig::{ACCEL_CHANNEL, FORCE_CHANNEL};
 use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::signals::calibration::PhaseCalibration;
+use vlab::signals::{AnalysisOptions, Trace, analyse_trace, read_trace};
 
 /// A finished shake: the summary, the rig's record and what the DEM knew.
 #[pyclass(name = "Shake", module = "vlab._vlab")]
@@ -291,9 +293,92 @@ fn shake(
     Ok(Shake { outcome })
 }
 
+/// Yang's method on a record, as `vlab analyze --json` does it: a record
+/// file (CSV, WAV with its sidecar, TDMS) or the two channels as arrays
+/// with their sample rate; returns the analysis as JSON (the wrapper makes
+/// it a dict). The keyword arguments are the command's flags.
+#[pyfunction]
+#[pyo3(signature = (
+    record = None,
+    *,
+    acceleration = None,
+    force = None,
+    sample_rate_hz = None,
+    freq_hz = None,
+    gamma = None,
+    particle_mass_kg = None,
+    calibration = None,
+    force_freq = false,
+    force_calibration = false,
+    as_recorded = false,
+))]
+#[allow(clippy::too_many_arguments)]
+fn analyze(
+    py: Python<'_>,
+    record: Option<PathBuf>,
+    acceleration: Option<PyReadonlyArray1<'_, f64>>,
+    force: Option<PyReadonlyArray1<'_, f64>>,
+    sample_rate_hz: Option<f64>,
+    freq_hz: Option<f64>,
+    gamma: Option<f64>,
+    particle_mass_kg: Option<f64>,
+    calibration: Option<PathBuf>,
+    force_freq: bool,
+    force_calibration: bool,
+    as_recorded: bool,
+) -> PyResult<String> {
+    let trace = match (record, acceleration, force, sample_rate_hz) {
+        (Some(path), None, None, None) => {
+            read_trace(&path).map_err(|e| value_error(format!("{}: {e}", path.display())))?
+        }
+        (None, Some(a), Some(f), Some(rate)) => {
+            let samples = |x: &PyReadonlyArray1<'_, f64>| -> PyResult<Vec<f64>> {
+                Ok(x.as_slice().map_err(value_error)?.to_vec())
+            };
+            let mut t = Trace::new(rate, 0.0).map_err(value_error)?;
+            t.add_channel(ACCEL_CHANNEL, "m/s^2", samples(&a)?)
+                .map_err(value_error)?;
+            t.add_channel(FORCE_CHANNEL, "N", samples(&f)?)
+                .map_err(value_error)?;
+            t
+        }
+        _ => {
+            return Err(PyValueError::new_err(
+                "give a record file, or acceleration (m/s^2), force (N) and sample_rate_hz (Hz), not both",
+            ));
+        }
+    };
+    let table = match &calibration {
+        Some(path) => Some(
+            PhaseCalibration::load_json(path)
+                .map_err(|e| value_error(format!("calibration {}: {e}", path.display())))?,
+        ),
+        None => None,
+    };
+    let options = AnalysisOptions {
+        force_channel: FORCE_CHANNEL.to_string(),
+        accel_channel: ACCEL_CHANNEL.to_string(),
+        freq_hz,
+        force_freq,
+        gamma,
+        particle_mass_kg,
+        calibration: table,
+        calibration_name: calibration
+            .as_ref()
+            .map_or("none".into(), |p| p.display().to_string()),
+        force_calibration,
+        as_recorded,
+    };
+    let analysis = py
+        .detach(|| analyse_trace(&trace, &options))
+        .map_err(value_error)?;
+    serde_json::to_string(&analysis).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
 #[pymodule]
 fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(shake, m)?)?;
+    m.add_function(wrap_pyfunction!(analyze, m)?)?;
     m.add_class::<Shake>()?;
     m.add("DEFAULT_BEDS", DEFAULT_BEDS)?;
     Ok(())

@@ -161,3 +161,51 @@ def test_progress_is_told_as_the_run_goes():
     driving = [p[1] for p in told if p[0] == "driving"]
     assert all(0.0 <= f <= 1.0 for f in driving) and driving == sorted(driving)
     assert max(p[2] for p in told) == 7  # 0-based: the eighth cycle
+
+
+REFERENCE = os.path.join(
+    os.path.dirname(__file__), "..", "..", "signals", "reference", "thesis-40Hz-G20"
+)
+
+
+def test_analyze_reads_a_record_as_the_command_does():
+    trace = os.path.join(REFERENCE, "trace.csv")
+    calibration = os.path.join(REFERENCE, "calibration.json")
+    r = vlab.analyze(trace, calibration=calibration)
+    # The reference record's documented reading (its README, the tutorial).
+    assert round(r["power_w"], 4) == 2.2613
+    assert r["energy_per_cycle_j"] == pytest.approx(r["power_w"] / 40.0, rel=1e-12)
+    cli = os.environ.get("VLAB")
+    if cli is None:
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+    run = subprocess.run(
+        [cli, "analyze", trace, "--calibration", calibration, "--json"],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 0, run.stderr
+    assert json.loads(run.stdout) == r
+
+
+def test_analyze_of_arrays_is_the_shakes_own_measurement(short, tmp_path):
+    # The shake's record, given back as arrays with the run's calibration,
+    # reads the power the run measured.
+    short.write(tmp_path / "run")
+    r = vlab.analyze(
+        acceleration=short.channel("acceleration"),
+        force=short.channel("force"),
+        sample_rate_hz=short.sample_rate_hz,
+        freq_hz=40,
+        calibration=tmp_path / "run" / "calibration.json",
+    )
+    assert r["power_w"] == pytest.approx(short.summary["measured"]["power_w"], rel=1e-9)
+    assert r["n_periods"] == 4
+
+
+def test_analyze_refuses_what_it_cannot_read():
+    with pytest.raises(ValueError, match="sample_rate_hz"):
+        vlab.analyze(acceleration=[0.0, 1.0], force=[0.0, 1.0])
+    with pytest.raises(ValueError, match="no-such-file"):
+        vlab.analyze("no-such-file.csv")
+    with pytest.raises(ValueError):
+        vlab.analyze(acceleration=[0.0] * 10, force=[0.0] * 9, sample_rate_hz=1000.0, freq_hz=40)

@@ -20,9 +20,11 @@ before any work is done.
 
 import json
 
+import numpy as np
+
 from . import _vlab
 
-__all__ = ["shake", "Shake", "DEFAULT_BEDS"]
+__all__ = ["shake", "analyze", "Shake", "DEFAULT_BEDS"]
 
 DEFAULT_BEDS = _vlab.DEFAULT_BEDS
 
@@ -79,3 +81,23 @@ def shake(freq_hz=40.0, gamma=20.0, **options):
     and measures it, as `vlab shake --freq F --gamma G` does; returns a Shake.
     """
     return Shake(_vlab.shake(freq_hz, gamma, **options))
+
+
+def analyze(record=None, **options):
+    """Yang's method on a record, as `vlab analyze --json` does it; returns
+    the analysis as a dict (power_w, energy_per_cycle_j, efficiency, each with
+    its one-sigma error or None, the phase correction, the per-harmonic
+    powers, the warnings).
+
+    `record` is a file (CSV, WAV with its .json sidecar, TDMS); or pass
+    `acceleration` (m/s^2), `force` (N) and `sample_rate_hz` (Hz) as arrays,
+    with `freq_hz` (Hz). `calibration` is a phase-error table (a file from
+    `vlab calibrate` or a run's calibration.json); `gamma` and
+    `particle_mass_kg` give the efficiency where the record's metadata does
+    not. `force_freq`, `force_calibration` and `as_recorded` are the
+    command's flags of the same names.
+    """
+    for key in ("acceleration", "force"):
+        if options.get(key) is not None:
+            options[key] = np.ascontiguousarray(options[key], dtype=np.float64)
+    return json.loads(_vlab.analyze(record, **options))

@@ -49,3 +49,18 @@ def shake(
     cache: bool = True,
     progress: Optional[Callable[[str, float, int], object]] = None,
 ) -> Shake: ...
+
+def analyze(
+    record: Union[str, PathLike[str], None] = None,
+    *,
+    acceleration: Optional[npt.NDArray[np.float64]] = None,
+    force: Optional[npt.NDArray[np.float64]] = None,
+    sample_rate_hz: Optional[float] = None,
+    freq_hz: Optional[float] = None,
+    gamma: Optional[float] = None,
+    particle_mass_kg: Optional[float] = None,
+    calibration: Union[str, PathLike[str], None] = None,
+    force_freq: bool = False,
+    force_calibration: bool = False,
+    as_recorded: bool = False,
+) -> str: ...
