@@ -15,7 +15,6 @@ use vlab::experiment::host_test::{Damper, HostRun, HostTest, run_host_test};
 use vlab::host::{DEFAULT_HOST, Excitation, HostSpec};
 use vlab::rig::{RigFile, RigSpec};
 use vlab::scene::Scene;
-use vlab::signals::{Series, SeriesStyle, Trace, plot_xy_svg, write_csv};
 
 use super::args;
 use super::cache_cmd::NoCacheArg;
@@ -200,68 +199,10 @@ pub fn excitation_text(e: &Excitation) -> String {
     serde_json::to_string(e).unwrap_or_default()
 }
 
-/// Writes `trace.csv` and `trace.wav` (the lab's channels), `record.csv`
-/// (the truth) and `record.svg` (the damper's displacement).
+/// Writes the run's records into `dir` ([`HostRun::write_records`]).
 pub fn write_records(dir: &Path, run: &HostRun) -> Result<()> {
-    write_csv(&dir.join("trace.csv"), &run.trace)?;
-    vlab::signals::write_wav_with_full_scale(
-        &dir.join("trace.wav"),
-        &run.trace,
-        &Default::default(),
-    )?;
-    write_csv(&dir.join("record.csv"), &truth_trace(run)?)?;
-    let r = &run.record;
-    let every = (r.time_s.len() / 4000).max(1);
-    let points: Vec<(f64, f64)> = r
-        .time_s
-        .iter()
-        .zip(&r.displacement_m)
-        .step_by(every)
-        .map(|(t, x)| (*t, x * 1e3))
-        .collect();
-    if !points.is_empty() {
-        plot_xy_svg(
-            &dir.join("record.svg"),
-            "Damper displacement on the host",
-            "time (s)",
-            "displacement at the damper (mm)",
-            &[Series {
-                name: "displacement".into(),
-                points,
-                style: SeriesStyle::Line,
-            }],
-        )?;
-    }
-    Ok(())
-}
-
-/// The truth record as a trace (one channel per column, units named).
-fn truth_trace(run: &HostRun) -> Result<Trace> {
-    let r = &run.record;
-    let mut t = Trace::new(
-        run.trace.sample_rate_hz,
-        r.time_s.first().copied().unwrap_or(0.0),
-    )?;
-    t.metadata = run.trace.metadata.clone();
-    t.metadata.source = "vlab host: truth".into();
-    let columns: [(&str, &str, &Vec<f64>); 12] = [
-        ("damper_displacement", "m", &r.displacement_m),
-        ("damper_velocity", "m/s", &r.velocity_mps),
-        ("damper_acceleration", "m/s^2", &r.acceleration_mps2),
-        ("drive_force", "N", &r.drive_force_n),
-        ("drive_velocity", "m/s", &r.drive_velocity_mps),
-        ("damper_force", "N", &r.damper_force_n),
-        ("host_energy", "J", &r.host_energy_j),
-        ("damper_dissipated", "J", &r.damper_dissipated_j),
-        ("damper_work_in", "J", &r.damper_work_in_j),
-        ("host_dissipated", "J", &r.host_dissipated_j),
-        ("dashpot_dissipated", "J", &r.dashpot_dissipated_j),
-        ("excitation_work", "J", &r.excitation_work_j),
-    ];
-    for (name, unit, data) in columns {
-        t.add_channel(name, unit, data.clone())?;
-    }
-    Ok(t)
+    run.write_records(dir)
+        .with_context(|| format!("writing the records into {}", dir.display()))
 }
 
 /// Writes `text` to `path` atomically.

@@ -301,6 +301,144 @@ pub fn analyse_decay(
     })
 }
 
+/// A finished free decay: the test, its run and both methods' analysis,
+/// with what a lab keeps of it ([`DecayOutcome::write`]).
+pub struct DecayOutcome {
+    pub test: super::host_test::HostTest,
+    pub run: HostRun,
+    pub analysis: DecayAnalysis,
+}
+
+/// Yang's structure-independent energy per cycle at an estimate's
+/// frequency and amplitude (from a map of the damper), or `None`.
+pub type MapEnergy<'a> = &'a dyn Fn(&DecayEstimate) -> Option<f64>;
+
+impl DecayOutcome {
+    /// `decay.csv`: one row per estimate of each method, with the truth of
+    /// the same cycle and, where `map` gives it, Yang's energy.
+    pub fn csv(&self, map: MapEnergy<'_>) -> String {
+        let mut csv = String::from(
+            "method,time_s,freq_hz,amplitude_m,gamma,loss_factor,loss_factor_stderr,true_loss_factor,damper_energy_j,damper_energy_stderr_j,true_damper_energy_j,true_damper_dissipated_j,yang_map_energy_j\n",
+        );
+        for (name, points) in self.methods() {
+            for e in points {
+                csv.push_str(&format!(
+                    "{name},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                    e.time_s,
+                    e.freq_hz,
+                    e.amplitude_m,
+                    e.gamma,
+                    e.loss_factor,
+                    e.loss_factor_stderr,
+                    e.true_loss_factor,
+                    e.damper_energy_j,
+                    e.damper_energy_stderr_j,
+                    e.true_damper_energy_j,
+                    e.true_damper_dissipated_j,
+                    map(e).unwrap_or(f64::NAN)
+                ));
+            }
+        }
+        csv
+    }
+
+    /// Each method's name and its estimates, the log decrement first.
+    pub fn methods(&self) -> [(&'static str, &[DecayEstimate]); 2] {
+        [
+            ("log-decrement", &self.analysis.log_decrement),
+            ("envelope", &self.analysis.envelope),
+        ]
+    }
+
+    /// `decay.json`: the test, the run's figures and the analysis.
+    pub fn summary(&self) -> serde_json::Value {
+        let (test, run) = (&self.test, &self.run);
+        serde_json::json!({
+            "host": test.host,
+            "damper": test.damper,
+            "excitation": test.excitation,
+            "duration_s": test.duration_s,
+            "dt_s": run.dt_s,
+            "steps": run.steps,
+            "wall_time_s": run.wall_time_s,
+            "particles": run.particles,
+            "particle_mass_kg": run.particle_mass_kg,
+            "energy": run.energy,
+            "damper_dissipated_j": run.damper_dissipated_j,
+            "analysis": self.analysis,
+        })
+    }
+
+    /// Writes the records ([`HostRun::write_records`]), `decay.csv`,
+    /// `decay.json` and, with plots, `loss-factor.svg` into `dir`, which
+    /// must exist, each file atomically.
+    pub fn write(&self, dir: &std::path::Path, map: MapEnergy<'_>) -> Result<(), SceneError> {
+        use crate::atomic_write::write_bytes_atomic;
+        self.run.write_records(dir)?;
+        let io = |path: std::path::PathBuf, text: std::io::Result<String>| {
+            text.and_then(|t| write_bytes_atomic(&path, t.as_bytes()))
+                .map_err(|source| SceneError::Write { path, source })
+        };
+        io(dir.join("decay.csv"), Ok(self.csv(map)))?;
+        let json = serde_json::to_string_pretty(&self.summary()).map_err(std::io::Error::other);
+        io(dir.join("decay.json"), json)?;
+        #[cfg(feature = "plot")]
+        self.plot_loss_factor(&dir.join("loss-factor.svg"))?;
+        Ok(())
+    }
+
+    /// `loss-factor.svg`: each method's loss factor and the truth's against Γ.
+    #[cfg(feature = "plot")]
+    fn plot_loss_factor(&self, path: &std::path::Path) -> Result<(), SceneError> {
+        use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+        let (log, env) = (&self.analysis.log_decrement, &self.analysis.envelope);
+        let pts = |v: &[DecayEstimate], f: fn(&DecayEstimate) -> f64| -> Vec<(f64, f64)> {
+            v.iter()
+                .map(|e| (e.gamma, f(e)))
+                .filter(|p| p.1.is_finite())
+                .collect()
+        };
+        let mut series = vec![
+            Series {
+                name: "truth over the same cycle (energies)".into(),
+                points: pts(log, |e| e.true_loss_factor),
+                style: SeriesStyle::Line,
+            },
+            Series {
+                name: "logarithmic decrement".into(),
+                points: pts(log, |e| e.loss_factor),
+                style: SeriesStyle::Points,
+            },
+            Series {
+                name: "Hilbert envelope (2 cycles)".into(),
+                points: pts(env, |e| e.loss_factor),
+                style: SeriesStyle::Points,
+            },
+        ];
+        let gammas: Vec<f64> = log.iter().map(|e| e.gamma).collect();
+        if let (Some(lo), Some(hi)) = (
+            gammas.iter().copied().reduce(f64::min),
+            gammas.iter().copied().reduce(f64::max),
+        ) {
+            let host_eta = self.analysis.host_loss_factor;
+            series.push(Series {
+                name: "bare host".into(),
+                points: vec![(lo, host_eta), (hi, host_eta)],
+                style: SeriesStyle::Line,
+            });
+        }
+        series.retain(|s| !s.points.is_empty());
+        plot_xy_svg(
+            path,
+            "Loss factor against amplitude, free decay",
+            "Gamma at the damper (peak acceleration / g)",
+            "loss factor eta",
+            &series,
+        )?;
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

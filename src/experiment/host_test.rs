@@ -209,6 +209,83 @@ pub struct HostRun {
     pub warnings: Vec<RunWarning>,
 }
 
+impl HostRun {
+    /// Writes the lab's channels (`trace.csv`, `trace.wav`), the truth
+    /// (`record.csv`) and, with plots, the damper's displacement
+    /// (`record.svg`) into `dir`, which must exist, each file atomically.
+    pub fn write_records(&self, dir: &std::path::Path) -> Result<(), SceneError> {
+        crate::signals::write_csv(&dir.join("trace.csv"), &self.trace)?;
+        crate::signals::write_wav_with_full_scale(
+            &dir.join("trace.wav"),
+            &self.trace,
+            &Default::default(),
+        )?;
+        crate::signals::write_csv(&dir.join("record.csv"), &self.truth_trace()?)?;
+        #[cfg(feature = "plot")]
+        self.plot_displacement(&dir.join("record.svg"))?;
+        Ok(())
+    }
+
+    /// `record.svg`: the damper's displacement against time, at most about
+    /// 4 000 points.
+    #[cfg(feature = "plot")]
+    fn plot_displacement(&self, path: &std::path::Path) -> Result<(), SceneError> {
+        use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+        let r = &self.record;
+        let every = (r.time_s.len() / 4000).max(1);
+        let points: Vec<(f64, f64)> = r
+            .time_s
+            .iter()
+            .zip(&r.displacement_m)
+            .step_by(every)
+            .map(|(t, x)| (*t, x * 1e3))
+            .collect();
+        if !points.is_empty() {
+            plot_xy_svg(
+                path,
+                "Damper displacement on the host",
+                "time (s)",
+                "displacement at the damper (mm)",
+                &[Series {
+                    name: "displacement".into(),
+                    points,
+                    style: SeriesStyle::Line,
+                }],
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The truth record as a trace (one channel per column, units named).
+    fn truth_trace(&self) -> Result<Trace, SceneError> {
+        let r = &self.record;
+        let mut t = Trace::new(
+            self.trace.sample_rate_hz,
+            r.time_s.first().copied().unwrap_or(0.0),
+        )?;
+        t.metadata = self.trace.metadata.clone();
+        t.metadata.source = "vlab host: truth".into();
+        let columns: [(&str, &str, &Vec<f64>); 12] = [
+            ("damper_displacement", "m", &r.displacement_m),
+            ("damper_velocity", "m/s", &r.velocity_mps),
+            ("damper_acceleration", "m/s^2", &r.acceleration_mps2),
+            ("drive_force", "N", &r.drive_force_n),
+            ("drive_velocity", "m/s", &r.drive_velocity_mps),
+            ("damper_force", "N", &r.damper_force_n),
+            ("host_energy", "J", &r.host_energy_j),
+            ("damper_dissipated", "J", &r.damper_dissipated_j),
+            ("damper_work_in", "J", &r.damper_work_in_j),
+            ("host_dissipated", "J", &r.host_dissipated_j),
+            ("dashpot_dissipated", "J", &r.dashpot_dissipated_j),
+            ("excitation_work", "J", &r.excitation_work_j),
+        ];
+        for (name, unit, data) in columns {
+            t.add_channel(name, unit, data.clone())?;
+        }
+        Ok(t)
+    }
+}
+
 /// Samples the host and the bed at the rig's clock: the kinematics and the
 /// ledgers at the step nearest to each sample, the damper force averaged
 /// over the steps nearest to it (a contact is shorter than a sample), as

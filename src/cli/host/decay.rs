@@ -12,13 +12,12 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
-use vlab::experiment::host_decay::{DecayEstimate, analyse_decay};
+use vlab::experiment::host_decay::{DecayEstimate, DecayOutcome, analyse_decay};
 use vlab::host::Excitation;
-use vlab::signals::{Series, SeriesStyle, plot_xy_svg};
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
 use vlab::study::sweep::SweepFile;
 
-use super::{HostTestArgs, damper_slug, run_test, write_records, write_text};
+use super::{HostTestArgs, damper_slug, run_test};
 use crate::cli::args;
 
 #[derive(Debug, Clone, Args)]
@@ -94,7 +93,12 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         Ok((run, analysis))
     })())?;
     let (run, analysis) = analysed;
-    write_records(&out, &run)?;
+    let outcome = DecayOutcome {
+        test,
+        run,
+        analysis,
+    };
+    let (test, run, analysis) = (&outcome.test, &outcome.run, &outcome.analysis);
     let g = scene.simulation.gravity_mps2;
     // Yang's structure-independent energy per cycle at a point's f and Γ.
     let yang_energy = |e: &DecayEstimate| {
@@ -118,15 +122,8 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         "  method          t_s     Gamma   eta (+- reading)     eta_true  damper J/cycle: method  host's work  dissipated{}",
         if map.is_some() { "  Yang's map" } else { "" }
     );
-    let mut csv = String::from(
-        "method,time_s,freq_hz,amplitude_m,gamma,loss_factor,loss_factor_stderr,true_loss_factor,damper_energy_j,damper_energy_stderr_j,true_damper_energy_j,true_damper_dissipated_j,yang_map_energy_j\n",
-    );
-    for (name, points) in [
-        ("log-decrement", &analysis.log_decrement),
-        ("envelope", &analysis.envelope),
-    ] {
-        for e in points.iter() {
-            let yang = yang_energy(e);
+    for (name, points) in outcome.methods() {
+        for e in points {
             println!(
                 "  {:14} {:6.3}  {:6.2}  {:.4} +- {:.4}   {:.4}    {:12.5}  {:11.5}  {:10.5}{}",
                 name,
@@ -138,23 +135,8 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
                 e.damper_energy_j,
                 e.true_damper_energy_j,
                 e.true_damper_dissipated_j,
-                yang.map_or(String::new(), |y| format!("  {y:10.5}"))
+                yang_energy(e).map_or(String::new(), |y| format!("  {y:10.5}"))
             );
-            csv.push_str(&format!(
-                "{name},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-                e.time_s,
-                e.freq_hz,
-                e.amplitude_m,
-                e.gamma,
-                e.loss_factor,
-                e.loss_factor_stderr,
-                e.true_loss_factor,
-                e.damper_energy_j,
-                e.damper_energy_stderr_j,
-                e.true_damper_energy_j,
-                e.true_damper_dissipated_j,
-                yang.map_or(f64::NAN, |y| y)
-            ));
         }
     }
     println!(
@@ -164,83 +146,9 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         analysis.true_damper_energy_sum_j,
         analysis.true_damper_dissipated_sum_j
     );
-    write_text(&out.join("decay.csv"), &csv)?;
-    let json = serde_json::json!({
-        "host": test.host,
-        "damper": test.damper,
-        "excitation": test.excitation,
-        "duration_s": test.duration_s,
-        "dt_s": run.dt_s,
-        "steps": run.steps,
-        "wall_time_s": run.wall_time_s,
-        "particles": run.particles,
-        "particle_mass_kg": run.particle_mass_kg,
-        "energy": run.energy,
-        "damper_dissipated_j": run.damper_dissipated_j,
-        "analysis": analysis,
-    });
-    write_text(
-        &out.join("decay.json"),
-        &serde_json::to_string_pretty(&json)?,
-    )?;
-    plot_loss_factor(
-        &out,
-        &analysis.log_decrement,
-        &analysis.envelope,
-        analysis.host_loss_factor,
-    )?;
+    outcome
+        .write(&out, &yang_energy)
+        .with_context(|| format!("writing into {}", out.display()))?;
     println!("wrote {}", out.display());
-    Ok(())
-}
-
-/// `loss-factor.svg`: each method's loss factor and the truth's against Γ.
-fn plot_loss_factor(
-    dir: &std::path::Path,
-    log: &[DecayEstimate],
-    env: &[DecayEstimate],
-    host_eta: f64,
-) -> Result<()> {
-    let pts = |v: &[DecayEstimate], f: fn(&DecayEstimate) -> f64| -> Vec<(f64, f64)> {
-        v.iter()
-            .map(|e| (e.gamma, f(e)))
-            .filter(|p| p.1.is_finite())
-            .collect()
-    };
-    let mut series = vec![
-        Series {
-            name: "truth over the same cycle (energies)".into(),
-            points: pts(log, |e| e.true_loss_factor),
-            style: SeriesStyle::Line,
-        },
-        Series {
-            name: "logarithmic decrement".into(),
-            points: pts(log, |e| e.loss_factor),
-            style: SeriesStyle::Points,
-        },
-        Series {
-            name: "Hilbert envelope (2 cycles)".into(),
-            points: pts(env, |e| e.loss_factor),
-            style: SeriesStyle::Points,
-        },
-    ];
-    let gammas: Vec<f64> = log.iter().map(|e| e.gamma).collect();
-    if let (Some(lo), Some(hi)) = (
-        gammas.iter().copied().reduce(f64::min),
-        gammas.iter().copied().reduce(f64::max),
-    ) {
-        series.push(Series {
-            name: "bare host".into(),
-            points: vec![(lo, host_eta), (hi, host_eta)],
-            style: SeriesStyle::Line,
-        });
-    }
-    series.retain(|s| !s.points.is_empty());
-    plot_xy_svg(
-        &dir.join("loss-factor.svg"),
-        "Loss factor against amplitude, free decay",
-        "Gamma at the damper (peak acceleration / g)",
-        "loss factor eta",
-        &series,
-    )?;
     Ok(())
 }
