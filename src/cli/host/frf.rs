@@ -493,7 +493,7 @@ fn random(
         lines.last().map_or(0.0, |l| l.freq_hz),
     );
     let run = super::run_test(scene, &test, a.common.cache, quiet)?;
-    let frf = random_frf(&run, period_s)?;
+    let frf = random_frf(&run, &test.rig, period_s)?;
     write_records(out, &run)?;
     let mut csv = String::from(
         "freq_hz,h1_re_m_per_n,h1_im_m_per_n,h2_re_m_per_n,h2_im_m_per_n,coherence,h1_magnitude_stderr_rel\n",
