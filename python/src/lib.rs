@@ -25,7 +25,8 @@ use vlab::experiment::shake_plan::{ShakeOutcome, ShakePlan, ShakeRequest};
 use vlab::rig::{ACCEL_CHANNEL, FORCE_CHANNEL};
 use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::signals::calibration::PhaseCalibration;
-use vlab::signals::{AnalysisOptions, Trace, analyse_trace, read_trace};
+use vlab::signals::impacts::default_force_channel;
+use vlab::signals::{AnalysisOptions, ImpactParams, Trace, analyse_trace, cor_report, read_trace};
 
 /// A finished shake: the summary, the rig's record and what the DEM knew.
 #[pyclass(name = "Shake", module = "vlab._vlab")]
@@ -375,8 +376,70 @@ fn analyze(
     serde_json::to_string(&analysis).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
+/// The drop-test restitution estimator (thesis eq. 7.3-7.5) on a force
+/// record, as `vlab cor --json` does it: a record file, or the force as an
+/// array (N) with its sample rate; returns the report as JSON (the wrapper
+/// makes it a dict).
+#[pyfunction]
+#[pyo3(signature = (
+    record = None,
+    *,
+    force = None,
+    sample_rate_hz = None,
+    channel = None,
+    g_mps2 = 9.81,
+    threshold_n = None,
+    holdoff_s = None,
+))]
+#[allow(clippy::too_many_arguments)]
+fn cor(
+    py: Python<'_>,
+    record: Option<PathBuf>,
+    force: Option<PyReadonlyArray1<'_, f64>>,
+    sample_rate_hz: Option<f64>,
+    channel: Option<String>,
+    g_mps2: f64,
+    threshold_n: Option<f64>,
+    holdoff_s: Option<f64>,
+) -> PyResult<String> {
+    let (name, trace) = match (record, force, sample_rate_hz) {
+        (Some(path), None, None) => {
+            let trace =
+                read_trace(&path).map_err(|e| value_error(format!("{}: {e}", path.display())))?;
+            (path.display().to_string(), trace)
+        }
+        (None, Some(f), Some(rate)) => {
+            let mut t = Trace::new(rate, 0.0).map_err(value_error)?;
+            t.add_channel("force", "N", f.as_slice().map_err(value_error)?.to_vec())
+                .map_err(value_error)?;
+            ("array".to_string(), t)
+        }
+        _ => {
+            return Err(PyValueError::new_err(
+                "give a record file, or force (N) and sample_rate_hz (Hz), not both",
+            ));
+        }
+    };
+    let Some(channel) = channel.or_else(|| default_force_channel(&trace)) else {
+        return Err(PyValueError::new_err(format!(
+            "{name} has channels [{}] and none is called 'force': name it with channel=",
+            trace.channel_names().join(", ")
+        )));
+    };
+    let params = ImpactParams {
+        threshold_n,
+        holdoff_s,
+        ..ImpactParams::default()
+    };
+    let report = py
+        .detach(|| cor_report(&name, &trace, &channel, &params, g_mps2))
+        .map_err(value_error)?;
+    serde_json::to_string(&report).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
 #[pymodule]
 fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(cor, m)?)?;
     m.add_function(wrap_pyfunction!(shake, m)?)?;
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
     m.add_class::<Shake>()?;

@@ -24,7 +24,7 @@ import numpy as np
 
 from . import _vlab
 
-__all__ = ["shake", "analyze", "Shake", "DEFAULT_BEDS"]
+__all__ = ["shake", "analyze", "cor", "Shake", "DEFAULT_BEDS"]
 
 DEFAULT_BEDS = _vlab.DEFAULT_BEDS
 
@@ -101,3 +101,19 @@ def analyze(record=None, **options):
         if options.get(key) is not None:
             options[key] = np.ascontiguousarray(options[key], dtype=np.float64)
     return json.loads(_vlab.analyze(record, **options))
+
+
+def cor(record=None, **options):
+    """The drop-test restitution estimator (thesis eq. 7.3-7.5) on a force
+    record, as `vlab cor --json` does it; returns the report as a dict (the
+    impacts' onsets and peaks, the gaps, the speeds, the restitution of each
+    triple, their mean and spread, the warnings).
+
+    `record` is a file (CSV with the time first, WAV with its .json sidecar,
+    TDMS); or pass `force` (N) as an array with `sample_rate_hz` (Hz).
+    `channel`, `g_mps2`, `threshold_n` and `holdoff_s` are the command's
+    flags of the same names.
+    """
+    if options.get("force") is not None:
+        options["force"] = np.ascontiguousarray(options["force"], dtype=np.float64)
+    return json.loads(_vlab.cor(record, **options))

@@ -64,3 +64,14 @@ def analyze(
     force_calibration: bool = False,
     as_recorded: bool = False,
 ) -> str: ...
+
+def cor(
+    record: Union[str, PathLike[str], None] = None,
+    *,
+    force: Optional[npt.NDArray[np.float64]] = None,
+    sample_rate_hz: Optional[float] = None,
+    channel: Optional[str] = None,
+    g_mps2: float = 9.81,
+    threshold_n: Optional[float] = None,
+    holdoff_s: Optional[float] = None,
+) -> str: ...

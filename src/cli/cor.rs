@@ -8,6 +8,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use vlab::signals::impacts::default_force_channel;
 use vlab::signals::{CorInput, CorReport, ImpactParams, Trace, cor_report};
 
 use super::analyze::LabFileArgs;
@@ -50,15 +51,12 @@ fn read_trace(path: &std::path::Path, file: &LabFileArgs) -> Result<Trace> {
 
 pub fn run(a: CorArgs) -> Result<()> {
     let trace = read_trace(&a.trace, &a.file)?;
-    let name = match &a.channel {
-        Some(n) => n.clone(),
-        None if trace.channel("force").is_ok() => "force".to_string(),
-        None if trace.channels.len() == 1 => trace.channels[0].name.clone(),
-        None => bail!(
+    let Some(name) = a.channel.clone().or_else(|| default_force_channel(&trace)) else {
+        bail!(
             "{} has channels [{}] and none is called 'force': name the force channel with --channel",
             a.trace.display(),
             trace.channel_names().join(", ")
-        ),
+        );
     };
     trace
         .channel(&name)

@@ -486,6 +486,18 @@ pub struct CorReport {
     pub warnings: Vec<CorWarning>,
 }
 
+/// The channel of `trace` a drop-test estimate reads when none is named:
+/// `force`, or the record's only channel; `None` when neither is there.
+pub fn default_force_channel(trace: &Trace) -> Option<String> {
+    if trace.channel("force").is_ok() {
+        Some("force".to_string())
+    } else if let [only] = trace.channels.as_slice() {
+        Some(only.name.clone())
+    } else {
+        None
+    }
+}
+
 /// Detects the impacts in channel `channel` of `trace` (the record `file`)
 /// and estimates the restitution ([`estimate_cor`]), with the warnings a lab
 /// user must see: triples whose gaps grew, a channel not in N.
