@@ -18,7 +18,13 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 let target;
 for (let i = 0; i < 50 && !target; i++) {
   await sleep(200);
-  try { target = await (await fetch(`http://127.0.0.1:${port}/json/new?${url}`, { method: "PUT" })).json(); } catch {}
+  // The page's URL goes whole, its own `&` and `?` encoded: unencoded,
+  // DevTools would keep only what comes before the first `&`.
+  try { target = await (await fetch(`http://127.0.0.1:${port}/json/new?${encodeURIComponent(url)}`, { method: "PUT" })).json(); } catch {}
+}
+if (!target) {
+  browser.kill();
+  throw new Error(`Chromium's DevTools did not answer on port ${port} within 10 s`);
 }
 const ws = new WebSocket(target.webSocketDebuggerUrl);
 await new Promise((r) => ws.addEventListener("open", r));
@@ -32,10 +38,18 @@ const call = (method, params = {}) => new Promise((r) => {
   waiting.set(++id, r);
   ws.send(JSON.stringify({ id, method, params }));
 });
-for (let i = 0; i < 600; i++) {
+let finished = false;
+for (let i = 0; i < 600 && !finished; i++) {
   const r = await call("Runtime.evaluate", { expression: "window.labWallSeconds !== undefined" });
-  if (r.result.value === true) break;
-  await sleep(500);
+  finished = r.result.value === true;
+  if (!finished) await sleep(500);
+}
+if (!finished) {
+  ws.close();
+  browser.kill();
+  // A page that never finished is not a screenshot of the lab: say so and
+  // write nothing.
+  throw new Error(`the lab at ${url} did not finish its run within 300 s; no screenshot written`);
 }
 if (frame !== undefined) {
   await call("Runtime.evaluate", { expression:
