@@ -448,6 +448,11 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
         "`vlab analyze`'s correction {:.4} W",
         power_w - num(&reference["power_w"])
     ));
+    quote(format!(
+        "the same {:.2} W is {:.1} %, the answers' figure",
+        0.005 * q_var,
+        100.0 * 0.005 * q_var / num(&reference["power_w"])
+    ));
 
     // 5. Shake, record, measure.
     let (m, dem) = (&run["measured"], &run["dem"]);
@@ -478,10 +483,11 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
 
     // 6. Analyse the record yourself.
     let raw = json_output(dir, &["analyze", "run/trace.csv", "--json"]);
+    let low = -100.0 * (num(&raw["energy_per_cycle_j"]) / dem_j - 1.0);
     quote(format!(
-        "Without the calibration the same record reads {:.1} % low",
-        -100.0 * (num(&raw["energy_per_cycle_j"]) / dem_j - 1.0)
+        "Without the calibration the same record reads {low:.1} % low"
     ));
+    quote(format!("your run of step 5 leaks {low:.1} % of its own"));
 
     // 7. Break it on purpose.
     let broken = json_file(dir, "wrong/summary.json");
