@@ -6,8 +6,9 @@
 //! It plans and runs exactly what the command line does
 //! ([`vlab::experiment::shake_plan`]): the same request, the same checks
 //! worded alike, the same numbers for the same scene and seed whatever the
-//! thread count. The bed cache is the command line's too, so a bed poured
-//! by either is read back by the other.
+//! thread count. The bed cache is the command line's too: a bed poured by
+//! a build of the same optimisation (pip's is a release build, as
+//! `cargo build --release` is) is read back by the other.
 
 use std::path::PathBuf;
 
@@ -136,12 +137,16 @@ impl Shake {
         Ok(PyArray1::from_slice(py, &c.samples))
     }
 
-    /// The time of each sample from the drive's start (s), as a numpy array.
+    /// The time of each sample from the drive's start (s), as a numpy array:
+    /// the record's own clock (zero at its start) plus where the record
+    /// starts in the drive (`summary["steady_start_s"]`), so that it lines up
+    /// with `dissipated_per_cycle_j`'s cycles.
     fn time_s<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         let trace = &self.outcome.run.experiment.trace;
+        let from_s = self.outcome.summary().steady_start_s + trace.start_time_s;
         let n = trace.channels.first().map_or(0, |c| c.samples.len());
         let t: Vec<f64> = (0..n)
-            .map(|k| trace.start_time_s + k as f64 / trace.sample_rate_hz)
+            .map(|k| from_s + k as f64 / trace.sample_rate_hz)
             .collect();
         PyArray1::from_vec(py, t)
     }
@@ -275,21 +280,30 @@ fn shake(
     } else {
         BedSource::Settle
     };
+    // As `vlab --threads N`: a pool of N workers for everything the run
+    // does in parallel, the beds among them (N never changes a number).
     let threads = threads.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
     });
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot start {threads} threads: {e}")))?;
+    // The first error the callback raises (a bug in it, or Ctrl-C while it
+    // ran) stops the calls and is raised when the run ends: the run itself
+    // cannot be stopped half-way.
+    let mut raised: Option<PyErr> = None;
     let outcome = py.detach(|| {
         let mut tell = |p: Progress| {
-            if let Some(f) = &progress {
-                Python::attach(|py| {
-                    // A callback that raises is the caller's: it is not
-                    // allowed to stop the run half-way through a file.
-                    let _ = f.call1(py, (p.phase, p.fraction, p.cycle));
-                });
+            if let Some(f) = progress.as_ref().filter(|_| raised.is_none()) {
+                raised = Python::attach(|py| f.call1(py, (p.phase, p.fraction, p.cycle)).err());
             }
         };
-        plan.run(&source, threads, &mut [], &mut tell)
+        pool.install(|| plan.run(&source, rayon::current_num_threads(), &mut [], &mut tell))
     });
+    if let Some(e) = raised {
+        return Err(e);
+    }
     let outcome = outcome.map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     Ok(Shake { outcome })
 }
@@ -312,6 +326,8 @@ fn shake(
     force_freq = false,
     force_calibration = false,
     as_recorded = false,
+    force_channel = FORCE_CHANNEL.to_string(),
+    accel_channel = ACCEL_CHANNEL.to_string(),
 ))]
 #[allow(clippy::too_many_arguments)]
 fn analyze(
@@ -327,6 +343,8 @@ fn analyze(
     force_freq: bool,
     force_calibration: bool,
     as_recorded: bool,
+    force_channel: String,
+    accel_channel: String,
 ) -> PyResult<String> {
     let trace = match (record, acceleration, force, sample_rate_hz) {
         (Some(path), None, None, None) => {
@@ -337,9 +355,9 @@ fn analyze(
                 Ok(x.as_slice().map_err(value_error)?.to_vec())
             };
             let mut t = Trace::new(rate, 0.0).map_err(value_error)?;
-            t.add_channel(ACCEL_CHANNEL, "m/s^2", samples(&a)?)
+            t.add_channel(&accel_channel, "m/s^2", samples(&a)?)
                 .map_err(value_error)?;
-            t.add_channel(FORCE_CHANNEL, "N", samples(&f)?)
+            t.add_channel(&force_channel, "N", samples(&f)?)
                 .map_err(value_error)?;
             t
         }
@@ -357,8 +375,8 @@ fn analyze(
         None => None,
     };
     let options = AnalysisOptions {
-        force_channel: FORCE_CHANNEL.to_string(),
-        accel_channel: ACCEL_CHANNEL.to_string(),
+        force_channel,
+        accel_channel,
         freq_hz,
         force_freq,
         gamma,

@@ -30,16 +30,20 @@ fn profile_dir() -> PathBuf {
 }
 
 /// The `vlab` command built beside this test: `cargo test --workspace`
-/// builds it with the library; alone (`-p vlab-python`) it may be missing.
+/// builds it with the library; alone (`-p vlab-python`) it may be missing,
+/// or left from an earlier build (then a comparison with it may fail for
+/// that reason: `cargo test --workspace` builds both).
 fn vlab_command() -> Option<PathBuf> {
     let name = if cfg!(windows) { "vlab.exe" } else { "vlab" };
     Some(profile_dir().join(name)).filter(|p| p.is_file())
 }
 
 /// The compiled library cargo built beside this test, and the name Python
-/// loads it by.
+/// loads it by. A test run leaves it in target/<profile>/deps/, beside the
+/// test itself (only `cargo build` copies it up to target/<profile>/, so a
+/// copy there may be older than the code).
 fn compiled_library() -> (PathBuf, &'static str) {
-    let profile_dir = profile_dir();
+    let deps_dir = profile_dir().join("deps");
     let (built, loaded) = if cfg!(windows) {
         ("_vlab.dll", "_vlab.pyd")
     } else if cfg!(target_os = "macos") {
@@ -47,7 +51,7 @@ fn compiled_library() -> (PathBuf, &'static str) {
     } else {
         ("lib_vlab.so", "_vlab.abi3.so")
     };
-    (profile_dir.join(built), loaded)
+    (deps_dir.join(built), loaded)
 }
 
 /// The energy per cycle the library gives for the request the tests' short
@@ -117,14 +121,15 @@ fn the_python_package_passes_its_tests() {
     );
     // Every test ran (those that compare with the library and with the
     // command skip without their figure or binary), but the command's where
-    // this cargo run did not build it.
+    // there is no binary.
     let words: Vec<&str> = said.split_whitespace().collect();
     let skipped: usize = words
         .windows(2)
         .filter(|w| w[1].trim_end_matches(',') == "skipped")
         .filter_map(|w| w[0].parse::<usize>().ok())
         .sum();
-    let allowed = usize::from(cli.is_none());
+    // Without the command, the three tests that compare with it skip.
+    let allowed = if cli.is_none() { 3 } else { 0 };
     assert!(
         skipped <= allowed,
         "{skipped} skipped (the vlab command {}):\n{said}",

@@ -59,6 +59,27 @@ def test_the_record_is_arrays_on_one_clock(short):
         short.channel("no-such-channel")
 
 
+def test_the_records_clock_is_the_drives(short):
+    # The record holds the last 4 of 8 cycles at 40 Hz: it starts at 0.1 s
+    # of the drive (within a sample), where the summary says it does.
+    start = short.summary["steady_start_s"]
+    assert start == pytest.approx(4 / 40, abs=1e-5)
+    t = short.time_s()
+    assert 0 <= t[0] - start < 1 / short.sample_rate_hz
+
+
+def test_a_progress_callback_that_raises_is_raised_when_the_run_ends():
+    calls = []
+
+    def broken(*p):
+        calls.append(p)
+        raise RuntimeError("the callback's own bug")
+
+    with pytest.raises(RuntimeError, match="the callback's own bug"):
+        vlab.shake(40, 20, seed=3, progress=broken, **SHORT)
+    assert len(calls) == 1  # not called again after it raised
+
+
 def test_the_ideal_rig_records_the_drive_it_was_asked(short):
     # The enclosure's acceleration peaks at Gamma g (the ideal rig records it
     # exactly, sampled: within 0.1 %) and its fundamental is at 40 Hz.
@@ -139,6 +160,8 @@ def test_the_thread_count_changes_no_number():
     assert one.energy_per_cycle_j == two.energy_per_cycle_j
     assert one.measured_energy_per_cycle_j == two.measured_energy_per_cycle_j
     assert one.summary["ensemble"]["beds"] == 2
+    # The run had the workers it was given, as `vlab --threads N`.
+    assert (one.summary["threads"], two.summary["threads"]) == (1, 2)
     assert np.array_equal(one.channel("force"), two.channel("force"))
 
 

@@ -1,7 +1,7 @@
 """vlab in Python: the virtual granular-damper laboratory's shake as a function.
 
     >>> import vlab
-    >>> r = vlab.shake(freq_hz=40, gamma=20)          # about 80 s on 2 cores
+    >>> r = vlab.shake(freq_hz=40, gamma=20)          # 72-79 s on an idle 2-core VM
     >>> r.efficiency                                  # (value, one-sigma error)
     >>> acc = r.channel("acceleration")               # numpy array, m/s^2
     >>> r.summary["ensemble"]["beds"]
@@ -40,7 +40,12 @@ class Shake:
 
     def __init__(self, inner):
         self._inner = inner
-        self.summary = json.loads(inner.summary_json)
+
+    @property
+    def summary(self):
+        """What summary.json holds, as a dict (read anew: `write` adds the
+        files it wrote)."""
+        return json.loads(self._inner.summary_json)
 
     efficiency = property(lambda self: self._inner.efficiency)
     measured_efficiency = property(lambda self: self._inner.measured_efficiency)
@@ -61,7 +66,8 @@ class Shake:
         return self._inner.channel(name)
 
     def time_s(self):
-        """Each sample's time from the drive's start, s (numpy array)."""
+        """Each sample's time from the drive's start, s (numpy array): the
+        record starts summary["steady_start_s"] after the drive does."""
         return self._inner.time_s()
 
     def dissipated_per_cycle_j(self):
@@ -94,8 +100,8 @@ def analyze(record=None, **options):
     with `freq_hz` (Hz). `calibration` is a phase-error table (a file from
     `vlab calibrate` or a run's calibration.json); `gamma` and
     `particle_mass_kg` give the efficiency where the record's metadata does
-    not. `force_freq`, `force_calibration` and `as_recorded` are the
-    command's flags of the same names.
+    not. `force_freq`, `force_calibration`, `as_recorded`, `force_channel`
+    and `accel_channel` are the command's flags of the same names.
     """
     for key in ("acceleration", "force"):
         if options.get(key) is not None:

@@ -63,6 +63,8 @@ def analyze(
     force_freq: bool = False,
     force_calibration: bool = False,
     as_recorded: bool = False,
+    force_channel: str = "force",
+    accel_channel: str = "acceleration",
 ) -> str: ...
 
 def cor(
