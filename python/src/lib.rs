@@ -275,10 +275,17 @@ fn shake(
         ..ShakeRequest::new(scene, freq_hz, gamma)
     })
     .map_err(value_error)?;
-    let source = if cache {
-        BedCache::user().map_or(BedSource::Settle, BedSource::Cache)
-    } else {
-        BedSource::Settle
+    let source = match (cache, BedCache::user()) {
+        (false, _) => BedSource::Settle,
+        (true, Ok(c)) => BedSource::Cache(c),
+        (true, Err(e)) => {
+            // As the command line says it: the run goes on, settling anew.
+            let said = std::ffi::CString::new(format!("{e}; the beds are settled anew"))
+                .unwrap_or_default();
+            let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
+            PyErr::warn(py, &category, &said, 1)?;
+            BedSource::Settle
+        }
     };
     // As `vlab --threads N`: a pool of N workers for everything the run
     // does in parallel, the beds among them (N never changes a number).
