@@ -49,9 +49,33 @@ fn vlab_commands(text: &str) -> Vec<String> {
         .collect()
 }
 
+/// How a `vlab sweep` of the docs is run by the tests: each condition
+/// driven a fixed 12 cycles (the last 6 measured), not until steady. The
+/// command's flags, its conditions and its files are checked; its minutes
+/// are not (the tutorial's took 4 minutes of the docs' tests' 6; the rule
+/// that stops a sweep's shakes is `cli_sweep`'s to check).
+const SWEEP_IN_TESTS: &str = "--cycles 12 --steady-cycles 6";
+
+/// `cmd` as the tests run it: a `vlab sweep` of conditions (not `merge`
+/// or `optimum`) that names no cycle count shortened by [`SWEEP_IN_TESTS`],
+/// before any comment.
+fn as_tested(cmd: &str) -> String {
+    let is_sweep = cmd.starts_with("vlab sweep ")
+        && !cmd.starts_with("vlab sweep merge")
+        && !cmd.starts_with("vlab sweep optimum");
+    if !is_sweep || cmd.contains("--cycles") {
+        return cmd.to_string();
+    }
+    match cmd.split_once('#') {
+        Some((run, comment)) => format!("{} {SWEEP_IN_TESTS}   #{comment}", run.trim_end()),
+        None => format!("{cmd} {SWEEP_IN_TESTS}"),
+    }
+}
+
 /// Runs `commands` in order with `sh` in a scratch folder that holds a copy of
 /// the reference records (as a reader's checkout does), the test build's
-/// `vlab` first on the `PATH` and a scratch cache of settled beds.
+/// `vlab` first on the `PATH` and a scratch cache of settled beds; a sweep
+/// shortened ([`as_tested`]).
 fn run_in_order(tag: &str, doc: &str, commands: &[String]) -> Scratch {
     let bin_dir = Path::new(env!("CARGO_BIN_EXE_vlab"))
         .parent()
@@ -67,7 +91,7 @@ fn run_in_order(tag: &str, doc: &str, commands: &[String]) -> Scratch {
         &root().join("signals/reference"),
         &dir.path("signals/reference"),
     );
-    for cmd in commands {
+    for cmd in commands.iter().map(|c| as_tested(c)) {
         let out = Command::new("sh")
             .args(["-c", &format!("set -e; {cmd}")])
             .env("PATH", &path)
@@ -82,6 +106,21 @@ fn run_in_order(tag: &str, doc: &str, commands: &[String]) -> Scratch {
         );
     }
     dir
+}
+
+#[test]
+fn only_a_sweep_of_conditions_is_shortened() {
+    assert_eq!(
+        as_tested("vlab sweep --freq 40 --gamma 3,10 --seeds 1,2   # about 3 minutes"),
+        "vlab sweep --freq 40 --gamma 3,10 --seeds 1,2 --cycles 12 --steady-cycles 6   # about 3 minutes"
+    );
+    for kept in [
+        "vlab sweep --freq 40 --gamma 3 --cycles 8 --out x",
+        "vlab sweep merge a b --out c",
+        "vlab shake --freq 40 --gamma 20",
+    ] {
+        assert_eq!(as_tested(kept), kept);
+    }
 }
 
 #[test]
