@@ -10,7 +10,7 @@ use common::{Scratch, stderr, vlab};
 #[test]
 fn wrong_host_input_is_refused_and_leaves_nothing() {
     let dir = Scratch::new("host-cli");
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 9] = [
         (
             &["host", "decay", "--damper", "dashpot:-1", "--out", "out"],
             "damper dashpot = -1 N s/m: must be in (0, 1000000]",
@@ -43,6 +43,10 @@ fn wrong_host_input_is_refused_and_leaves_nothing() {
         (
             &["host", "run", "--excitation", "sine:40", "--out", "out"],
             "sine:freq_hz:force_n",
+        ),
+        (
+            &["host", "decay", "--beds", "0", "--out", "out"],
+            "beds = 0: must be from 1 to 64",
         ),
         (
             &["host", "decay", "--host", "no-such-host", "--out", "out"],
@@ -102,6 +106,51 @@ fn a_dashpot_decay_writes_its_record_and_recovers_its_loss_factor() {
         .expect("eta");
     let want = 2.0 * (0.003 + 15.0 / (2.0 * (31_582.734_f64 * 0.5).sqrt()));
     assert!((eta / want - 1.0).abs() < 0.01, "{eta} against {want}");
+}
+
+#[test]
+fn beds_decay_alike_and_their_mean_is_each_cycles_figure() {
+    // `--beds 2` decays two beds (seeds 1 and 1 000 001) and gives each
+    // cycle's mean with the error of their spread (Student's t on 1 degree
+    // of freedom: |a - b| / 2 * 1.8125, or the readings' errors if larger);
+    // the second bed alone (`--seed 1000001`) reads what it read in the
+    // ensemble, to the bit, and a dashpot asked for beds decays once.
+    let dir = Scratch::new("host-cli-decay-beds");
+    let decay = |extra: &[&str], out: &str| {
+        let mut args = vec!["--quiet", "host", "decay", "--duration-s", "0.2"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", out]);
+        let o = vlab(&dir.0, &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        common::json(&dir.path(&format!("{out}/decay.json")))
+    };
+    let both = decay(&["--beds", "2"], "both");
+    let second = decay(&["--seed", "1000001"], "second");
+    let e = &both["ensemble"];
+    assert_eq!(e["beds"], 2);
+    assert_eq!(e["seeds"][1], 1_000_001);
+    let eta = |j: &serde_json::Value, c: usize| {
+        j["analysis"]["log_decrement"][c]["loss_factor"]
+            .as_f64()
+            .expect("eta")
+    };
+    let points = e["log_decrement"].as_array().expect("points");
+    assert!(points.len() >= 5, "{e}");
+    for (c, p) in points.iter().enumerate() {
+        let (a, b) = (eta(&both, c), eta(&second, c));
+        let mean = p["loss_factor"].as_f64().expect("mean");
+        assert!((mean - 0.5 * (a + b)).abs() < 1e-12, "cycle {c}: {p}");
+        let spread = (a - b).abs() / 2.0 * 1.8125;
+        let err = p["loss_factor_stderr"].as_f64().expect("error");
+        assert!(
+            err >= spread * (1.0 - 1e-9),
+            "cycle {c}: {err} below {spread}"
+        );
+    }
+    let csv = std::fs::read_to_string(dir.path("both/decay-beds.csv")).expect("decay-beds.csv");
+    assert!(csv.starts_with("method,cycle,"), "{csv}");
+    let dashpot = decay(&["--damper", "dashpot:15", "--beds", "3"], "dashpot");
+    assert!(dashpot["ensemble"].is_null(), "{}", dashpot["ensemble"]);
 }
 
 #[test]

@@ -39,6 +39,7 @@ use crate::host::HostSpec;
 use crate::rig::ACCEL_CHANNEL;
 use crate::scene::SceneError;
 use crate::signals::structural::{DecayPoint, band_pass, envelope_decay, log_decrement};
+use crate::stats::ensemble_mean_floored;
 
 /// Cycles a Hilbert-envelope fit spans.
 pub const ENVELOPE_CYCLES: f64 = 2.0;
@@ -301,12 +302,152 @@ pub fn analyse_decay(
     })
 }
 
+/// One cycle of a method over an ensemble of decays, each with its own
+/// bed: the mean over the beds of their estimates at that cycle, with the
+/// error of their spread (Student's t on `beds − 1` degrees of freedom,
+/// never below the beds' own readings' errors,
+/// [`crate::stats::ensemble_mean_floored`]). The beds' decays are aligned
+/// by cycle from the release, as a lab averages repeated decays; their Γ
+/// at a cycle differs a little, and the mean Γ is given.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct EnsembleDecayPoint {
+    /// The estimate's place in each bed's decay (1 = the first).
+    pub cycle: usize,
+    pub time_s: f64,
+    pub gamma: f64,
+    pub loss_factor: f64,
+    /// One sigma of the mean over the beds: how far another set of beds
+    /// would read, which one decay's reading error cannot say.
+    pub loss_factor_stderr: Option<f64>,
+    /// The beds' sample standard deviation.
+    pub loss_factor_spread: f64,
+    pub true_loss_factor: f64,
+    pub damper_energy_j: f64,
+    pub damper_energy_stderr_j: Option<f64>,
+    pub true_damper_dissipated_j: f64,
+}
+
+/// Free decays of the same host and damper, one bed each (seeds
+/// [`crate::experiment::ensemble::bed_seed`]), averaged cycle by cycle
+/// over the cycles every bed's decay has.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DecayEnsemble {
+    pub beds: usize,
+    pub seeds: Vec<u64>,
+    pub log_decrement: Vec<EnsembleDecayPoint>,
+    pub envelope: Vec<EnsembleDecayPoint>,
+}
+
+impl DecayEnsemble {
+    /// The ensemble of `analyses`, one per bed of seed `seeds[k]`.
+    pub fn of(seeds: &[u64], analyses: &[DecayAnalysis]) -> Self {
+        let method = |pick: fn(&DecayAnalysis) -> &[DecayEstimate]| {
+            let shortest = analyses.iter().map(|a| pick(a).len()).min().unwrap_or(0);
+            (0..shortest)
+                .map(|c| {
+                    let at: Vec<&DecayEstimate> = analyses.iter().map(|a| &pick(a)[c]).collect();
+                    let values = |f: fn(&DecayEstimate) -> f64| -> Vec<f64> {
+                        at.iter().map(|e| f(e)).collect()
+                    };
+                    let mean =
+                        |f: fn(&DecayEstimate) -> f64| crate::stats::mean_std(&values(f)).mean;
+                    let eta = ensemble_mean_floored(
+                        &values(|e| e.loss_factor),
+                        &values(|e| e.loss_factor_stderr),
+                    );
+                    let energy = ensemble_mean_floored(
+                        &values(|e| e.damper_energy_j),
+                        &values(|e| e.damper_energy_stderr_j),
+                    );
+                    EnsembleDecayPoint {
+                        cycle: c + 1,
+                        time_s: mean(|e| e.time_s),
+                        gamma: mean(|e| e.gamma),
+                        loss_factor: eta.mean,
+                        loss_factor_stderr: eta.stderr,
+                        loss_factor_spread: crate::stats::mean_std(&values(|e| e.loss_factor)).std,
+                        true_loss_factor: mean(|e| e.true_loss_factor),
+                        damper_energy_j: energy.mean,
+                        damper_energy_stderr_j: energy.stderr,
+                        true_damper_dissipated_j: mean(|e| e.true_damper_dissipated_j),
+                    }
+                })
+                .collect()
+        };
+        DecayEnsemble {
+            beds: analyses.len(),
+            seeds: seeds.to_vec(),
+            log_decrement: method(|a| &a.log_decrement),
+            envelope: method(|a| &a.envelope),
+        }
+    }
+
+    /// `decay-beds.csv`: one row per cycle of each method.
+    pub fn csv(&self) -> String {
+        let mut csv = String::from(
+            "method,cycle,time_s,gamma,loss_factor,loss_factor_stderr,loss_factor_spread,true_loss_factor,damper_energy_j,damper_energy_stderr_j,true_damper_dissipated_j\n",
+        );
+        let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+        for (name, points) in [
+            ("log-decrement", &self.log_decrement),
+            ("envelope", &self.envelope),
+        ] {
+            for p in points {
+                csv.push_str(&format!(
+                    "{name},{},{},{},{},{},{},{},{},{},{}\n",
+                    p.cycle,
+                    p.time_s,
+                    p.gamma,
+                    p.loss_factor,
+                    opt(p.loss_factor_stderr),
+                    p.loss_factor_spread,
+                    p.true_loss_factor,
+                    p.damper_energy_j,
+                    opt(p.damper_energy_stderr_j),
+                    p.true_damper_dissipated_j
+                ));
+            }
+        }
+        csv
+    }
+}
+
+/// Runs the free decay `test` of `scene` once more for each bed `k` of
+/// `beds` (seed and rig noise [`crate::experiment::ensemble::bed_seed`]
+/// of the scene's and the test's), side by side on the rayon pool, and
+/// analyses each as [`analyse_decay`] with `skip_s` and `g`.
+pub fn run_decays(
+    scene: &crate::scene::Scene,
+    source: &crate::experiment::bed_cache::BedSource,
+    test: &super::host_test::HostTest,
+    beds: std::ops::Range<u32>,
+    skip_s: f64,
+    g: f64,
+) -> Result<Vec<DecayAnalysis>, SceneError> {
+    use crate::experiment::ensemble::bed_seed;
+    use rayon::prelude::*;
+    beds.into_par_iter()
+        .map(|k| {
+            let mut s = scene.clone();
+            s.simulation.seed = bed_seed(scene.simulation.seed, k);
+            let t = super::host_test::HostTest {
+                noise_seed: bed_seed(test.noise_seed, k),
+                ..test.clone()
+            };
+            let run = super::host_test::run_host_test(&s, source, &t, &mut |_| {})?;
+            analyse_decay(&run, &t.host, skip_s, g)
+        })
+        .collect()
+}
+
 /// A finished free decay: the test, its run and both methods' analysis,
-/// with what a lab keeps of it ([`DecayOutcome::write`]).
+/// with what a lab keeps of it ([`DecayOutcome::write`]); with several
+/// beds, their ensemble (the run and analysis are the first bed's).
 pub struct DecayOutcome {
     pub test: super::host_test::HostTest,
     pub run: HostRun,
     pub analysis: DecayAnalysis,
+    pub ensemble: Option<DecayEnsemble>,
 }
 
 /// Yang's structure-independent energy per cycle at an estimate's
@@ -366,6 +507,7 @@ impl DecayOutcome {
             "energy": run.energy,
             "damper_dissipated_j": run.damper_dissipated_j,
             "analysis": self.analysis,
+            "ensemble": self.ensemble,
         })
     }
 
@@ -382,6 +524,9 @@ impl DecayOutcome {
         io(dir.join("decay.csv"), Ok(self.csv(map)))?;
         let json = serde_json::to_string_pretty(&self.summary()).map_err(std::io::Error::other);
         io(dir.join("decay.json"), json)?;
+        if let Some(e) = &self.ensemble {
+            io(dir.join("decay-beds.csv"), Ok(e.csv()))?;
+        }
         #[cfg(feature = "plot")]
         self.plot_loss_factor(&dir.join("loss-factor.svg"))?;
         Ok(())

@@ -12,7 +12,11 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
-use vlab::experiment::host_decay::{DecayEstimate, DecayOutcome, analyse_decay};
+use vlab::experiment::ensemble::{bed_seed, check_beds};
+use vlab::experiment::host_decay::{
+    DecayEnsemble, DecayEstimate, DecayOutcome, analyse_decay, run_decays,
+};
+use vlab::experiment::host_test::Damper;
 use vlab::host::Excitation;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
 use vlab::study::sweep::SweepFile;
@@ -38,6 +42,13 @@ pub struct DecayArgs {
     /// structure-independent energy per cycle at each point's frequency and Γ.
     #[arg(long, value_name = "FILE")]
     map: Option<PathBuf>,
+    /// Independent beds, one decay each (seeds derived from --seed as
+    /// `vlab shake --beds` derives them; the particle damper only): each
+    /// cycle's loss factor is then also given as their mean with the error
+    /// of their spread (decay-beds.csv). Costs N times one bed, side by side
+    /// on the cores.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    beds: u32,
     /// Output folder [default: signals/host-decay-<host>-<damper>].
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -55,7 +66,13 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
             "--x0-m"
         }))
     })?;
+    check_beds(a.beds).map_err(|e| anyhow::Error::from(e).context("--beds"))?;
     let (scene, test) = a.common.test(excitation, a.duration_s)?;
+    let beds = if test.damper == Damper::Particles {
+        a.beds
+    } else {
+        1
+    };
     let map = match &a.map {
         Some(path) => {
             let file =
@@ -90,13 +107,28 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         if analysis.log_decrement.is_empty() {
             bail!("the decay has no two successive peaks to compare: lengthen --duration-s");
         }
-        Ok((run, analysis))
+        let ensemble = if beds > 1 {
+            let source = a.common.cache.source(&mut |n| eprintln!("{n}"));
+            let mut all = vec![analysis.clone()];
+            all.extend(
+                run_decays(&scene, &source, &test, 1..beds, skip, g)
+                    .context("the other beds' decays")?,
+            );
+            let seeds: Vec<u64> = (0..beds)
+                .map(|k| bed_seed(scene.simulation.seed, k))
+                .collect();
+            Some(DecayEnsemble::of(&seeds, &all))
+        } else {
+            None
+        };
+        Ok((run, analysis, ensemble))
     })())?;
-    let (run, analysis) = analysed;
+    let (run, analysis, ensemble) = analysed;
     let outcome = DecayOutcome {
         test,
         run,
         analysis,
+        ensemble,
     };
     let (test, run, analysis) = (&outcome.test, &outcome.run, &outcome.analysis);
     let g = scene.simulation.gravity_mps2;
@@ -146,9 +178,47 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         analysis.true_damper_energy_sum_j,
         analysis.true_damper_dissipated_sum_j
     );
+    if let Some(e) = &outcome.ensemble {
+        print_ensemble(e);
+    }
     outcome
         .write(&out, &yang_energy)
         .with_context(|| format!("writing into {}", out.display()))?;
     println!("wrote {}", out.display());
     Ok(())
+}
+
+/// The beds' decays cycle by cycle: the mean loss factor with the error of
+/// the beds' spread.
+fn print_ensemble(e: &DecayEnsemble) {
+    println!(
+        "  {} beds (seeds {}), cycle by cycle: the mean over the beds, +- one sigma of it from their spread (Student's t on {}, never less than their readings' errors make it)",
+        e.beds,
+        e.seeds
+            .iter()
+            .map(u64::to_string)
+            .collect::<Vec<_>>()
+            .join(", "),
+        crate::cli::shake::degrees_of_freedom(e.beds.saturating_sub(1))
+    );
+    println!("  method          cycle  t_s     Gamma   eta (+- beds)        spread   eta_true");
+    let opt = |v: Option<f64>| v.map_or("not known".to_string(), |x| format!("{x:.4}"));
+    for (name, points) in [
+        ("log-decrement", &e.log_decrement),
+        ("envelope", &e.envelope),
+    ] {
+        for p in points {
+            println!(
+                "  {:14} {:5}  {:6.3}  {:6.2}  {:.4} +- {:9}  {:.4}   {:.4}",
+                name,
+                p.cycle,
+                p.time_s,
+                p.gamma,
+                p.loss_factor,
+                opt(p.loss_factor_stderr),
+                p.loss_factor_spread,
+                p.true_loss_factor
+            );
+        }
+    }
 }
