@@ -129,6 +129,43 @@ fn thesis_scene_ledger_closes_and_record_agrees() {
     );
     let csv = std::fs::read_to_string(dir.path("run/beds.csv")).expect("beds.csv");
     assert_eq!(csv.lines().count(), 3, "{csv}");
+    // The allowance for a longer drive: 21 % of the mean over the root of
+    // the window's cycles, beside the +-, not in it.
+    let mean = fig["mean"].as_f64().expect("mean");
+    let allowance = fig["longer_drive"].as_f64().expect("longer_drive");
+    let window = s["steady_cycles"].as_f64().expect("steady cycles");
+    assert!(
+        (allowance - 0.21 / window.sqrt() * mean).abs() < 1e-12 * mean,
+        "{allowance} of {mean} over {window} cycles"
+    );
+    assert!(stdout.contains("longer drive"), "{stdout}");
+    // cycles.csv: each bed's energy per cycle from the drive's start, their
+    // mean, and the window; over the window the first bed's column averages
+    // to its figure and the mean column to the ensemble's (within 1e-4: a
+    // figure is the window's energy over its length in time, whose cycles
+    // end on steps, 1/20 000 of a period).
+    #[cfg(feature = "plot")]
+    assert!(dir.path("run/cycles.svg").is_file() && dir.path("run/cycles.png").is_file());
+    let cycles = std::fs::read_to_string(dir.path("run/cycles.csv")).expect("cycles.csv");
+    let mut lines = cycles.lines();
+    assert_eq!(
+        lines.next(),
+        Some("cycle,in_window,mean_dissipated_j,bed_1_dissipated_j,bed_2_dissipated_j")
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().expect("number")).collect())
+        .collect();
+    assert_eq!(rows.len() as u64, s["cycles"].as_u64().expect("cycles"));
+    let window: Vec<&Vec<f64>> = rows.iter().filter(|r| r[1] == 1.0).collect();
+    assert_eq!(
+        window.len() as u64,
+        s["steady_cycles"].as_u64().expect("steady cycles")
+    );
+    let avg = |col: usize| window.iter().map(|r| r[col]).sum::<f64>() / window.len() as f64;
+    let bed1 = dem["energy_per_cycle_j"].as_f64().expect("energy");
+    let both = e["dem_energy_per_cycle_j"]["mean"].as_f64().expect("mean");
+    assert!((avg(3) - bed1).abs() < 1e-4 * bed1, "{} vs {bed1}", avg(3));
+    assert!((avg(2) - both).abs() < 1e-4 * both, "{} vs {both}", avg(2));
     assert!(
         stdout.contains("ensemble of 2 beds")
             && stdout.contains("Student's t on 1 degree of freedom"),

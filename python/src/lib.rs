@@ -94,6 +94,16 @@ impl Shake {
         })
     }
 
+    /// One sigma more, relative, for where the same beds driven hundreds
+    /// more cycles would read (not in the figures' errors); `None` for one
+    /// bed, whose figure claims only its own window.
+    #[getter]
+    fn longer_drive_rel(&self) -> Option<f64> {
+        self.outcome.summary().ensemble.as_ref().map(|e| {
+            vlab::experiment::ensemble_summary::longer_drive_rel(e.cycles - e.steady_first_cycle)
+        })
+    }
+
     /// What the run warns of, one sentence each.
     #[getter]
     fn warnings(&self) -> Vec<String> {

@@ -96,6 +96,7 @@ def test_the_figures_are_the_summarys_and_the_energy_books_close(short):
     e, pm = short.energy_per_cycle_j
     assert e == s["dem"]["energy_per_cycle_j"] and e > 0
     eff, _ = short.efficiency
+    assert short.longer_drive_rel is None  # one bed claims only its window
     assert eff == pytest.approx(e / s["dem"]["e_max_j"], rel=1e-12)
     # The measured energy per cycle (Yang's method on the ideal rig's
     # record) is the DEM's within 2 % over 4 cycles of an unsteady bed.
@@ -160,6 +161,12 @@ def test_the_thread_count_changes_no_number():
     assert one.energy_per_cycle_j == two.energy_per_cycle_j
     assert one.measured_energy_per_cycle_j == two.measured_energy_per_cycle_j
     assert one.summary["ensemble"]["beds"] == 2
+    # An ensemble's figure claims the damper: beside its error, the
+    # allowance for beds driven on, 21 % over the root of the window's
+    # cycles (4 here), as summary.json's.
+    eff = one.summary["ensemble"]["dem_efficiency"]
+    assert one.longer_drive_rel == pytest.approx(0.21 / 2, rel=1e-12)
+    assert eff["longer_drive"] == pytest.approx(0.105 * eff["mean"], rel=1e-12)
     # The run had the workers it was given, as `vlab --threads N`.
     assert (one.summary["threads"], two.summary["threads"]) == (1, 2)
     assert np.array_equal(one.channel("force"), two.channel("force"))
@@ -169,7 +176,7 @@ def test_written_files_are_the_commands(short, tmp_path):
     short.write(tmp_path / "run")
     written = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert written["dem"]["energy_per_cycle_j"] == short.energy_per_cycle_j[0]
-    for name in ["trace.csv", "trace.wav", "kinematics.csv", "calibration.json"]:
+    for name in ["trace.csv", "trace.wav", "kinematics.csv", "calibration.json", "cycles.csv"]:
         assert name in written["files"] and (tmp_path / "run" / name).is_file(), name
     # Nothing half-written is left behind.
     assert not [p for p in (tmp_path / "run").iterdir() if ".tmp" in p.name]

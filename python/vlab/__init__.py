@@ -53,6 +53,12 @@ class Shake:
     measured_energy_per_cycle_j = property(
         lambda self: self._inner.measured_energy_per_cycle_j
     )
+    longer_drive_rel = property(
+        lambda self: self._inner.longer_drive_rel,
+        doc="""One sigma more, relative, for where the same beds driven hundreds
+        more cycles would read (0.21 over the root of the window's cycles);
+        not in the errors above. `None` for one bed.""",
+    )
     warnings = property(lambda self: self._inner.warnings)
     sample_rate_hz = property(lambda self: self._inner.sample_rate_hz)
 

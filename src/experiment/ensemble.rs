@@ -369,10 +369,12 @@ fn summarise(
         .collect();
     // Each figure with its beds' own window errors (an efficiency's is its
     // energy's, scaled alike).
+    let first = &runs[0].summary;
+    let window_cycles = first.steady_cycles;
     let col = |f: fn(&BedRow) -> f64, err: fn(&BedRow) -> Option<f64>| {
         let values: Vec<f64> = rows.iter().map(f).collect();
         let errors: Vec<Option<f64>> = rows.iter().map(err).collect();
-        EnsembleFigure::of(&values, &errors)
+        EnsembleFigure::of(&values, &errors, window_cycles)
     };
     fn scaled(e: Option<f64>, figure: f64, energy: f64) -> Option<f64> {
         e.map(|e| {
@@ -383,7 +385,6 @@ fn summarise(
             }
         })
     }
-    let first = &runs[0].summary;
     let steadiness = judge
         .final_verdict()
         .map_or(first.dem.steadiness, |v| v.steadiness);

@@ -10,10 +10,44 @@ use serde::Serialize;
 use crate::experiment::damper::{DRIFT_FLOOR_REL, Steadiness};
 use crate::stats::{MeanStderr, ensemble_mean, ensemble_mean_floored};
 
+/// How far the mean of the same beds driven on for hundreds more cycles
+/// may lie from a window's mean, one sigma, relative, times the square root
+/// of the window's cycles ([`longer_drive_rel`]): 21 %, so 3.0 % over the
+/// default job's 50 cycles at 40 Hz Γ 20, 1.3 % over 250.
+///
+/// The beds keep changing after any window a run can show stationary, in
+/// either direction and by more than the window's noise: a slow creep (at
+/// 80 Hz Γ 28 the runs of 124-400 cycles read 1.5 % above twelve beds
+/// driven 800), or a bed falling at a random time into a state that
+/// dissipates 10-15 % less (at 20 Hz Γ 5 two of six beds did between
+/// cycles 50 and 800; the run that stopped at 50 read 5.0 % above the same
+/// beds over cycles 401-800). No window's own drift can see either (its
+/// error across the window is √12 times the mean's), and the beds' spread
+/// sees only the changes that have happened. Taken as the error of the
+/// mean of a slow fluctuation whose correlation time is longer than the
+/// window, it falls as one over the root of the window's cycles. What the
+/// +- of an ensemble leaves out, so printed beside it, never folded in: the
+/// beds' +- is checked against how far runs of the same length scatter, this
+/// part against beds driven 800 cycles.
+///
+/// 0.21: the rms of `d √w` over the five conditions where it was measured
+/// (`d` how far the runs read from beds driven 800 cycles, `w` their
+/// windows' cycles: 80 Hz Γ 4, 9, 10 and 28 and 20 Hz Γ 5; 10-28 each),
+/// checked at conditions and seeds not used to choose it
+/// (`docs/accuracy.md`, "A longer drive").
+pub const LONGER_DRIVE_SCALE: f64 = 0.21;
+
+/// The allowance for a longer drive of a figure over a window of
+/// `window_cycles` cycles, relative ([`LONGER_DRIVE_SCALE`]).
+pub fn longer_drive_rel(window_cycles: u32) -> f64 {
+    LONGER_DRIVE_SCALE / f64::from(window_cycles.max(1)).sqrt()
+}
+
 /// An ensemble's figure: the mean over the beds and its one-sigma error
 /// from their spread (Student's t on `beds − 1` degrees of freedom), never
 /// less than the beds' own window errors make it
-/// ([`crate::stats::ensemble_mean_floored`]).
+/// ([`crate::stats::ensemble_mean_floored`]), and beside it the allowance
+/// for a longer drive ([`longer_drive_rel`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct EnsembleFigure {
     pub mean: f64,
@@ -21,12 +55,16 @@ pub struct EnsembleFigure {
     pub stderr: Option<f64>,
     /// Sample standard deviation of the beds' figures (0 for one bed).
     pub spread: f64,
+    /// One sigma of how far the same beds driven for hundreds more cycles
+    /// may read ([`longer_drive_rel`] of the mean): not in `stderr`.
+    pub longer_drive: f64,
 }
 
 impl EnsembleFigure {
     /// The figure of `values`, one per bed, each with its own window's
-    /// error where known (the error is floored only if every bed's is).
-    pub fn of(values: &[f64], window_stderrs: &[Option<f64>]) -> Self {
+    /// error where known (the error is floored only if every bed's is),
+    /// over windows of `window_cycles` cycles.
+    pub fn of(values: &[f64], window_stderrs: &[Option<f64>], window_cycles: u32) -> Self {
         let windows: Option<Vec<f64>> = window_stderrs.iter().copied().collect();
         let m: MeanStderr = match windows {
             Some(w) if w.len() == values.len() => ensemble_mean_floored(values, &w),
@@ -36,7 +74,15 @@ impl EnsembleFigure {
             mean: m.mean,
             stderr: m.stderr,
             spread: crate::stats::mean_std(values).std,
+            longer_drive: longer_drive_rel(window_cycles) * m.mean.abs(),
         }
+    }
+
+    /// The one-sigma error of the mean as the state of beds driven on:
+    /// `stderr` and `longer_drive` in quadrature (`None` where `stderr` is
+    /// not known).
+    pub fn stderr_with_longer_drive(&self) -> Option<f64> {
+        self.stderr.map(|se| se.hypot(self.longer_drive))
     }
 }
 

@@ -19,7 +19,7 @@
 //! };
 //! let mut run = run_shake(&scene, &setup, &mut |_| {})?;
 //! println!("efficiency {:.3}", run.summary.dem.efficiency);
-//! run.write(std::path::Path::new("signals/my-run"), &scene, &setup)?;
+//! run.write(std::path::Path::new("signals/my-run"), &scene, &setup, &[])?;
 //! # Ok::<(), vlab::scene::SceneError>(())
 //! ```
 
@@ -35,7 +35,7 @@ use crate::drive::Drive;
 use crate::experiment::bed_cache::BedSource;
 use crate::experiment::damper::{
     DRIFT_FLOOR_REL, DriveJudge, DriveOutcome, Observers, OneBed, Progress, Steadiness,
-    StepObserver,
+    StepObserver, cycle_energies,
 };
 use crate::experiment::ensemble_summary::EnsembleSummary;
 use crate::experiment::measurement::{
@@ -612,12 +612,18 @@ impl ShakeSummary {
 impl ShakeRun {
     /// Writes the run's files into `dir` (which must exist), each atomically,
     /// `summary.json` last; the file names end up in `summary.files`.
+    /// `others` are the other beds of its ensemble (none for one bed): their
+    /// energies per cycle go into `cycles.csv` beside this bed's.
     pub fn write(
         &mut self,
         dir: &Path,
         scene: &Scene,
         setup: &ShakeSetup,
+        others: &[ShakeRun],
     ) -> Result<(), SceneError> {
+        let path = dir.join("cycles.csv");
+        write_bytes_atomic(&path, cycles_csv(self, others).as_bytes())
+            .map_err(|source| SceneError::Write { path, source })?;
         let e = &self.experiment;
         let truth = truth_trace(&e.truth, &self.summary)?;
         write_csv(&dir.join("kinematics.csv"), &truth)?;
@@ -631,6 +637,7 @@ impl ShakeRun {
             "trace.wav.json",
             "kinematics.csv",
             "calibration.json",
+            "cycles.csv",
         ];
         #[cfg(feature = "plot")]
         {
@@ -664,6 +671,21 @@ impl ShakeRun {
                 )?;
             }
             files.extend(["bed.svg", "bed.png"]);
+            for ext in ["svg", "png"] {
+                plot_cycles(
+                    &dir.join(format!("cycles.{ext}")),
+                    self,
+                    others,
+                    &format!(
+                        "{} damper, {} Hz, Gamma {}: efficiency of each cycle, window from cycle {}",
+                        scene.name,
+                        setup.drive.freq_hz(),
+                        setup.drive.gamma(),
+                        self.summary.dem.steady_first_cycle + 1
+                    ),
+                )?;
+            }
+            files.extend(["cycles.svg", "cycles.png"]);
         }
         #[cfg(not(feature = "plot"))]
         let _ = (scene, setup);
@@ -685,6 +707,39 @@ impl ShakeRun {
             .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
             + "\n"
     }
+}
+
+/// `cycles.csv`: the energy each bed dissipated in each cycle of the drive
+/// (J, the DEM's books), their mean and whether the cycle is in the steady
+/// window: the series the steady rule judged, to see a warm-up, a drift or
+/// a period-2 bed for oneself. `first` is the bed whose records were kept,
+/// `others` the rest of its ensemble, in bed order.
+pub fn cycles_csv(first: &ShakeRun, others: &[ShakeRun]) -> String {
+    let series: Vec<Vec<f64>> = std::iter::once(first)
+        .chain(others)
+        .map(|r| cycle_energies(&r.experiment.outcome.cycle_snapshots, 0))
+        .collect();
+    let window_from = first.experiment.outcome.steady_first_cycle as usize;
+    let mut out = String::from("cycle,in_window,mean_dissipated_j");
+    for k in 1..=series.len() {
+        out.push_str(&format!(",bed_{k}_dissipated_j"));
+    }
+    out.push('\n');
+    let cycles = series.iter().map(Vec::len).min().unwrap_or(0);
+    for c in 0..cycles {
+        let values: Vec<f64> = series.iter().map(|s| s[c]).collect();
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        out.push_str(&format!(
+            "{},{},{mean:e}",
+            c + 1,
+            u8::from(c >= window_from)
+        ));
+        for v in values {
+            out.push_str(&format!(",{v:e}"));
+        }
+        out.push('\n');
+    }
+    out
 }
 
 /// Writes what a rig recorded: `trace.csv`, and `trace.wav` with its
@@ -844,6 +899,69 @@ pub fn plot_bed(
         "position along the enclosure's axis (mm)",
         &series,
     )?;
+    Ok(())
+}
+
+/// Most beds [`plot_cycles`] draws one by one; more are drawn as their
+/// mean alone.
+const MOST_BEDS_DRAWN: usize = 8;
+
+/// `cycles.{svg,png}`: the efficiency of each cycle of the drive (the
+/// energy it dissipated over `E_max`) for each bed of `first` and `others`
+/// (up to [`MOST_BEDS_DRAWN`]) and their mean, with the cycle the window
+/// starts at: a warm-up, a creep, a bed falling into another state or a
+/// period-2 bed, seen at once.
+pub fn plot_cycles(
+    path: &Path,
+    first: &ShakeRun,
+    others: &[ShakeRun],
+    title: &str,
+) -> Result<(), SceneError> {
+    use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+    let e_max = first.summary.dem.e_max_j;
+    if e_max <= 0.0 {
+        return Ok(());
+    }
+    let beds: Vec<Vec<f64>> = std::iter::once(first)
+        .chain(others)
+        .map(|r| cycle_energies(&r.experiment.outcome.cycle_snapshots, 0))
+        .collect();
+    let cycles = beds.iter().map(Vec::len).min().unwrap_or(0);
+    if cycles == 0 {
+        return Ok(());
+    }
+    let line = |name: String, values: &dyn Fn(usize) -> f64| Series {
+        name,
+        points: (0..cycles)
+            .map(|c| ((c + 1) as f64, values(c) / e_max))
+            .collect(),
+        style: SeriesStyle::Line,
+    };
+    let mut series = Vec::new();
+    if beds.len() <= MOST_BEDS_DRAWN {
+        for (k, b) in beds.iter().enumerate() {
+            series.push(line(format!("bed {}", k + 1), &|c| b[c]));
+        }
+    }
+    if beds.len() > 1 {
+        let n = beds.len() as f64;
+        series.push(line(format!("mean of {} beds", beds.len()), &|c| {
+            beds.iter().map(|b| b[c]).sum::<f64>() / n
+        }));
+    }
+    let (lo, hi) = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.1))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| {
+            (lo.min(y), hi.max(y))
+        });
+    let start = f64::from(first.summary.dem.steady_first_cycle) + 0.5;
+    series.push(Series {
+        name: "window starts".into(),
+        points: vec![(start, lo), (start, hi)],
+        style: SeriesStyle::Line,
+    });
+    plot_xy_svg(path, title, "cycle", "energy dissipated / E_max", &series)?;
     Ok(())
 }
 

@@ -181,7 +181,8 @@ impl ShakeOutcome {
     /// Writes the records, the calibration, the plots and `summary.json`
     /// (last) into `dir`, which must exist, each file atomically.
     pub fn write(&mut self, dir: &Path) -> Result<(), SceneError> {
-        self.run.write(dir, &self.plan.scene, &self.plan.setup)
+        self.run
+            .write(dir, &self.plan.scene, &self.plan.setup, &self.others)
     }
 
     /// The summary as pretty JSON, as `summary.json` holds it.
