@@ -904,6 +904,7 @@ pub fn plot_bed(
 
 /// Most beds [`plot_cycles`] draws one by one; more are drawn as their
 /// mean alone.
+#[cfg(feature = "plot")]
 const MOST_BEDS_DRAWN: usize = 8;
 
 /// `cycles.{svg,png}`: the efficiency of each cycle of the drive (the
@@ -911,6 +912,7 @@ const MOST_BEDS_DRAWN: usize = 8;
 /// (up to [`MOST_BEDS_DRAWN`]) and their mean, with the cycle the window
 /// starts at: a warm-up, a creep, a bed falling into another state or a
 /// period-2 bed, seen at once.
+#[cfg(feature = "plot")]
 pub fn plot_cycles(
     path: &Path,
     first: &ShakeRun,
