@@ -338,7 +338,7 @@ fn print_ensemble(e: &EnsembleSummary) {
     );
     let window = e.cycles - e.steady_first_cycle;
     println!(
-        "    (longer drive: one sigma more, {:.1} % of the mean ({:.0} % over the root of the window's {window} cycles), for where these beds driven hundreds more cycles would read: beds creep, or fall into another state at random times, too slowly for any window to show; see docs/accuracy.md)",
+        "    (longer drive: an allowance, one sigma more, {:.1} % of the mean ({:.0} % over the root of the window's {window} cycles), for where these beds driven hundreds more cycles would read: beds may creep, or fall into another state at random times, too slowly for any window to show, or stay where they are, when it is wide; see docs/accuracy.md)",
         100.0 * longer_drive_rel(window),
         100.0 * LONGER_DRIVE_SCALE
     );
