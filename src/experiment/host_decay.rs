@@ -382,16 +382,21 @@ impl DecayEnsemble {
         }
     }
 
+    /// Each method's name and its points, the log decrement first.
+    pub fn methods(&self) -> [(&'static str, &[EnsembleDecayPoint]); 2] {
+        [
+            ("log-decrement", &self.log_decrement),
+            ("envelope", &self.envelope),
+        ]
+    }
+
     /// `decay-beds.csv`: one row per cycle of each method.
     pub fn csv(&self) -> String {
         let mut csv = String::from(
             "method,cycle,time_s,gamma,loss_factor,loss_factor_stderr,loss_factor_spread,true_loss_factor,damper_energy_j,damper_energy_stderr_j,true_damper_dissipated_j\n",
         );
         let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
-        for (name, points) in [
-            ("log-decrement", &self.log_decrement),
-            ("envelope", &self.envelope),
-        ] {
+        for (name, points) in self.methods() {
             for p in points {
                 csv.push_str(&format!(
                     "{name},{},{},{},{},{},{},{},{},{},{}\n",

@@ -709,16 +709,22 @@ impl ShakeRun {
     }
 }
 
+/// The energy each cycle of the drive dissipated (J, from its start), for
+/// `first` and then each of `others`.
+fn beds_cycle_energies(first: &ShakeRun, others: &[ShakeRun]) -> Vec<Vec<f64>> {
+    std::iter::once(first)
+        .chain(others)
+        .map(|r| cycle_energies(&r.experiment.outcome.cycle_snapshots, 0))
+        .collect()
+}
+
 /// `cycles.csv`: the energy each bed dissipated in each cycle of the drive
 /// (J, the DEM's books), their mean and whether the cycle is in the steady
 /// window: the series the steady rule judged, to see a warm-up, a drift or
 /// a period-2 bed for oneself. `first` is the bed whose records were kept,
 /// `others` the rest of its ensemble, in bed order.
 pub fn cycles_csv(first: &ShakeRun, others: &[ShakeRun]) -> String {
-    let series: Vec<Vec<f64>> = std::iter::once(first)
-        .chain(others)
-        .map(|r| cycle_energies(&r.experiment.outcome.cycle_snapshots, 0))
-        .collect();
+    let series = beds_cycle_energies(first, others);
     let window_from = first.experiment.outcome.steady_first_cycle as usize;
     let mut out = String::from("cycle,in_window,mean_dissipated_j");
     for k in 1..=series.len() {
@@ -924,10 +930,7 @@ pub fn plot_cycles(
     if e_max <= 0.0 {
         return Ok(());
     }
-    let beds: Vec<Vec<f64>> = std::iter::once(first)
-        .chain(others)
-        .map(|r| cycle_energies(&r.experiment.outcome.cycle_snapshots, 0))
-        .collect();
+    let beds = beds_cycle_energies(first, others);
     let cycles = beds.iter().map(Vec::len).min().unwrap_or(0);
     if cycles == 0 {
         return Ok(());

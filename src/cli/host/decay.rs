@@ -203,10 +203,7 @@ fn print_ensemble(e: &DecayEnsemble) {
     );
     println!("  method          cycle  t_s     Gamma   eta (+- beds)        spread   eta_true");
     let opt = |v: Option<f64>| v.map_or("not known".to_string(), |x| format!("{x:.4}"));
-    for (name, points) in [
-        ("log-decrement", &e.log_decrement),
-        ("envelope", &e.envelope),
-    ] {
+    for (name, points) in e.methods() {
         for p in points {
             println!(
                 "  {:14} {:5}  {:6.3}  {:6.2}  {:.4} +- {:9}  {:.4}   {:.4}",
