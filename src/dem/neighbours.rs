@@ -9,10 +9,11 @@
 //! hands the states of surviving pairs over to the new list. Pairs are sorted by
 //! `(i, j)`, so everything built from the list is independent of thread count.
 //!
-//! The overlap of every pair at the previous step (negative: the gap) is also
-//! kept on its own, in [`NeighbourList::gaps`]: a step asks of most listed
-//! pairs only whether they are still apart, and reads 8 bytes for it instead
-//! of the whole 88-byte contact state.
+//! The overlap of every pair at the previous step is also kept on its own,
+//! in [`NeighbourList::gaps`] (for a pair apart, minus the squared distance
+//! of the centres: no square root for it): a step asks of most listed pairs
+//! only whether they are still apart, and reads 8 bytes for it instead of
+//! the whole 96-byte contact state.
 //!
 //! Each rebuild also lays out, for every particle, its row (the pairs
 //! `(p, j)`, [`NeighbourList::row`]) and the pairs `(i, p)` that reach it
@@ -77,10 +78,14 @@ pub struct NeighbourList {
     pub pairs: Vec<(u32, u32)>,
     /// Contact state of each pair, same order as `pairs`. Its `delta_prev`
     /// is current only while the pair touches (`gaps[k] > 0`); a pair apart
-    /// has the state of [`ContactState::apart`] and its gap in `gaps`.
+    /// has the state of [`ContactState::apart`] and its distance in `gaps`.
     pub states: Vec<ContactState>,
-    /// Overlap of each pair at the previous step (m), same order as `pairs`;
-    /// negative: the gap. Always current.
+    /// What a step needs to know of each pair from the previous one, same
+    /// order as `pairs`, always current: the overlap (m) of a pair that
+    /// touched; for a pair apart, minus the squared distance of the centres
+    /// (m², so never positive), which the step has without a square root
+    /// and turns into the gap only when the pair touches
+    /// ([`crate::dem::step::contacts::gap_from_code`]).
     pub gaps: Vec<f64>,
     skin_m: f64,
     /// Each particle's row and pairs from earlier blocks.
@@ -327,8 +332,11 @@ impl NeighbourList {
                     }
                     None => {
                         let ju = j as usize;
-                        let gap = (positions[ju] - pi).length() - radii[i] - radii[ju];
-                        (ContactState::apart(-gap), -gap)
+                        let dist_sq = (positions[ju] - pi).length_squared();
+                        let gap = dist_sq.sqrt() - radii[i] - radii[ju];
+                        // A pair apart keeps its code, as the step does.
+                        let kept = if gap < 0.0 { -gap } else { -dist_sq };
+                        (ContactState::apart(-gap), kept)
                     }
                 };
                 self.new_pairs.push(key);

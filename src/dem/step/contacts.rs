@@ -250,9 +250,13 @@ pub fn wall_contact<const D: bool, const F: bool>(
 }
 
 /// One particle-particle contact (thesis eq. 3.1–3.8, 3.26–3.27); `None`
-/// when the particles are apart and were apart. `gap` is the pair's overlap
-/// at the previous step (negative: the gap), remembered for the trapezoid
-/// at contact onset and updated here; `st` is read only when they touch.
+/// when the particles are apart and were apart. `gap` is what the pair
+/// list keeps of the previous step ([`NeighbourList::gaps`]: the overlap of
+/// a touching pair, minus the squared distance of the centres of one
+/// apart), read for the trapezoid at contact onset and updated here; `st`
+/// is read only when they touch.
+///
+/// [`NeighbourList::gaps`]: crate::dem::neighbours::NeighbourList::gaps
 #[inline(always)]
 pub fn pair_contact<const D: bool, const F: bool>(
     law: &ContactLaw,
@@ -268,12 +272,13 @@ pub fn pair_contact<const D: bool, const F: bool>(
     let dist_sq = d.length_squared();
     let reach = ri + rj;
     if dist_sq >= reach * reach && *gap <= 0.0 {
-        *gap = reach - dist_sq.sqrt();
+        // Most listed pairs, every step: no square root until one touches.
+        *gap = -dist_sq;
         return None;
     }
     if *gap <= 0.0 {
         // Opening: the contact's books start from the gap.
-        st.delta_prev = *gap;
+        st.delta_prev = gap_from_code(reach, *gap);
     }
     let dist = dist_sq.sqrt();
     let n = d / dist;
@@ -297,6 +302,14 @@ pub fn pair_contact<const D: bool, const F: bool>(
         v_rel,
     };
     let out = resolve_contact::<D, F>(law, &geometry, arms, ri.min(rj), dt, st);
-    *gap = st.delta_prev;
+    *gap = if delta > 0.0 { st.delta_prev } else { -dist_sq };
     Some(out)
+}
+
+/// The gap (m, negative) of a pair apart whose centres, `reach` apart when
+/// they touch, were `sqrt(-code)` apart: `reach - sqrt(-code)`, the very
+/// bits the step would have computed then.
+#[inline(always)]
+pub fn gap_from_code(reach_m: f64, code: f64) -> f64 {
+    reach_m - (-code).sqrt()
 }
