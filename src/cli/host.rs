@@ -165,7 +165,7 @@ fn run_record(a: RunArgs, quiet: bool) -> Result<()> {
     let made = OutputDir::prepare(&out)
         .with_context(|| format!("cannot create output folder {}", out.display()))?;
     let run = made.keep_if_ok(run_test(&scene, &test, a.common.cache, quiet))?;
-    write_records(&out, &run)?;
+    made.keep_if_ok(write_records(&out, &run))?;
     let e = &run.energy;
     println!(
         "{} on {} ({}), {:.3} s: {} steps of {:.3e} s, {:.1} s wall",

@@ -20,6 +20,7 @@ pub mod ensemble_summary;
 pub mod fill;
 pub mod host_decay;
 pub mod host_frf;
+pub mod host_frf_outcome;
 pub mod host_test;
 pub mod impact;
 pub mod measurement;

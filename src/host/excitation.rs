@@ -55,6 +55,39 @@ pub enum Excitation {
     Release { x0_m: f64 },
 }
 
+/// A periodic random force as its key gives it
+/// (`random:LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PeriodicRandom {
+    pub low_hz: f64,
+    pub high_hz: f64,
+    pub rms_n: f64,
+    /// Its period (s): the block of an FRF without leakage.
+    pub period_s: f64,
+    pub seed: u64,
+}
+
+impl PeriodicRandom {
+    /// Parses `LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED` (the key without its
+    /// `random:`), refusing what [`Excitation::parse`] refuses.
+    pub fn parse(values: &str) -> Result<Self, InvalidParameter> {
+        let key = format!("random:{values}");
+        let (_, force) = Excitation::parse_with_random(&key)?;
+        force.ok_or_else(|| InvalidParameter::new("excitation", key, "", "a random key"))
+    }
+
+    /// The force itself ([`Excitation::periodic_random`]).
+    pub fn excitation(&self) -> Result<Excitation, InvalidParameter> {
+        Excitation::periodic_random(
+            self.low_hz,
+            self.high_hz,
+            self.rms_n,
+            self.period_s,
+            self.seed,
+        )
+    }
+}
+
 impl Excitation {
     /// The force at `t_s` from the start, N.
     pub fn force_n(&self, t_s: f64) -> f64 {
@@ -162,6 +195,14 @@ impl Excitation {
 
     /// Parses a key of the table in the module docs.
     pub fn parse(key: &str) -> Result<Self, InvalidParameter> {
+        Self::parse_with_random(key).map(|(excitation, _)| excitation)
+    }
+
+    /// [`Self::parse`], and of a `random:` key the periodic random force's
+    /// values as given (its period is what an FRF's block is).
+    pub fn parse_with_random(
+        key: &str,
+    ) -> Result<(Self, Option<PeriodicRandom>), InvalidParameter> {
         let refuse =
             |valid: &str| InvalidParameter::new("excitation", format!("'{key}'"), "", valid);
         let (kind, rest) = key.split_once(':').ok_or_else(|| {
@@ -234,7 +275,16 @@ impl Excitation {
                     Bound::Closed(0.0),
                     Bound::Closed(u32::MAX.into()),
                 )?;
-                Excitation::periodic_random(v[0], v[1], v[2], v[3], v[4] as u64)?
+                let force = PeriodicRandom {
+                    low_hz: v[0],
+                    high_hz: v[1],
+                    rms_n: v[2],
+                    period_s: v[3],
+                    seed: v[4] as u64,
+                };
+                let excitation = force.excitation()?;
+                excitation.validate()?;
+                return Ok((excitation, Some(force)));
             }
             "hammer" => {
                 let v = numbers(rest, &["impulse_n_s"], &["N s"])?;
@@ -251,7 +301,7 @@ impl Excitation {
             }
         };
         excitation.validate()?;
-        Ok(excitation)
+        Ok((excitation, None))
     }
 
     /// Checks every value (frequencies positive and at most 5 kHz, forces

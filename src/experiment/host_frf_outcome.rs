@@ -1,0 +1,516 @@
+//! What `vlab host frf` leaves: a stepped sine with the comparisons a lab
+//! makes (the host without particles and with their mass as a solid, the
+//! map-based prediction and Yang's map beside it), or a periodic random
+//! test's H1, H2 and coherence, each as an outcome that writes its own
+//! files (`frf.csv`, `frf.json`, the figures), so that the command line only
+//! prints. The measurements are [`super::host_frf`]'s.
+
+use std::path::{Path, PathBuf};
+
+use super::bed_cache::BedSource;
+use super::host_frf::{SteppedSine, SteppedSineResult, random_frf, run_stepped_sine};
+use super::host_test::{Damper, HostRun, HostTest};
+use crate::atomic_write::write_bytes_atomic;
+use crate::host::map_model::{DissipationMap, SteadyResponse, stepped_sine};
+use crate::host::{Excitation, PeriodicRandom};
+use crate::scene::{Scene, SceneError};
+use crate::signals::structural::Frf;
+use crate::validation::InvalidParameter;
+
+/// A frequency's predicted response and how many roots it had.
+pub type Predicted = (SteadyResponse, usize);
+
+/// The maps a stepped sine is held against: the DEM's efficiency (the
+/// model's) and Yang's (the structure-independent figure at each point).
+#[derive(Clone, Copy)]
+pub struct FrfMaps<'a> {
+    pub dem: &'a DissipationMap,
+    pub yang: &'a DissipationMap,
+}
+
+/// A finished stepped sine and what a lab compares it with.
+pub struct SteppedSineOutcome {
+    pub test: HostTest,
+    pub plan: SteppedSine,
+    /// The damper on its host.
+    pub measured: SteppedSineResult,
+    /// The host without particles, and with their mass as a solid (linear).
+    pub empty: SteppedSineResult,
+    pub solid: SteppedSineResult,
+    /// With maps: the map-based model's prediction at each frequency.
+    pub predicted: Option<Vec<Predicted>>,
+    /// How long the prediction took (ms).
+    pub predict_ms: f64,
+    /// Yang's map's power at each measured point's frequency and amplitude
+    /// (W); NaN without maps.
+    pub yang_map_w: Vec<f64>,
+}
+
+impl SteppedSineOutcome {
+    /// Runs `plan` with `test`'s damper, then the empty host and the solid
+    /// mass at the same frequencies (`done` is told of each point of the
+    /// first), and, with `maps`, the prediction and Yang's power at each
+    /// point; a point the DEM drove outside the map gets a warning.
+    pub fn run(
+        scene: &Scene,
+        beds: &BedSource,
+        test: &HostTest,
+        plan: &SteppedSine,
+        maps: Option<FrfMaps<'_>>,
+        done: &(dyn Fn(&super::host_frf::FrfPoint) + Sync),
+    ) -> Result<Self, SceneError> {
+        let mut measured = run_stepped_sine(scene, beds, test, plan, done)?;
+        if let Some(m) = maps {
+            for p in &mut measured.points {
+                if let Some(why) = m.dem.outside(p.freq_hz, p.gamma) {
+                    p.warnings.push(format!(
+                        "the DEM drove the damper to Gamma {:.1}, where the map cannot answer: {why}; the map's prediction and Yang's map W at this point are guesses",
+                        p.gamma
+                    ));
+                }
+            }
+        }
+        let compare = |damper: Damper| {
+            let t = HostTest {
+                damper,
+                ..test.clone()
+            };
+            run_stepped_sine(scene, beds, &t, plan, &|_| {})
+        };
+        let empty = compare(Damper::Empty)?;
+        let solid = compare(Damper::Solid)?;
+        let started = crate::clock::Stopwatch::start();
+        let predicted = maps.map(|m| stepped_sine(m.dem, &test.host, &plan.freqs_hz, plan.force_n));
+        let predict_ms = started.elapsed().as_secs_f64() * 1e3;
+        // Yang's energy per cycle at each point's frequency and amplitude,
+        // as power.
+        let yang_map_w = measured
+            .points
+            .iter()
+            .map(|p| {
+                maps.map_or(f64::NAN, |m| {
+                    let d = m.yang.damper_at(p.freq_hz, p.amplitude_m);
+                    let v = d.gamma * scene.simulation.gravity_mps2
+                        / (std::f64::consts::TAU * p.freq_hz);
+                    d.efficiency * 4.0 * v * v * m.yang.particle_mass_kg * p.freq_hz
+                })
+            })
+            .collect();
+        Ok(SteppedSineOutcome {
+            test: test.clone(),
+            plan: plan.clone(),
+            measured,
+            empty,
+            solid,
+            predicted,
+            predict_ms,
+            yang_map_w,
+        })
+    }
+
+    /// The predicted receptance magnitude at measured point `k` (m/N), with
+    /// maps.
+    pub fn predicted_receptance(&self, k: usize) -> Option<f64> {
+        let f = self.measured.points.get(k)?.freq_hz;
+        self.predicted
+            .as_ref()?
+            .iter()
+            .find(|(r, _)| r.freq_hz == f)
+            .map(|(r, _)| r.amplitude_m / self.plan.force_n)
+    }
+
+    /// The peak's change against another stepped sine (dB).
+    pub fn reduction_db(&self, other: &SteppedSineResult) -> f64 {
+        20.0 * (self.measured.peak_m_per_n / other.peak_m_per_n).log10()
+    }
+
+    /// `frf.csv`: a row per frequency, the measurement, the truth and the
+    /// comparisons.
+    pub fn csv(&self) -> String {
+        let mut csv = String::from(
+            "freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,gamma,true_amplitude_m,power_input_w,host_storage_w,damper_power_w,damper_power_stderr_w,damper_power_record_stderr_w,true_input_w,true_host_w,true_damper_work_w,true_damper_w,host_energy_drift_w,steady,empty_receptance_m_per_n,solid_receptance_m_per_n,predicted_receptance_m_per_n,yang_map_w\n",
+        );
+        for (k, p) in self.measured.points.iter().enumerate() {
+            csv.push_str(&format!(
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                p.freq_hz,
+                p.receptance_re,
+                p.receptance_im,
+                p.amplitude_m,
+                p.gamma,
+                p.true_amplitude_m,
+                p.power_input_w,
+                p.host_storage_w,
+                p.damper_power_w,
+                p.damper_power_stderr_w,
+                p.damper_power_record_stderr_w,
+                p.true_input_w,
+                p.true_host_w,
+                p.true_damper_work_w,
+                p.true_damper_w,
+                p.host_energy_drift_w,
+                p.steady,
+                self.empty.points[k].receptance().norm(),
+                self.solid.points[k].receptance().norm(),
+                self.predicted_receptance(k).unwrap_or(f64::NAN),
+                self.yang_map_w[k]
+            ));
+        }
+        csv
+    }
+
+    /// `frf.json`: the test, the three stepped sines and the prediction.
+    pub fn summary(&self) -> serde_json::Value {
+        serde_json::json!({
+            "host": self.test.host,
+            "damper": self.test.damper,
+            "force_n": self.plan.force_n,
+            "settle_cycles": self.plan.settle_cycles,
+            "record_cycles": self.plan.record_cycles,
+            "measured": self.measured,
+            "empty": self.empty,
+            "solid": self.solid,
+            "predicted": self.predicted.as_ref().map(|v| v.iter().map(|(r, n)| serde_json::json!({"response": r, "roots": n})).collect::<Vec<_>>()),
+            "predict_ms": self.predict_ms,
+        })
+    }
+
+    /// Writes `frf.csv`, `frf.json` and, with plots, `frf-magnitude.svg`
+    /// and `frf-phase.svg` into `dir`, which must exist, each atomically.
+    pub fn write(&self, dir: &Path) -> Result<(), SceneError> {
+        write_text(dir.join("frf.csv"), Ok(self.csv()))?;
+        let json = serde_json::to_string_pretty(&self.summary()).map_err(std::io::Error::other);
+        write_text(dir.join("frf.json"), json)?;
+        #[cfg(feature = "plot")]
+        self.plot(dir)?;
+        Ok(())
+    }
+
+    /// `frf-magnitude.svg` (dB re 1 m/N) and `frf-phase.svg`.
+    #[cfg(feature = "plot")]
+    fn plot(&self, dir: &Path) -> Result<(), SceneError> {
+        use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+        let db = |h: f64| 20.0 * h.log10();
+        let mag = |r: &SteppedSineResult| -> Vec<(f64, f64)> {
+            r.points
+                .iter()
+                .map(|p| (p.freq_hz, db(p.receptance().norm())))
+                .collect()
+        };
+        let phase = |r: &SteppedSineResult| -> Vec<(f64, f64)> {
+            r.points
+                .iter()
+                .map(|p| (p.freq_hz, p.receptance().arg().to_degrees()))
+                .collect()
+        };
+        let line = |name: &str, points| Series {
+            name: name.into(),
+            points,
+            style: SeriesStyle::Line,
+        };
+        let coupled = format!("{} (coupled DEM)", self.test.damper.label());
+        let curves = |of: &dyn Fn(&SteppedSineResult) -> Vec<(f64, f64)>| {
+            vec![
+                line("empty host", of(&self.empty)),
+                line("particles' mass as a solid", of(&self.solid)),
+                Series {
+                    name: coupled.clone(),
+                    points: of(&self.measured),
+                    style: SeriesStyle::Points,
+                },
+            ]
+        };
+        let (mut series, mut phases) = (curves(&mag), curves(&phase));
+        if let Some(p) = &self.predicted {
+            let force_n = self.plan.force_n;
+            series.push(line(
+                "map-based model",
+                p.iter()
+                    .map(|(r, _)| (r.freq_hz, db(r.amplitude_m / force_n)))
+                    .collect(),
+            ));
+            phases.push(line(
+                "map-based model",
+                p.iter()
+                    .map(|(r, _)| (r.freq_hz, r.phase_rad.to_degrees()))
+                    .collect(),
+            ));
+        }
+        let host = &self.test.host.name;
+        plot_xy_svg(
+            &dir.join("frf-magnitude.svg"),
+            &format!(
+                "Receptance at the damper, {} N at the drive, {host}",
+                self.plan.force_n
+            ),
+            "frequency (Hz)",
+            "|X / F| (dB re 1 m/N)",
+            &series,
+        )?;
+        plot_xy_svg(
+            &dir.join("frf-phase.svg"),
+            &format!("Phase of the receptance, {host}"),
+            "frequency (Hz)",
+            "phase of X / F (degrees)",
+            &phases,
+        )?;
+        Ok(())
+    }
+}
+
+/// A finished periodic random test: its run (the records) and H1, H2 and
+/// coherence over the force's band.
+pub struct RandomFrfOutcome {
+    pub test: HostTest,
+    pub force: PeriodicRandom,
+    pub run: HostRun,
+    pub frf: Frf,
+}
+
+impl RandomFrfOutcome {
+    /// `test` with the periodic random `force` instead of its excitation,
+    /// run (`run_test`: the caller's run of the host test, with its
+    /// progress) and analysed over blocks of one period, the first dropped;
+    /// refused before any work unless the test lasts three periods
+    /// ([`Self::check_duration`]).
+    pub fn run<E: From<SceneError> + From<InvalidParameter>>(
+        mut test: HostTest,
+        force: PeriodicRandom,
+        run_test: impl FnOnce(&HostTest) -> Result<HostRun, E>,
+    ) -> Result<Self, E> {
+        Self::check_duration(test.duration_s, &force)?;
+        test.excitation = force.excitation()?;
+        let run = run_test(&test)?;
+        let frf = random_frf(&run, &test.rig, force.period_s)?;
+        Ok(RandomFrfOutcome {
+            test,
+            force,
+            run,
+            frf,
+        })
+    }
+
+    /// A test of `duration_s` lasts three periods of `force` at least: one
+    /// dropped, two averaged.
+    pub fn check_duration(duration_s: f64, force: &PeriodicRandom) -> Result<(), InvalidParameter> {
+        if duration_s < 3.0 * force.period_s {
+            return Err(InvalidParameter::new(
+                "duration_s",
+                duration_s,
+                "s",
+                format!(
+                    "at least three periods of the random force ({} s each): one dropped, two averaged",
+                    force.period_s
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The indices of the FRF's lines inside the force's band.
+    pub fn in_band(&self) -> impl Iterator<Item = usize> + '_ {
+        let Excitation::Lines { lines, .. } = &self.test.excitation else {
+            unreachable!("a periodic random force is lines")
+        };
+        let low = lines.first().map_or(0.0, |l| l.freq_hz);
+        let high = lines.last().map_or(0.0, |l| l.freq_hz);
+        (0..self.frf.freq_hz.len()).filter(move |&k| (low..=high).contains(&self.frf.freq_hz[k]))
+    }
+
+    /// The lowest coherence in the band and its frequency (Hz).
+    pub fn lowest_coherence(&self) -> (f64, f64) {
+        self.in_band()
+            .map(|k| (self.frf.freq_hz[k], self.frf.coherence[k]))
+            .fold((f64::NAN, 2.0), |b, p| if p.1 < b.1 { p } else { b })
+    }
+
+    /// `frf.csv`: a row per line in the band.
+    pub fn csv(&self) -> String {
+        let f = &self.frf;
+        let mut csv = String::from(
+            "freq_hz,h1_re_m_per_n,h1_im_m_per_n,h2_re_m_per_n,h2_im_m_per_n,coherence,h1_magnitude_stderr_rel\n",
+        );
+        for k in self.in_band() {
+            csv.push_str(&format!(
+                "{},{},{},{},{},{},{}\n",
+                f.freq_hz[k],
+                f.h1[k].re,
+                f.h1[k].im,
+                f.h2[k].re,
+                f.h2[k].im,
+                f.coherence[k],
+                f.magnitude_stderr_rel(k)
+            ));
+        }
+        csv
+    }
+
+    /// Writes the records ([`HostRun::write_records`]), `frf.csv` and, with
+    /// plots, `frf-magnitude.svg` and `coherence.svg` into `dir`, which must
+    /// exist, each atomically.
+    pub fn write(&self, dir: &Path) -> Result<(), SceneError> {
+        self.run.write_records(dir)?;
+        write_text(dir.join("frf.csv"), Ok(self.csv()))?;
+        #[cfg(feature = "plot")]
+        self.plot(dir)?;
+        Ok(())
+    }
+
+    /// `frf-magnitude.svg` (H1 and H2, dB re 1 m/N) and `coherence.svg`.
+    #[cfg(feature = "plot")]
+    fn plot(&self, dir: &Path) -> Result<(), SceneError> {
+        use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+        let f = &self.frf;
+        let curve = |name: &str, y: &dyn Fn(usize) -> f64| Series {
+            name: name.into(),
+            points: self.in_band().map(|k| (f.freq_hz[k], y(k))).collect(),
+            style: SeriesStyle::Line,
+        };
+        let host = &self.test.host.name;
+        plot_xy_svg(
+            &dir.join("frf-magnitude.svg"),
+            &format!("H1 and H2 of the receptance, periodic random, {host}"),
+            "frequency (Hz)",
+            "|X / F| (dB re 1 m/N)",
+            &[
+                curve("H1", &|k| 20.0 * f.h1[k].norm().log10()),
+                curve("H2", &|k| 20.0 * f.h2[k].norm().log10()),
+            ],
+        )?;
+        plot_xy_svg(
+            &dir.join("coherence.svg"),
+            &format!("Coherence, periodic random, {host}"),
+            "frequency (Hz)",
+            "coherence",
+            &[curve("coherence", &|k| f.coherence[k])],
+        )?;
+        Ok(())
+    }
+}
+
+/// Writes `text` to `path` atomically, or says which file it could not.
+fn write_text(path: PathBuf, text: std::io::Result<String>) -> Result<(), SceneError> {
+    text.and_then(|t| write_bytes_atomic(&path, t.as_bytes()))
+        .map_err(|source| SceneError::Write { path, source })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::host::HostSpec;
+    use crate::rig::{RigFile, RigSpec};
+
+    fn dashpot_test(duration_s: f64) -> HostTest {
+        HostTest {
+            host: HostSpec::builtin("plate-40hz").expect("built in"),
+            damper: Damper::Dashpot { n_s_per_m: 10.0 },
+            excitation: Excitation::Release { x0_m: 1e-3 },
+            duration_s,
+            start_steady: true,
+            rig: RigSpec::builtin("thesis-shaker").expect("built in"),
+            noise_seed: 5,
+        }
+    }
+
+    #[test]
+    fn a_stepped_sine_outcome_holds_its_comparisons_row_by_row() {
+        // Three frequencies across plate-40hz's resonance with a dashpot:
+        // the solid mass lowers the resonance and the dashpot lowers the
+        // peak, so the damper reads below the empty host at its peak;
+        // frf.csv has a row a frequency whose comparisons are the other
+        // runs' receptances, and no map leaves the map's columns NaN.
+        let plan = SteppedSine {
+            freqs_hz: vec![38.0, 40.0, 42.0],
+            force_n: 2.0,
+            settle_cycles: 0,
+            record_cycles: 20,
+            beds: 1,
+        };
+        let test = dashpot_test(1.0);
+        let o = SteppedSineOutcome::run(
+            &Scene::thesis(),
+            &BedSource::Settle,
+            &test,
+            &plan,
+            None,
+            &|_| {},
+        )
+        .expect("runs");
+        assert!(
+            o.reduction_db(&o.empty) < -3.0,
+            "{}",
+            o.reduction_db(&o.empty)
+        );
+        let csv = o.csv();
+        let rows: Vec<Vec<&str>> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect())
+            .collect();
+        assert_eq!(rows.len(), 3);
+        for (k, row) in rows.iter().enumerate() {
+            assert_eq!(row.len(), 21);
+            let empty: f64 = row[17].parse().expect("number");
+            assert_eq!(empty, o.empty.points[k].receptance().norm());
+            assert_eq!(row[19], "NaN");
+            assert_eq!(row[20], "NaN");
+        }
+        let json = o.summary();
+        assert_eq!(json["record_cycles"], 20);
+        assert_eq!(json["measured"]["points"].as_array().map(Vec::len), Some(3));
+        assert!(json["predicted"].is_null());
+    }
+
+    #[test]
+    fn a_random_test_shorter_than_three_periods_is_refused_before_it_runs() {
+        let force = PeriodicRandom::parse("20:60:1:1:4").expect("a key");
+        assert_eq!(force.period_s, 1.0);
+        let run = RandomFrfOutcome::run(
+            dashpot_test(2.5),
+            force,
+            |_| -> Result<HostRun, SceneError> { panic!("ran a test that was too short") },
+        );
+        let Err(SceneError::Invalid(e)) = run else {
+            panic!("not refused")
+        };
+        assert_eq!(e.key, "duration_s");
+        // The key refuses what the excitation's parser refuses, by name.
+        let e = PeriodicRandom::parse("20:60:1:x:4").expect_err("not a number");
+        assert_eq!(e.key, "period_s");
+        assert_eq!(
+            force.excitation().expect("a force"),
+            Excitation::parse("random:20:60:1:1:4").expect("a key")
+        );
+    }
+
+    #[test]
+    fn a_random_outcome_writes_its_band_only() {
+        let force = PeriodicRandom::parse("30:50:1:0.5:2").expect("a key");
+        let test = dashpot_test(2.0);
+        let o = RandomFrfOutcome::run(test, force, |t| {
+            crate::experiment::host_test::run_host_test(
+                &Scene::thesis(),
+                &BedSource::Settle,
+                t,
+                &mut |_| {},
+            )
+        })
+        .expect("runs");
+        let freqs: Vec<f64> = o
+            .csv()
+            .lines()
+            .skip(1)
+            .map(|l| {
+                l.split(',')
+                    .next()
+                    .and_then(|f| f.parse().ok())
+                    .expect("freq")
+            })
+            .collect();
+        // Lines every 2 Hz (a 0.5 s period) from 30 to 50 Hz: eleven.
+        assert_eq!(freqs.len(), 11, "{freqs:?}");
+        assert_eq!((freqs[0], freqs[10]), (30.0, 50.0));
+        let (f, c) = o.lowest_coherence();
+        assert!((30.0..=50.0).contains(&f) && c > 0.99, "{f} {c}");
+    }
+}
