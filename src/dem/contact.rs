@@ -441,7 +441,7 @@ pub fn evaluate_contact(
 /// [`evaluate_contact`] for a law whose damping is present (`DAMPED`) and whose
 /// tangential sub-model is Mindlin–Coulomb (`FRICTION`), as the caller knows;
 /// the sub-models a law lacks are not computed.
-#[inline]
+#[inline(always)]
 pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
     law: &ContactLaw,
     geometry: &ContactGeometry,

@@ -154,6 +154,38 @@ impl Kick {
         built_at: Option<&[DVec3]>,
         carry: f64,
     ) -> KickSums {
+        // The pass and the spin chosen once for the block's loop, not per
+        // particle inside it.
+        match (self.pass, self.rotation) {
+            (Pass::KickDrift, true) => {
+                self.block_of::<CLUMPS, true, true>(l, x, v, w, clump, built_at, carry)
+            }
+            (Pass::KickDrift, false) => {
+                self.block_of::<CLUMPS, true, false>(l, x, v, w, clump, built_at, carry)
+            }
+            (Pass::Kick, true) => {
+                self.block_of::<CLUMPS, false, true>(l, x, v, w, clump, built_at, carry)
+            }
+            (Pass::Kick, false) => {
+                self.block_of::<CLUMPS, false, false>(l, x, v, w, clump, built_at, carry)
+            }
+        }
+    }
+
+    /// [`Self::block`] for the first pass (`DRIFT`) or the second, with
+    /// the spin (`SPIN`) or without.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn block_of<const CLUMPS: bool, const DRIFT: bool, const SPIN: bool>(
+        &self,
+        l: &Loads,
+        x: &mut [DVec3],
+        v: &mut [DVec3],
+        w: &mut [DVec3],
+        clump: &[u32],
+        built_at: Option<&[DVec3]>,
+        carry: f64,
+    ) -> KickSums {
         let half = 0.5 * self.dt;
         let g = self.gravity;
         let mut work = carry;
@@ -162,31 +194,28 @@ impl Kick {
                 continue;
             }
             let contact = l.force[k] - g * l.mass[k];
-            match self.pass {
-                Pass::KickDrift => {
-                    v[k] += l.force[k] * (l.inv_mass[k] * half);
-                    x[k] += v[k] * self.dt;
-                    if self.rotation {
-                        w[k] += l.torque[k] * (l.inv_inertia[k] * half);
-                        work += contact.dot(v[k]) + l.torque[k].dot(w[k]);
-                    } else {
-                        work += contact.dot(v[k]);
-                    }
+            if DRIFT {
+                v[k] += l.force[k] * (l.inv_mass[k] * half);
+                x[k] += v[k] * self.dt;
+                if SPIN {
+                    w[k] += l.torque[k] * (l.inv_inertia[k] * half);
+                    work += contact.dot(v[k]) + l.torque[k].dot(w[k]);
+                } else {
+                    work += contact.dot(v[k]);
                 }
-                Pass::Kick => {
-                    if self.rotation {
-                        work += contact.dot(v[k]) + l.torque[k].dot(w[k]);
-                        w[k] += l.torque[k] * (l.inv_inertia[k] * half);
-                    } else {
-                        work += contact.dot(v[k]);
-                    }
-                    v[k] += l.force[k] * (l.inv_mass[k] * half);
+            } else {
+                if SPIN {
+                    work += contact.dot(v[k]) + l.torque[k].dot(w[k]);
+                    w[k] += l.torque[k] * (l.inv_inertia[k] * half);
+                } else {
+                    work += contact.dot(v[k]);
                 }
+                v[k] += l.force[k] * (l.inv_mass[k] * half);
             }
         }
-        let (nonfinite, moved_far) = match (self.pass, built_at) {
-            (Pass::Kick, _) => (None, false),
-            (Pass::KickDrift, built_at) => (
+        let (nonfinite, moved_far) = match (DRIFT, built_at) {
+            (false, _) => (None, false),
+            (true, built_at) => (
                 x.iter().position(|p| !p.is_finite()),
                 built_at.is_some_and(|r| {
                     x.iter()
