@@ -441,6 +441,9 @@ struct BenchReport {
     cores: usize,
     /// Load average over the last minute when the bench ended (Linux).
     load_average_1min: Option<f64>,
+    /// Which loops the step ran: "x86-64-v3" or "baseline"
+    /// (`vlab::dem::isa`; `VLAB_ISA=baseline` asks for the baseline).
+    step_loops: &'static str,
     /// vlab against LAMMPS per core (`--lammps`); none without.
     lammps: Option<lammps::LammpsComparison>,
 }
@@ -521,6 +524,7 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
         peak_memory_mib: peak_memory_mib(),
         cores,
         load_average_1min: load_average(),
+        step_loops: step_loops(),
         lammps,
     };
     if let Some(path) = &a.out {
@@ -586,7 +590,7 @@ fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
 
 fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
     println!(
-        "thesis scene at dt {:.1e} s, lattice and poured beds; {} cores{}; each row: median and fastest of {} runs",
+        "thesis scene at dt {:.1e} s, lattice and poured beds; {} cores{}, the step's {} loops; each row: median and fastest of {} runs",
         scene
             .drive(40.0, 20.0)
             .map_or(f64::NAN, |d| scene.drive_dt_s(&d)),
@@ -594,6 +598,7 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
         report
             .load_average_1min
             .map_or(String::new(), |l| format!(", load average {l:.2}")),
+        report.step_loops,
         repeats
     );
     for p in &report.poured_beds {
@@ -1112,6 +1117,15 @@ fn peak_memory_mib() -> Option<f64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib / 1024.0)
+}
+
+/// Which loops the step runs on this processor ([`vlab::dem::isa`]).
+fn step_loops() -> &'static str {
+    if vlab::dem::isa::wide() {
+        "x86-64-v3"
+    } else {
+        "baseline"
+    }
 }
 
 /// The load average over the last minute, from /proc on Linux.

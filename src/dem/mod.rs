@@ -32,6 +32,7 @@ pub use ledger::{Dissipation, EnergyState, Ledger, LedgerBalance, LedgerSnapshot
 pub use material::Material;
 pub use particles::Particles;
 pub use restitution::RestitutionMode;
+pub use step::isa;
 pub use step::team::Team;
 pub use step::thread_choice::TRIAL_STEPS;
 pub use walls::{WallShape, Walls};

@@ -79,7 +79,7 @@ pub struct PairRun<'a> {
 /// pair order, each force added to the block's particles as it comes, a
 /// pair into a later block leaving its second particle's share in its slot.
 /// A contact that stops the run ends the block.
-#[inline]
+#[inline(always)]
 pub fn pair_rows<const D: bool, const F: bool>(
     law: &ContactLaw,
     bodies: &Bodies,

@@ -30,6 +30,7 @@ use super::checks::{Limits, Refusal, Refused};
 use super::contacts::{
     Bodies, ContactAt, ContactResult, WallGeometry, bodies, law_kind, wall_contact,
 };
+use super::isa;
 use super::team::{Team, for_each_block};
 use crate::dem::contact::{ContactLaw, ContactState};
 use crate::dem::neighbours::{NeighbourList, StepView};
@@ -216,33 +217,38 @@ impl ForceStage<'_> {
         }
         let (wall_kind, pair_kind) = (law_kind(&pw_law), law_kind(&pp_law));
         let block = |job: BlockJob<'_>| {
-            by_law_kind!(
-                wall_kind,
-                wall_block(
-                    &pw_law,
-                    &geometry,
-                    &bodies,
-                    g,
-                    job.start,
-                    job.force,
-                    job.torque,
-                    (job.wall_states, job.wall_gaps),
-                    (limits, job.wall_books),
-                    dt,
-                )
-            );
-            by_law_kind!(
-                pair_kind,
-                pair_rows(
-                    &pp_law,
-                    &bodies,
-                    job.start,
-                    job.run,
-                    (job.force, job.torque),
-                    (&limits, job.pair_books),
-                    dt,
-                )
-            );
+            isa::run(
+                #[inline(always)]
+                || {
+                    by_law_kind!(
+                        wall_kind,
+                        wall_block(
+                            &pw_law,
+                            &geometry,
+                            &bodies,
+                            g,
+                            job.start,
+                            job.force,
+                            job.torque,
+                            (job.wall_states, job.wall_gaps),
+                            (limits, job.wall_books),
+                            dt,
+                        )
+                    );
+                    by_law_kind!(
+                        pair_kind,
+                        pair_rows(
+                            &pp_law,
+                            &bodies,
+                            job.start,
+                            job.run,
+                            (job.force, job.torque),
+                            (&limits, job.pair_books),
+                            dt,
+                        )
+                    );
+                },
+            )
         };
         for_each_block(team.as_deref_mut(), jobs, block);
         // The shares of the pairs from earlier blocks.
@@ -268,7 +274,7 @@ impl ForceStage<'_> {
 
 /// The wall contacts of one block: [`wall_loop`] for walls that move
 /// together or apart.
-#[inline]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn wall_block<const D: bool, const F: bool>(
     law: &ContactLaw,
@@ -293,7 +299,7 @@ fn wall_block<const D: bool, const F: bool>(
 /// their forces and torques are set, the wall states advanced, and the
 /// touching contacts booked in `books`, in (particle, wall) order; a
 /// contact that stops the run (an escaped particle, say) ends the block.
-#[inline]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn wall_loop<const D: bool, const F: bool, const OWN: bool>(
     law: &ContactLaw,
@@ -309,6 +315,10 @@ fn wall_loop<const D: bool, const F: bool, const OWN: bool>(
 ) {
     books.clear();
     let n_walls = walls.shapes.len();
+    // Read once: copied out of `walls` for every wall of every particle,
+    // the offset went through the stack in pieces that the next load
+    // could not take whole (a stall of the wider loops of [`super::isa`]).
+    let (common_offset, common_v_wall) = (walls.offset, walls.v_wall);
     for (m, (f, t)) in force.iter_mut().zip(torque.iter_mut()).enumerate() {
         let i = start + m;
         *f = g * bodies.mass[i];
@@ -323,7 +333,7 @@ fn wall_loop<const D: bool, const F: bool, const OWN: bool>(
             let (offset, v_wall) = if OWN {
                 (walls.walls.offset_of(w), walls.walls.velocity_of(w))
             } else {
-                (walls.offset, walls.v_wall)
+                (common_offset, common_v_wall)
             };
             let dist = shape.distance_m(x, offset);
             if r - dist <= 0.0 && *gap <= 0.0 {

@@ -26,6 +26,7 @@
 
 use super::block_size::PARTICLE_BLOCK;
 use super::blocks::CrossShares;
+use super::isa;
 use super::team::{Team, for_each_block};
 use crate::dem::clumps::NOT_IN_CLUMP;
 use crate::dem::neighbours::NeighbourList;
@@ -142,7 +143,7 @@ impl Kick {
     /// order, and on the first pass the first particle of the block whose
     /// position is not finite and whether one drifted far enough to need a
     /// new pair list.
-    #[inline]
+    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn block<const CLUMPS: bool>(
         &self,
@@ -174,7 +175,7 @@ impl Kick {
 
     /// [`Self::block`] for the first pass (`DRIFT`) or the second, with
     /// the spin (`SPIN`) or without.
-    #[inline]
+    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn block_of<const CLUMPS: bool, const DRIFT: bool, const SPIN: bool>(
         &self,
@@ -259,29 +260,34 @@ fn half_kick(
         ),
     );
     let block = |((c, out), (((x, v), w), (force, torque))): Block<'_>| {
-        let s = c * PARTICLE_BLOCK;
-        let e = s + x.len();
-        if let Some(shares) = &shares {
-            shares.add_to(s, force, torque);
-        }
-        let loads = Loads {
-            force,
-            torque,
-            mass: &mass[s..e],
-            inv_mass: &inv_mass[s..e],
-            inv_inertia: &inv_inertia[s..e],
-        };
-        let built_at = reference.map(|r| &r[s..e]);
-        let carry = if c == 0 { carry } else { 0.0 };
-        let sums = if has_clumps {
-            kick.block::<true>(&loads, x, v, w, &clump[s..e], built_at, carry)
-        } else {
-            kick.block::<false>(&loads, x, v, w, &[], built_at, carry)
-        };
-        *out = KickSums {
-            nonfinite: sums.nonfinite.map(|k| s + k),
-            ..sums
-        };
+        isa::run(
+            #[inline(always)]
+            || {
+                let s = c * PARTICLE_BLOCK;
+                let e = s + x.len();
+                if let Some(shares) = &shares {
+                    shares.add_to(s, force, torque);
+                }
+                let loads = Loads {
+                    force,
+                    torque,
+                    mass: &mass[s..e],
+                    inv_mass: &inv_mass[s..e],
+                    inv_inertia: &inv_inertia[s..e],
+                };
+                let built_at = reference.map(|r| &r[s..e]);
+                let carry = if c == 0 { carry } else { 0.0 };
+                let sums = if has_clumps {
+                    kick.block::<true>(&loads, x, v, w, &clump[s..e], built_at, carry)
+                } else {
+                    kick.block::<false>(&loads, x, v, w, &[], built_at, carry)
+                };
+                *out = KickSums {
+                    nonfinite: sums.nonfinite.map(|k| s + k),
+                    ..sums
+                };
+            },
+        )
     };
     sums.clear();
     sums.resize(p.len().div_ceil(PARTICLE_BLOCK), KickSums::default());

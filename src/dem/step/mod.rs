@@ -40,6 +40,7 @@ pub mod contacts;
 pub mod drive;
 pub mod forces;
 pub mod integrate;
+pub mod isa;
 pub mod neighbour_update;
 pub mod team;
 pub mod thread_choice;
