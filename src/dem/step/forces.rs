@@ -166,55 +166,43 @@ impl ForceStage<'_> {
         } = neighbours.step_view();
         // The blocks' shares of every per-particle and per-pair array.
         let n_walls = geometry.shapes.len();
-        let mut jobs = Vec::with_capacity(n_blocks);
+        // Cut as the blocks are taken, so that a step on one thread
+        // allocates nothing for them.
         let (mut force, mut torque) = (&mut p.force[..], &mut p.torque[..]);
         let (mut w_states, mut w_gaps) = (wall_states, wall_gaps);
         let (mut pairs, mut gaps, mut states) = (pairs, gaps, states);
         let CrossSlotsMut { acts, force: slots } = scratch.cross.parts_mut();
         let (mut acts, mut slots) = (acts, slots);
         let books_of_blocks = scratch.wall_books.iter_mut().zip(&mut scratch.pair_books);
-        for (b, (wall_books, pair_books)) in books_of_blocks.take(n_blocks).enumerate() {
-            let start = b * PARTICLE_BLOCK;
-            let len = force.len().min(PARTICLE_BLOCK);
-            let rows = adjacency.rows(start, start + len);
-            let n_rows = rows.len();
-            let (f, rest) = force.split_at_mut(len);
-            force = rest;
-            let (t, rest) = torque.split_at_mut(len);
-            torque = rest;
-            let (ws, rest) = w_states.split_at_mut(len * n_walls);
-            w_states = rest;
-            let (wg, rest) = w_gaps.split_at_mut(len * n_walls);
-            w_gaps = rest;
-            let (pr, rest) = pairs.split_at(n_rows);
-            pairs = rest;
-            let (gp, rest) = gaps.split_at_mut(n_rows);
-            gaps = rest;
-            let (st, rest) = states.split_at_mut(n_rows);
-            states = rest;
-            let (ac, rest) = acts.split_at_mut(n_rows);
-            acts = rest;
-            let (sl, rest) = slots.split_at_mut(n_rows);
-            slots = rest;
-            jobs.push(BlockJob {
-                start,
-                force: f,
-                torque: t,
-                wall_states: ws,
-                wall_gaps: wg,
-                run: PairRun {
-                    pairs: pr,
-                    gaps: gp,
-                    states: st,
-                    slots: CrossSlotsMut {
-                        acts: ac,
-                        force: sl,
-                    },
-                },
-                wall_books,
-                pair_books,
-            });
-        }
+        let jobs =
+            books_of_blocks
+                .take(n_blocks)
+                .enumerate()
+                .map(move |(b, (wall_books, pair_books))| {
+                    let start = b * PARTICLE_BLOCK;
+                    let len = force.len().min(PARTICLE_BLOCK);
+                    let n_rows = adjacency.rows(start, start + len).len();
+                    let (pr, rest) = pairs.split_at(n_rows);
+                    pairs = rest;
+                    BlockJob {
+                        start,
+                        force: split_front(&mut force, len),
+                        torque: split_front(&mut torque, len),
+                        wall_states: split_front(&mut w_states, len * n_walls),
+                        wall_gaps: split_front(&mut w_gaps, len * n_walls),
+                        run: PairRun {
+                            pairs: pr,
+                            gaps: split_front(&mut gaps, n_rows),
+                            states: split_front(&mut states, n_rows),
+                            slots: CrossSlotsMut {
+                                acts: split_front(&mut acts, n_rows),
+                                force: split_front(&mut slots, n_rows),
+                            },
+                        },
+                        wall_books,
+                        pair_books,
+                    }
+                });
         let (wall_kind, pair_kind) = (law_kind(&pw_law), law_kind(&pp_law));
         let block = |job: BlockJob<'_>| {
             isa::run(
@@ -270,6 +258,13 @@ impl ForceStage<'_> {
         books.book(Kind::Wall, &scratch.wall_books[..n_blocks], dt)?;
         books.book(Kind::Pair, &scratch.pair_books[..n_blocks], dt)
     }
+}
+
+/// The first `n` items of `rest`, which keeps the others.
+fn split_front<'a, T>(rest: &mut &'a mut [T], n: usize) -> &'a mut [T] {
+    let (front, back) = std::mem::take(rest).split_at_mut(n);
+    *rest = back;
+    front
 }
 
 /// The wall contacts of one block: [`wall_loop`] for walls that move
