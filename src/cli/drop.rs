@@ -15,18 +15,15 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
-use rayon::prelude::*;
 
-use vlab::atomic_write::{OutputDir, write_atomic, write_bytes_atomic};
+use vlab::atomic_write::OutputDir;
 use vlab::experiment::drop::{
-    DROP_FRICTION, DROP_GRAVITY_MPS2, DropEstimate, DropNumerics, DropOutcome, DropParticle,
-    DropSetup, DropSummary, millimetres, run_drop, summarise_drops,
+    DROP_FRICTION, DROP_GRAVITY_MPS2, DropNumerics, DropParticle, DropSetup, DropSummary,
+    millimetres,
 };
+use vlab::experiment::drop_series::DropSeries;
 use vlab::rig::{DROP_RIG, DropRigSpec, RigFile};
-use vlab::scene::validity::yield_warning;
-use vlab::signals::{
-    ImpactParams, Series, SeriesStyle, plot_xy_svg_spanning, write_csv, write_wav,
-};
+use vlab::signals::ImpactParams;
 use vlab::warning::RunWarning;
 
 use super::args;
@@ -184,187 +181,20 @@ pub fn run(a: DropArgs) -> Result<()> {
         holdoff_s: a.holdoff_s,
         ..ImpactParams::default()
     };
-    let result = simulate(&setups, &params);
-    let runs = made.keep_if_ok(result)?;
-
-    let yield_mps = first.yield_velocity_mps();
-    for (s, (out, _)) in setups.iter().zip(&runs) {
-        let fastest = out
-            .impacts
-            .iter()
-            .map(|d| d.arrival_speed_mps)
-            .fold(0.0, f64::max);
-        if let Some(w) = yield_mps.and_then(|vy| yield_warning(&s.pair_label(), fastest, vy)) {
-            warnings.push(format!("height {} m: {w}", s.height_m).into());
-        }
-        if out.rig_report.clipped > 0 {
-            warnings.push(
-                format!(
-                    "height {} m: {} samples clipped at the ADC's full scale ({:.1} N): the record is distorted",
-                    s.height_m, out.rig_report.clipped, out.rig_report.full_scale_n
-                )
-                .into(),
-            );
-        }
-    }
-    for (s, (_, est)) in setups.iter().zip(&runs) {
-        let grown = est.result.cor.growing_gaps();
-        if !grown.is_empty() {
-            warnings.push(RunWarning::from(format!(
-                "height {} m: triple(s) {} have a second gap longer than the first (COR > 1): an \
-                 impact was missed or ringing taken for one; that estimate is not to be trusted \
-                 (try a lower --threshold-n)",
-                s.height_m,
-                grown
-                    .iter()
-                    .map(|k| (k + 1).to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )));
-        }
-    }
-    let summary = summarise_drops(
-        &setups,
-        &runs,
-        a.particle.preset().material_name(),
-        warnings,
-    )?;
-    write_outputs(&out_dir, &setups, &runs, summary, a.json)
-}
-
-fn simulate(
-    setups: &[DropSetup],
-    params: &ImpactParams,
-) -> Result<Vec<(DropOutcome, DropEstimate)>> {
-    setups
-        .par_iter()
-        .map(|s| {
-            let out =
-                run_drop(s).with_context(|| format!("dropping from {} m", s.height_m))?;
-            let est = out
-                .estimate(params, s.gravity_mps2)
-                .with_context(|| {
-                    format!(
-                        "height {} m: estimating the restitution from the force record ({} DEM contacts)",
-                        s.height_m,
-                        out.impacts.len()
-                    )
-                })?;
-            Ok((out, est))
-        })
-        .collect()
-}
-
-fn write_outputs(
-    dir: &Path,
-    setups: &[DropSetup],
-    runs: &[(DropOutcome, DropEstimate)],
-    summary: DropSummary,
-    json: bool,
-) -> Result<()> {
-    for (r, (out, _)) in summary.runs.iter().zip(runs) {
-        write_csv(&dir.join(&r.files[0]), &out.trace)?;
-        write_wav(&dir.join(&r.files[1]), &out.trace)?;
-    }
-    let csv = dir.join("results.csv");
-    write_atomic(&csv, |w| {
-        use std::io::Write;
-        writeln!(
-            w,
-            "height [m],triple [],impact speed [m/s],cor [],realised model cor [],height cor mean [],height cor std []"
-        )?;
-        for r in &summary.runs {
-            for (k, (c, v)) in r.cor_per_triple.iter().zip(&r.impact_speeds_mps).enumerate() {
-                let realised = r.realised_model_cor_per_triple[k]
-                    .map(|x| x.to_string())
-                    .unwrap_or_default();
-                writeln!(
-                    w,
-                    "{},{},{},{},{},{},{}",
-                    r.height_m,
-                    k + 1,
-                    v,
-                    c,
-                    realised,
-                    r.cor_mean,
-                    r.cor_std
-                )?;
-            }
-        }
-        Ok(())
-    })
-    .with_context(|| format!("writing {}", csv.display()))?;
-    write_plot(dir, &summary)?;
-    let text = serde_json::to_string_pretty(&summary)? + "\n";
-    let path = dir.join("drop.json");
-    write_bytes_atomic(&path, text.as_bytes())
-        .with_context(|| format!("writing {}", path.display()))?;
-    for w in &summary.warnings {
+    let material = a.particle.preset().material_name();
+    let series = made.keep_if_ok(DropSeries::run(setups, &params, material, warnings))?;
+    made.keep_if_ok(series.write(&out_dir))
+        .with_context(|| format!("writing into {}", out_dir.display()))?;
+    for w in &series.summary.warnings {
         eprintln!("warning: {w}");
     }
-    if json {
-        print!("{text}");
+    if a.json {
+        print!("{}", series.summary_json());
     } else {
-        print_summary(&summary, setups, dir);
+        print_summary(&series.summary, &series.setups, &out_dir);
     }
     Ok(())
 }
-
-fn write_plot(dir: &Path, s: &DropSummary) -> Result<()> {
-    let mut series: Vec<Series> = s
-        .runs
-        .iter()
-        .map(|r| Series {
-            name: format!("estimate, {} mm drop", millimetres(r.height_m)),
-            points: r
-                .impact_speeds_mps
-                .iter()
-                .copied()
-                .zip(r.cor_per_triple.iter().copied())
-                .collect(),
-            style: SeriesStyle::Points,
-        })
-        .collect();
-    let lo = s
-        .impact_speeds_mps
-        .iter()
-        .copied()
-        .fold(f64::INFINITY, f64::min);
-    let hi = s.impact_speeds_mps.iter().copied().fold(0.0, f64::max);
-    if let Some(r) = s.realised_model_cor {
-        series.push(Series {
-            name: format!("realised by the model, {r:.4}"),
-            points: vec![(lo, r), (hi, r)],
-            style: SeriesStyle::Line,
-        });
-    }
-    series.push(Series {
-        name: format!("configured e = {}", s.configured_cor),
-        points: vec![(lo, s.configured_cor), (hi, s.configured_cor)],
-        style: SeriesStyle::Line,
-    });
-    let title = format!(
-        "{} on {}: COR vs impact velocity (Fig. 7.5)",
-        s.particle, s.rig
-    );
-    for ext in ["svg", "png"] {
-        plot_xy_svg_spanning(
-            &dir.join(format!("cor-vs-speed.{ext}")),
-            &title,
-            "impact velocity of the middle impact (m/s)",
-            "COR = T(k+1,k+2) / T(k,k+1)",
-            &series,
-            COR_AXIS_SPAN,
-        )?;
-    }
-    Ok(())
-}
-
-/// The COR axis spans at least this much, so that the triples' scatter of a
-/// few 1e-4 does not fill the plot like a trend, while the configured and
-/// the realised restitution (1e-3 apart) stay apart by several pixels: at
-/// 0.2 they drew as one line over the points.
-const COR_AXIS_SPAN: f64 = 0.05;
 
 fn print_summary(s: &DropSummary, setups: &[DropSetup], dir: &Path) {
     println!(

@@ -15,6 +15,7 @@ pub mod bed_cache;
 pub mod bed_spread;
 pub mod damper;
 pub mod drop;
+pub mod drop_series;
 pub mod ensemble;
 pub mod ensemble_summary;
 pub mod fill;
