@@ -19,12 +19,14 @@ use pyo3::prelude::*;
 use vlab::atomic_write::OutputDir;
 use vlab::experiment::bed_cache::{BedCache, BedSource};
 use vlab::experiment::damper::Progress;
+use vlab::experiment::drop::DropParticle;
+use vlab::experiment::drop_series::{DropRequest, DropSeries, sampling_warning};
 use vlab::experiment::ensemble::{DEFAULT_BEDS, EnsembleFigure};
 use vlab::experiment::ensemble_summary::EnsembleSummary;
 use vlab::experiment::measurement::CalibrationSource;
 use vlab::experiment::shake_plan::{ShakeOutcome, ShakePlan, ShakeRequest};
-use vlab::rig::{ACCEL_CHANNEL, FORCE_CHANNEL};
-use vlab::scene::{Orientation, Scene, SceneOverrides};
+use vlab::rig::{ACCEL_CHANNEL, DROP_RIG, DropRigSpec, FORCE_CHANNEL, RigFile};
+use vlab::scene::{Orientation, Scene, SceneError, SceneOverrides};
 use vlab::signals::calibration::PhaseCalibration;
 use vlab::signals::impacts::default_force_channel;
 use vlab::signals::{AnalysisOptions, ImpactParams, Trace, analyse_trace, cor_report, read_trace};
@@ -171,11 +173,7 @@ impl Shake {
     /// Writes what `vlab shake` writes into folder `out` (made if missing;
     /// each file written whole under a temporary name, then renamed).
     fn write(&mut self, out: PathBuf) -> PyResult<()> {
-        let made = OutputDir::prepare(&out).map_err(|e| {
-            PyRuntimeError::new_err(format!("cannot create folder {}: {e}", out.display()))
-        })?;
-        made.keep_if_ok(self.outcome.write(&out))
-            .map_err(|e| PyRuntimeError::new_err(e.to_string()))
+        write_into(&out, |dir| self.outcome.write(dir))
     }
 
     fn __repr__(&self) -> String {
@@ -221,6 +219,19 @@ fn scene_of(
     }
     .apply(base)
     .map_err(value_error)
+}
+
+/// Makes folder `out` if missing and runs `write` into it; a failed write
+/// leaves no folder it made.
+fn write_into(
+    out: &std::path::Path,
+    write: impl FnOnce(&std::path::Path) -> Result<(), SceneError>,
+) -> PyResult<()> {
+    let made = OutputDir::prepare(out).map_err(|e| {
+        PyRuntimeError::new_err(format!("cannot create folder {}: {e}", out.display()))
+    })?;
+    made.keep_if_ok(write(out))
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
 fn value_error(e: impl std::fmt::Display) -> PyErr {
@@ -472,12 +483,172 @@ fn cor(
     serde_json::to_string(&report).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 
+/// A finished drop test: its summary (`drop.json`) and each height's
+/// force record.
+#[pyclass(name = "Drop", module = "vlab._vlab")]
+struct Drop {
+    series: DropSeries,
+}
+
+#[pymethods]
+impl Drop {
+    #[getter]
+    fn summary_json(&self) -> String {
+        self.series.summary_json()
+    }
+
+    #[getter]
+    fn heights_m(&self) -> Vec<f64> {
+        self.series.setups.iter().map(|s| s.height_m).collect()
+    }
+
+    #[getter]
+    fn sample_rate_hz(&self) -> f64 {
+        self.series
+            .runs
+            .first()
+            .map_or(f64::NAN, |(out, _)| out.trace.sample_rate_hz)
+    }
+
+    /// The force record of the drop from `height_m` (N).
+    fn force<'py>(&self, py: Python<'py>, height_m: f64) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let k = self
+            .series
+            .setups
+            .iter()
+            .position(|s| s.height_m == height_m)
+            .ok_or_else(|| {
+                PyKeyError::new_err(format!(
+                    "no drop from {height_m} m; the heights are {:?}",
+                    self.heights_m()
+                ))
+            })?;
+        let trace = &self.series.runs[k].0.trace;
+        let c = trace
+            .channel(vlab::rig::DROP_FORCE_CHANNEL)
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        Ok(PyArray1::from_slice(py, &c.samples))
+    }
+
+    /// Writes what `vlab drop` writes into folder `out`, as `Shake.write`.
+    fn write(&self, out: PathBuf) -> PyResult<()> {
+        write_into(&out, |dir| self.series.write(dir))
+    }
+
+    fn __repr__(&self) -> String {
+        let s = &self.series.summary;
+        format!(
+            "<vlab.Drop {} from {} height{}: COR {:.5} +- {:.5} over {} triples>",
+            s.particle,
+            s.runs.len(),
+            if s.runs.len() == 1 { "" } else { "s" },
+            s.cor_mean,
+            s.cor_std,
+            s.cor_per_triple.len()
+        )
+    }
+}
+
+/// The drop test of `vlab drop` (thesis Section 7.3): a preset sphere
+/// dropped on the drop rig's plate from each of `heights_m`, its force
+/// recorded and the lab's estimator turning the impacts' gaps into
+/// restitution, beside what the DEM contact did. Refusals name the
+/// keyword, its unit and its range, before any work.
+#[pyfunction]
+#[pyo3(signature = (
+    heights_m = vec![0.05],
+    *,
+    particle = "acrylic-smooth".to_string(),
+    cor = None,
+    diameter_m = vlab::experiment::drop::DEFAULT_DIAMETER_M,
+    sample_rate_hz = None,
+    rig = None,
+    threshold_n = None,
+    holdoff_s = None,
+    seed = 1,
+))]
+#[allow(clippy::too_many_arguments)]
+fn drop_test(
+    py: Python<'_>,
+    heights_m: Vec<f64>,
+    particle: String,
+    cor: Option<f64>,
+    diameter_m: f64,
+    sample_rate_hz: Option<f64>,
+    rig: Option<PathBuf>,
+    threshold_n: Option<f64>,
+    holdoff_s: Option<f64>,
+    seed: u64,
+) -> PyResult<Drop> {
+    let preset = DropParticle::ALL
+        .into_iter()
+        .find(|p| p.name() == particle)
+        .ok_or_else(|| {
+            let names: Vec<&str> = DropParticle::ALL.iter().map(|p| p.name()).collect();
+            PyValueError::new_err(format!(
+                "particle = {particle:?}: must be one of {}",
+                names.join(", ")
+            ))
+        })?;
+    let rig = match &rig {
+        Some(path) => DropRigSpec::load(path),
+        None => DropRigSpec::builtin(DROP_RIG),
+    }
+    .map_err(value_error)?;
+    let request = DropRequest {
+        particle: preset,
+        restitution: cor,
+        diameter_m,
+        heights_m,
+        rig,
+        sample_rate_hz,
+        seed,
+    };
+    // The setups' keys, as this function's keywords call them.
+    let keyword = |e: SceneError| match e {
+        SceneError::Invalid(p) => {
+            let name = match p.key.as_str() {
+                "restitution" => "cor",
+                "height_m" => "heights_m",
+                "daq.sample_rate_hz" if sample_rate_hz.is_some() => "sample_rate_hz",
+                other => other,
+            };
+            value_error(p.renamed(name))
+        }
+        other => value_error(other),
+    };
+    let setups = request.setups().map_err(keyword)?;
+    let warnings: Vec<_> = sampling_warning(&setups, "sample_rate_hz")
+        .map_err(keyword)?
+        .into_iter()
+        .collect();
+    let params = ImpactParams {
+        threshold_n,
+        holdoff_s,
+        ..ImpactParams::default()
+    };
+    let series = py
+        .detach(|| DropSeries::run(setups, &params, preset.material_name(), warnings))
+        .map_err(|e| {
+            let mut text = e.to_string();
+            let mut source = std::error::Error::source(&e);
+            while let Some(s) = source {
+                text.push_str(&format!(": {s}"));
+                source = s.source();
+            }
+            PyRuntimeError::new_err(text)
+        })?;
+    Ok(Drop { series })
+}
+
 #[pymodule]
 fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cor, m)?)?;
     m.add_function(wrap_pyfunction!(shake, m)?)?;
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(drop_test, m)?)?;
     m.add_class::<Shake>()?;
+    m.add_class::<Drop>()?;
     m.add("DEFAULT_BEDS", DEFAULT_BEDS)?;
     Ok(())
 }

@@ -79,3 +79,26 @@ def cor(
     threshold_n: Optional[float] = None,
     holdoff_s: Optional[float] = None,
 ) -> str: ...
+
+class Drop:
+    @property
+    def summary_json(self) -> str: ...
+    @property
+    def heights_m(self) -> list[float]: ...
+    @property
+    def sample_rate_hz(self) -> float: ...
+    def force(self, height_m: float) -> npt.NDArray[np.float64]: ...
+    def write(self, out: Union[str, PathLike[str]]) -> None: ...
+
+def drop_test(
+    heights_m: list[float] = ...,
+    *,
+    particle: str = "acrylic-smooth",
+    cor: Optional[float] = None,
+    diameter_m: float = 0.005,
+    sample_rate_hz: Optional[float] = None,
+    rig: Union[str, PathLike[str], None] = None,
+    threshold_n: Optional[float] = None,
+    holdoff_s: Optional[float] = None,
+    seed: int = 1,
+) -> Drop: ...

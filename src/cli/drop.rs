@@ -13,15 +13,12 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 
 use vlab::atomic_write::OutputDir;
-use vlab::experiment::drop::{
-    DROP_FRICTION, DROP_GRAVITY_MPS2, DropNumerics, DropParticle, DropSetup, DropSummary,
-    millimetres,
-};
-use vlab::experiment::drop_series::DropSeries;
+use vlab::experiment::drop::{DropParticle, DropSetup, DropSummary};
+use vlab::experiment::drop_series::{DropRequest, DropSeries, sampling_warning};
 use vlab::rig::{DROP_RIG, DropRigSpec, RigFile};
 use vlab::signals::ImpactParams;
 use vlab::warning::RunWarning;
@@ -113,64 +110,31 @@ fn flag_keys(a: &DropArgs) -> args::FlagKeys {
 }
 
 fn setups(a: &DropArgs) -> Result<Vec<DropSetup>> {
-    let preset = a.particle.preset();
-    let mut rig = match &a.rig {
+    let rig = match &a.rig {
         Some(path) => DropRigSpec::load(path)?,
         None => DropRigSpec::builtin(DROP_RIG)?,
     };
-    if let Some(fs) = a.sample_rate_hz {
-        rig.daq.sample_rate_hz = fs;
-    }
-    let fs = rig.daq.sample_rate_hz;
-    if fs.fract() != 0.0 || fs > 1e6 {
-        bail!(
-            "daq.sample_rate_hz = {fs} Hz in the rig file: must be a whole number of hertz, at most \
-             1000000 (the record is also written as WAV)"
-        );
-    }
-    let heights = a.heights.clone().unwrap_or_else(|| vec![a.height_m]);
-    let mut seen = Vec::new();
-    for &h in &heights {
-        if seen.contains(&millimetres(h)) {
-            bail!("--heights lists {h} m twice (to the micrometre); give each height once");
-        }
-        seen.push(millimetres(h));
-    }
-    let flags = flag_keys(a);
-    heights
-        .iter()
-        .map(|&height_m| {
-            let s = DropSetup {
-                particle_name: preset.name().to_string(),
-                material: preset.material(),
-                diameter_m: a.diameter_m,
-                restitution: a.cor.unwrap_or(preset.restitution()),
-                friction: DROP_FRICTION,
-                height_m,
-                rig: rig.clone(),
-                gravity_mps2: DROP_GRAVITY_MPS2,
-                seed: a.seed,
-                numerics: DropNumerics::default(),
-            };
-            s.validate().map_err(|e| flags.name_flags(e.into()))?;
-            Ok(s)
-        })
-        .collect()
+    let request = DropRequest {
+        particle: a.particle.preset(),
+        restitution: a.cor,
+        diameter_m: a.diameter_m,
+        heights_m: a.heights.clone().unwrap_or_else(|| vec![a.height_m]),
+        rig,
+        sample_rate_hz: a.sample_rate_hz,
+        seed: a.seed,
+    };
+    request
+        .setups()
+        .map_err(|e| flag_keys(a).name_flags(e.into()))
 }
 
 /// Runs the command.
 pub fn run(a: DropArgs) -> Result<()> {
     let setups = setups(&a)?;
     let first = &setups[0];
-    let mut warnings: Vec<RunWarning> = Vec::new();
-    // The fastest drop sets the sampling demands.
-    let fastest = setups
-        .iter()
-        .max_by(|x, y| x.height_m.total_cmp(&y.height_m))
-        .unwrap_or(first);
-    if let Some(w) = fastest.sampling_warning_naming(flag_keys(&a).name("daq.sample_rate_hz"))? {
-        warnings.push(w);
-    }
+    let keys = flag_keys(&a);
+    let rate = keys.name("daq.sample_rate_hz");
+    let warnings: Vec<RunWarning> = sampling_warning(&setups, rate)?.into_iter().collect();
     let out_dir = a
         .out
         .clone()

@@ -11,21 +11,116 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use super::drop::{DropEstimate, DropOutcome, DropSetup, DropSummary, run_drop, summarise_drops};
+use super::drop::{
+    DROP_FRICTION, DROP_GRAVITY_MPS2, DropEstimate, DropNumerics, DropOutcome, DropParticle,
+    DropSetup, DropSummary, millimetres, run_drop, summarise_drops,
+};
 use crate::atomic_write::write_bytes_atomic;
+use crate::rig::DropRigSpec;
 use crate::scene::SceneError;
 use crate::scene::validity::yield_warning;
 use crate::signals::{ImpactParams, SignalsError, write_csv, write_wav};
+use crate::validation::InvalidParameter;
 use crate::warning::RunWarning;
 
-/// Why a drop series stopped, naming the height.
+/// A drop series as a user asks for it: a preset sphere (its restitution
+/// unless `restitution` is given), its diameter, the heights, the rig and
+/// its sample rate, the seed.
+#[derive(Debug, Clone)]
+pub struct DropRequest {
+    pub particle: DropParticle,
+    pub restitution: Option<f64>,
+    pub diameter_m: f64,
+    pub heights_m: Vec<f64>,
+    pub rig: DropRigSpec,
+    /// The DAQ's rate instead of the rig's (Hz).
+    pub sample_rate_hz: Option<f64>,
+    pub seed: u64,
+}
+
+impl DropRequest {
+    /// Each height's drop, every value checked before any work: a refusal
+    /// names the setup's key (`diameter_m`, `restitution`, `height_m`,
+    /// `daq.sample_rate_hz`), for each front end to name its own input.
+    pub fn setups(&self) -> Result<Vec<DropSetup>, SceneError> {
+        let mut rig = self.rig.clone();
+        if let Some(fs) = self.sample_rate_hz {
+            rig.daq.sample_rate_hz = fs;
+        }
+        let fs = rig.daq.sample_rate_hz;
+        if fs.fract() != 0.0 || fs > 1e6 {
+            return Err(InvalidParameter::new(
+                "daq.sample_rate_hz",
+                fs,
+                "Hz",
+                "a whole number of hertz, at most 1000000 (the record is also written as WAV)",
+            )
+            .into());
+        }
+        let mut seen = Vec::new();
+        for &h in &self.heights_m {
+            if seen.contains(&millimetres(h)) {
+                return Err(InvalidParameter::new(
+                    "height_m",
+                    h,
+                    "m",
+                    "given once (to the micrometre): it is listed twice",
+                )
+                .into());
+            }
+            seen.push(millimetres(h));
+        }
+        if self.heights_m.is_empty() {
+            return Err(InvalidParameter::new("height_m", "[]", "", "at least one height").into());
+        }
+        let p = self.particle;
+        self.heights_m
+            .iter()
+            .map(|&height_m| {
+                let s = DropSetup {
+                    particle_name: p.name().to_string(),
+                    material: p.material(),
+                    diameter_m: self.diameter_m,
+                    restitution: self.restitution.unwrap_or(p.restitution()),
+                    friction: DROP_FRICTION,
+                    height_m,
+                    rig: rig.clone(),
+                    gravity_mps2: DROP_GRAVITY_MPS2,
+                    seed: self.seed,
+                    numerics: DropNumerics::default(),
+                };
+                s.validate()?;
+                Ok(s)
+            })
+            .collect()
+    }
+}
+
+/// The drop that asks most of the sampling (the highest) and, if its
+/// record cannot resolve the impacts, the warning, naming the sample rate
+/// `rate_name` as the caller's input is called.
+pub fn sampling_warning(
+    setups: &[DropSetup],
+    rate_name: &str,
+) -> Result<Option<RunWarning>, SceneError> {
+    match setups
+        .iter()
+        .max_by(|x, y| x.height_m.total_cmp(&y.height_m))
+    {
+        Some(s) => s.sampling_warning_naming(rate_name),
+        None => Ok(None),
+    }
+}
+
+/// Why a drop series stopped, naming the height (the causes boxed: they
+/// are large, and rare).
 #[derive(Debug, thiserror::Error)]
 pub enum DropSeriesError {
     #[error("dropping from {height_m} m")]
     Drop {
         height_m: f64,
         #[source]
-        source: SceneError,
+        source: Box<SceneError>,
     },
     #[error(
         "height {height_m} m: estimating the restitution from the force record ({contacts} DEM contacts)"
@@ -34,10 +129,16 @@ pub enum DropSeriesError {
         height_m: f64,
         contacts: usize,
         #[source]
-        source: SignalsError,
+        source: Box<SignalsError>,
     },
     #[error(transparent)]
-    Scene(#[from] SceneError),
+    Scene(Box<SceneError>),
+}
+
+impl From<SceneError> for DropSeriesError {
+    fn from(e: SceneError) -> Self {
+        DropSeriesError::Scene(Box::new(e))
+    }
 }
 
 /// A finished drop series: the drops, each height's run and estimate, and
@@ -63,15 +164,15 @@ impl DropSeries {
         let runs = setups
             .par_iter()
             .map(|s| {
-                let out = run_drop(s).map_err(|source| DropSeriesError::Drop {
+                let out = run_drop(s).map_err(|e| DropSeriesError::Drop {
                     height_m: s.height_m,
-                    source,
+                    source: Box::new(e),
                 })?;
-                let est = out.estimate(params, s.gravity_mps2).map_err(|source| {
+                let est = out.estimate(params, s.gravity_mps2).map_err(|e| {
                     DropSeriesError::Estimate {
                         height_m: s.height_m,
                         contacts: out.impacts.len(),
-                        source,
+                        source: Box::new(e),
                     }
                 })?;
                 Ok((out, est))
