@@ -30,6 +30,7 @@ use vlab::scene::{Orientation, Scene, SceneError, SceneOverrides};
 use vlab::signals::calibration::PhaseCalibration;
 use vlab::signals::impacts::default_force_channel;
 use vlab::signals::{AnalysisOptions, ImpactParams, Trace, analyse_trace, cor_report, read_trace};
+use vlab::validation::{Bound as Limit, in_range, positive};
 
 /// A finished shake: the summary, the rig's record and what the DEM knew.
 #[pyclass(name = "Shake", module = "vlab._vlab")]
@@ -618,7 +619,19 @@ fn drop_test(
         other => value_error(other),
     };
     let setups = request.setups().map_err(keyword)?;
-    let warnings: Vec<_> = sampling_warning(&setups, "sample_rate_hz")
+    // The estimator's settings, checked as the command's flags are.
+    if let Some(t) = threshold_n {
+        positive("threshold_n", t, "N").map_err(value_error)?;
+    }
+    if let Some(h) = holdoff_s {
+        in_range("holdoff_s", h, "s", Limit::Closed(0.0), Limit::Unbounded).map_err(value_error)?;
+    }
+    let rate = if sample_rate_hz.is_some() {
+        "sample_rate_hz"
+    } else {
+        "daq.sample_rate_hz"
+    };
+    let warnings: Vec<_> = sampling_warning(&setups, rate)
         .map_err(keyword)?
         .into_iter()
         .collect();
@@ -630,10 +643,15 @@ fn drop_test(
     let series = py
         .detach(|| DropSeries::run(setups, &params, preset.material_name(), warnings))
         .map_err(|e| {
+            // The causes in one line, each once (an invalid value's own
+            // error repeats its text).
             let mut text = e.to_string();
             let mut source = std::error::Error::source(&e);
             while let Some(s) = source {
-                text.push_str(&format!(": {s}"));
+                let cause = s.to_string();
+                if !text.contains(&cause) {
+                    text.push_str(&format!(": {cause}"));
+                }
                 source = s.source();
             }
             PyRuntimeError::new_err(text)

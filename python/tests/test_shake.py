@@ -313,6 +313,8 @@ def test_drop_gives_the_commands_figures_and_files(tmp_path):
         (dict(diameter_m=0), "diameter_m = 0 m"),
         (dict(sample_rate_hz=200000.5), "sample_rate_hz = 200000.5 Hz"),
         (dict(particle="glass"), 'particle = "glass"'),
+        (dict(threshold_n=-1), "threshold_n = -1 N"),
+        (dict(holdoff_s=-0.1), "holdoff_s = -0.1 s"),
     ],
 )
 def test_a_bad_drop_is_refused_with_its_keyword(kwargs, said):

@@ -306,10 +306,13 @@ pub fn pair_contact<const D: bool, const F: bool>(
     Some(out)
 }
 
-/// The gap (m, negative) of a pair apart whose centres, `reach` apart when
-/// they touch, were `sqrt(-code)` apart: `reach - sqrt(-code)`, the very
-/// bits the step would have computed then.
+/// The gap (m, never positive) of a pair apart whose centres, `reach`
+/// apart when they touch, were `sqrt(-code)` apart: `reach - sqrt(-code)`,
+/// the very bits the step would have computed then. Zero for a pair the
+/// list's rebuild found apart by a rounding step that the step's own test
+/// (squared distances) finds touching: it opens now, from no gap.
 #[inline(always)]
 pub fn gap_from_code(reach_m: f64, code: f64) -> f64 {
-    reach_m - (-code).sqrt()
+    let gap = reach_m - (-code).sqrt();
+    if gap > 0.0 { 0.0 } else { gap }
 }

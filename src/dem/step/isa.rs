@@ -67,6 +67,9 @@ fn has_v3() -> bool {
             && std::is_x86_feature_detected!("bmi2")
             && std::is_x86_feature_detected!("lzcnt")
             && std::is_x86_feature_detected!("popcnt")
+            && std::is_x86_feature_detected!("sse3")
+            && std::is_x86_feature_detected!("ssse3")
+            && std::is_x86_feature_detected!("sse4.1")
             && std::is_x86_feature_detected!("sse4.2")
             && std::is_x86_feature_detected!("movbe")
     }
