@@ -1,7 +1,7 @@
 """vlab in Python: the virtual granular-damper laboratory's shake as a function.
 
     >>> import vlab
-    >>> r = vlab.shake(freq_hz=40, gamma=20)          # about 65 s on an idle 2-core machine
+    >>> r = vlab.shake(freq_hz=40, gamma=20)          # about 63 s on an idle 2-core machine
     >>> r.efficiency                                  # (value, one-sigma error)
     >>> acc = r.channel("acceleration")               # numpy array, m/s^2
     >>> r.summary["ensemble"]["beds"]
