@@ -9,6 +9,10 @@ use vlab::dem::World;
 use vlab::dem::isa;
 use vlab::dem::testbed::lattice_bed;
 
+#[path = "support/fingerprint.rs"]
+mod fingerprint;
+use fingerprint::fingerprint;
+
 /// `steps` steps of the lattice bed of `n` spheres, the walls moving so
 /// that they do work, on the wider loops or the baseline's.
 fn run(n: usize, friction: f64, steps: u32, baseline: bool) -> World {
@@ -24,23 +28,6 @@ fn run(n: usize, friction: f64, steps: u32, baseline: bool) -> World {
 fn wide_processor() -> bool {
     isa::set_baseline_only(false);
     isa::wide()
-}
-
-/// Every number the state and the books hold, as bits.
-fn fingerprint(w: &World) -> (Vec<u64>, String) {
-    let p = &w.particles;
-    let bits = [
-        &p.position,
-        &p.velocity,
-        &p.angular_velocity,
-        &p.force,
-        &p.torque,
-    ]
-    .iter()
-    .flat_map(|v| v.iter().flat_map(|x| x.to_array().map(f64::to_bits)))
-    .collect();
-    let books = format!("{:?} {:?} {:?}", w.ledger, w.energy_state(), w.wall_force());
-    (bits, books)
 }
 
 #[test]

@@ -8,6 +8,10 @@
 use vlab::dem::testbed::lattice_bed;
 use vlab::dem::{AUTO_PARALLEL_MIN_PAIRS, World};
 
+#[path = "support/fingerprint.rs"]
+mod fingerprint;
+use fingerprint::fingerprint;
+
 /// `steps` steps of the lattice bed of `n` spheres on `threads` threads, the
 /// walls moving a little so that they do work.
 fn run(threads: usize, n: usize, friction: f64, steps: u32, force_parallel: bool) -> World {
@@ -25,32 +29,6 @@ fn run(threads: usize, n: usize, friction: f64, steps: u32, force_parallel: bool
         }
         w
     })
-}
-
-/// Every number the state and the books hold, as bits.
-fn fingerprint(w: &World) -> (Vec<u64>, String) {
-    let p = &w.particles;
-    let bits = [
-        &p.position,
-        &p.velocity,
-        &p.angular_velocity,
-        &p.force,
-        &p.torque,
-    ]
-    .iter()
-    .flat_map(|v| v.iter().flat_map(|x| x.to_array().map(f64::to_bits)))
-    .collect();
-    let books = format!(
-        "{:?} {:?} {:?} {:?} {:?} {:?} {:?}",
-        w.ledger,
-        w.energy_state(),
-        w.wall_force(),
-        w.impact_speeds,
-        w.planned_steps_per_contact,
-        w.fewest_counted_steps_per_contact,
-        w.fastest_collision
-    );
-    (bits, books)
 }
 
 fn assert_same(a: &World, b: &World) {
