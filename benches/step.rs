@@ -20,8 +20,8 @@ use vlab::scene::Scene;
 use vlab::signals::{PowerOptions, yang_power};
 
 fn main() {
-    // One thread for rayon: the benches time one core (and the DEM sees a
-    // single thread, so it runs its serial path).
+    // One thread for rayon: the benches time one core (a world's step runs
+    // on the caller alone unless given threads).
     rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build_global()

@@ -149,17 +149,14 @@ fn an_elastic_collision_counts_its_hertz_duration_within_one_step() {
             } else {
                 let mut parallel = spheres_head_on(1.0, dt);
                 parallel.numerics.parallel_min_pairs = 0;
+                parallel.set_step_threads(2);
                 vec![
                     ("sphere on sphere", spheres_head_on(1.0, dt)),
                     ("sphere on sphere, parallel", parallel),
                 ]
             };
             for (what, w) in &mut worlds {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(2)
-                    .build()
-                    .expect("pool");
-                let counted = pool.install(|| until_counted(w, 1000));
+                let counted = until_counted(w, 1000);
                 let expected = t_c / dt;
                 assert!(
                     (f64::from(counted) - expected).abs() <= 1.0,

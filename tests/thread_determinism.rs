@@ -15,20 +15,18 @@ use fingerprint::fingerprint;
 /// `steps` steps of the lattice bed of `n` spheres on `threads` threads, the
 /// walls moving a little so that they do work.
 fn run(threads: usize, n: usize, friction: f64, steps: u32, force_parallel: bool) -> World {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("thread pool");
-    pool.install(|| {
-        let mut w = lattice_bed(n, friction, 7).expect("bed");
-        if force_parallel {
-            w.numerics.parallel_min_pairs = 0;
-        }
-        for k in 0..steps {
-            w.step(2e-6 * (f64::from(k) * 0.02).sin()).expect("step");
-        }
-        w
-    })
+    let mut w = lattice_bed(n, friction, 7).expect("bed");
+    w.set_step_threads(threads);
+    if force_parallel {
+        w.numerics.parallel_min_pairs = 0;
+    }
+    for k in 0..steps {
+        w.step(2e-6 * (f64::from(k) * 0.02).sin()).expect("step");
+    }
+    if force_parallel {
+        assert_eq!(w.step_helpers_started(), threads - 1, "the team ran");
+    }
+    w
 }
 
 fn assert_same(a: &World, b: &World) {
@@ -76,11 +74,7 @@ fn the_parallel_path_gives_the_serial_bits_on_a_small_bed() {
 /// renumbering forgot (a mass left behind its sphere), fails it.
 #[test]
 fn a_bed_read_back_in_id_order_drives_to_the_same_bits() {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("thread pool");
-    pool.install(|| {
+    {
         let mut moved = run(1, 3000, 0.52, 300, false);
         assert!(!moved.particles.in_id_order(), "the bed was renumbered");
         let mut read_back = World::new(
@@ -105,5 +99,36 @@ fn a_bed_read_back_in_id_order_drives_to_the_same_bits() {
         assert_eq!(moved.particles.id, read_back.particles.id);
         assert_same(&moved, &read_back);
         assert!(moved.ledger.dissipated.total() > 0.0);
+    }
+}
+
+/// A world steps on the threads it is given, not on those of the pool it
+/// steps in (issue 35): given one, a bed of three blocks forced onto the
+/// parallel path starts no helper inside a pool of four, so that beds a
+/// sweep runs side by side on the pool's threads add none of their own;
+/// given three, it starts two.
+#[test]
+fn a_world_steps_on_the_threads_it_is_given_not_the_pools() {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(4)
+        .build()
+        .expect("thread pool");
+    pool.install(|| {
+        for (threads, helpers) in [(1, 0), (3, 2)] {
+            let mut w = lattice_bed(1300, 0.52, 7).expect("bed");
+            w.numerics.parallel_min_pairs = 0;
+            w.set_step_threads(threads);
+            for _ in 0..20 {
+                w.step(0.0).expect("step");
+            }
+            assert_eq!(w.step_helpers_started(), helpers, "{threads} threads");
+            assert_eq!(w.splits_across_threads(), threads > 1);
+            // A copy steps on as many, with a team of its own.
+            let copy = w.clone();
+            assert_eq!(
+                (copy.step_threads(), copy.step_helpers_started()),
+                (threads, 0)
+            );
+        }
     });
 }

@@ -156,6 +156,14 @@ pub struct BedArgs {
     pub dt_s: Option<f64>,
 }
 
+/// `scene` for a bed run alone: its step may use every thread the command
+/// has (`--threads`). Beds run side by side take shares instead
+/// ([`vlab::experiment::ensemble::thread_shares`]).
+pub fn run_alone(mut scene: Scene) -> Scene {
+    scene.simulation.step_threads = rayon::current_num_threads();
+    scene
+}
+
 impl BedArgs {
     /// The scene (built-in or file) with the command-line overrides applied and
     /// everything validated; a refusal names the flag or the key at fault.

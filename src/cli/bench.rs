@@ -787,11 +787,8 @@ fn thesis_rows(
     progress: &mut ProgressLine,
     rows: &mut Vec<BenchRow>,
 ) -> Result<SettledBed> {
-    let one = single_pool(1)?;
     let clock = Clock::start();
-    let bed = one
-        .install(|| settle_bed(scene, &mut |p| progress.update(p)))
-        .context("settling the thesis bed")?;
+    let bed = settle_bed(scene, &mut |p| progress.update(p)).context("settling the thesis bed")?;
     let n = bed.world.particles.len();
     rows.push(BenchRow::new(
         "thesis: pour and settle (dense bed)",
@@ -804,18 +801,13 @@ fn thesis_rows(
     let mut frictionless = scene.clone();
     frictionless.contact.particle_particle.friction = 0.0;
     frictionless.contact.particle_wall.friction = 0.0;
-    let pools = configs
-        .iter()
-        .map(|&t| single_pool(t))
-        .collect::<Result<Vec<_>>>()?;
     for (case, scene) in [(THESIS_DRIVE, scene), (FRICTIONLESS_DRIVE, &frictionless)] {
         let mut runs = vec![Vec::new(); configs.len()];
         let mut steps = 0;
         let mut split = vec![false; configs.len()];
         for _ in 0..a.repeats {
-            for (k, pool) in pools.iter().enumerate() {
-                let (run, s, sp) = pool
-                    .install(|| drive_once(&bed, scene, a.cycles, progress))
+            for (k, &threads) in configs.iter().enumerate() {
+                let (run, s, sp) = drive_once(&bed, scene, a.cycles, threads, progress)
                     .context("driving the thesis bed")?;
                 runs[k].push(run);
                 steps = s;
@@ -829,16 +821,19 @@ fn thesis_rows(
     Ok(bed)
 }
 
-/// One timed drive of `cycles` at 40 Hz, Γ 20 from the settled bed: the run,
-/// its steps, and whether its steps ran on all threads.
+/// One timed drive of `cycles` at 40 Hz, Γ 20 from the settled bed on
+/// `threads` threads: the run, its steps, and whether its steps ran on all
+/// threads.
 fn drive_once(
     bed: &SettledBed,
     scene: &Scene,
     cycles: u32,
+    threads: usize,
     progress: &mut ProgressLine,
 ) -> Result<(Run, u64, bool)> {
     let drive = scene.drive(40.0, 20.0)?;
     let mut world: World = prepare_drive(bed, scene, scene.drive_dt_s(&drive))?;
+    world.set_step_threads(threads);
     let plan = DrivePlan {
         drive,
         length: DriveLength::Fixed {
@@ -896,12 +891,14 @@ impl Bed {
     /// A new copy of the bed after untimed steps that let its lists and
     /// buffers grow (20) and time the serial step against the parallel one
     /// (a whole trial, [`TRIAL_STEPS`]), so that the timed steps run the
-    /// way vlab chose, as a long run does.
-    fn warm(&self) -> Result<World> {
+    /// way vlab chose, as a long run does; its steps may use `threads`
+    /// threads.
+    fn warm(&self, threads: usize) -> Result<World> {
         let mut world = match self {
             Bed::Lattice(n) => lattice_bed(*n, 0.52, 1).context("building the lattice bed")?,
             Bed::Poured(w) | Bed::Prolates(w) => (**w).clone(),
         };
+        world.set_step_threads(threads);
         world.retime_threads();
         for _ in 0..20 + TRIAL_STEPS {
             world.step(0.0)?;
@@ -930,8 +927,10 @@ fn poured_bed(
     let scene = p.scene()?;
     let threads = configs.last().copied().unwrap_or(1);
     let clock = Clock::start();
-    let bed = single_pool(threads)?
-        .install(|| source.settle(&scene, &mut |x| progress.update(x)))
+    let mut scene = scene;
+    scene.simulation.step_threads = threads;
+    let bed = source
+        .settle(&scene, &mut |x| progress.update(x))
         .with_context(|| format!("settling the poured bed of {} spheres", p.spheres))?;
     let run = clock.stop();
     for w in &bed.warnings {
@@ -965,10 +964,6 @@ fn poured_bed(
 /// that shares nothing, the ceiling of the speed-up of one bed over all
 /// cores on a machine that shares its cores.
 fn bed_rows(bed: &Bed, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow>) -> Result<()> {
-    let pools = configs
-        .iter()
-        .map(|&t| single_pool(t))
-        .collect::<Result<Vec<_>>>()?;
     let copies = match a.no_copies {
         true => 1,
         false => configs.last().copied().unwrap_or(1),
@@ -980,8 +975,8 @@ fn bed_rows(bed: &Bed, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow
     let mut pairs = vec![None; configs.len()];
     let mut host = Vec::new();
     for _ in 0..a.repeats {
-        for (k, pool) in pools.iter().enumerate() {
-            let (run, sp, pp) = pool.install(|| bed_run(bed, a.bed_steps))?;
+        for (k, &threads) in configs.iter().enumerate() {
+            let (run, sp, pp) = bed_run(bed, a.bed_steps, threads)?;
             runs[k].push(run);
             split[k] = sp;
             pairs[k] = Some(pp);
@@ -1020,11 +1015,11 @@ fn bed_rows(bed: &Bed, a: &BenchArgs, configs: &[usize], rows: &mut Vec<BenchRow
     Ok(())
 }
 
-/// One timed run of `steps` steps of a new copy of `bed` on the current
-/// pool: the run, whether its steps ran on all threads, and its pairs per
+/// One timed run of `steps` steps of a new copy of `bed` on `threads`
+/// threads: the run, whether its steps ran on all threads, and its pairs per
 /// particle at the end (listed, touching).
-fn bed_run(bed: &Bed, steps: u32) -> Result<(Run, bool, (f64, f64))> {
-    let mut world = bed.warm()?;
+fn bed_run(bed: &Bed, steps: u32, threads: usize) -> Result<(Run, bool, (f64, f64))> {
+    let mut world = bed.warm(threads)?;
     let clock = Clock::start();
     for _ in 0..steps {
         world.step(0.0)?;
@@ -1038,32 +1033,25 @@ fn bed_run(bed: &Bed, steps: u32) -> Result<(Run, bool, (f64, f64))> {
     Ok((run, world.splits_across_threads(), pairs))
 }
 
-/// `copies` copies of `bed` stepped at once, each on its own 1-thread
-/// pool: the wall time from the common start to the last one's end, and the
+/// `copies` copies of `bed` stepped at once, each on one thread: the wall time from the common start to the last one's end, and the
 /// process' CPU time over it. The beds are built before any thread starts,
 /// so that every thread reaches the start.
 fn independent_copies(bed: &Bed, steps: u32, copies: usize) -> Result<Run> {
     let worlds = (0..copies)
-        .map(|_| bed.warm())
-        .collect::<Result<Vec<_>>>()?;
-    let pools = (0..copies)
-        .map(|_| single_pool(1))
+        .map(|_| bed.warm(1))
         .collect::<Result<Vec<_>>>()?;
     let start = Barrier::new(copies + 1);
     std::thread::scope(|s| {
         let handles: Vec<_> = worlds
             .into_iter()
-            .zip(&pools)
-            .map(|(mut world, pool)| {
+            .map(|mut world| {
                 let start = &start;
-                s.spawn(move || {
+                s.spawn(move || -> Result<()> {
                     start.wait();
-                    pool.install(|| -> Result<()> {
-                        for _ in 0..steps {
-                            world.step(0.0)?;
-                        }
-                        Ok(())
-                    })
+                    for _ in 0..steps {
+                        world.step(0.0)?;
+                    }
+                    Ok(())
                 })
             })
             .collect();
@@ -1075,13 +1063,6 @@ fn independent_copies(bed: &Bed, steps: u32, copies: usize) -> Result<Run> {
         }
         Ok(clock.stop())
     })
-}
-
-fn single_pool(threads: usize) -> Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| anyhow::anyhow!("cannot start {threads} threads: {e}"))
 }
 
 /// CPU seconds (user + system) this process used so far, from /proc on

@@ -64,7 +64,7 @@ fn run_lammps(a: LammpsArgs, quiet: bool) -> Result<()> {
         .flags()
         .set(true, "freq_hz", "--freq")
         .set(true, "gamma", "--gamma");
-    let scene = a.scene.resolve()?;
+    let scene = super::args::run_alone(a.scene.resolve()?);
     let export = LammpsExport::for_scene(&scene, a.freq_hz, a.gamma)
         .map_err(|e| flags.name_flags(e.into()))?;
     let made = OutputDir::prepare(&a.out)

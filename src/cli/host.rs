@@ -142,6 +142,7 @@ fn damper_slug(d: Damper) -> String {
 pub fn run_test(scene: &Scene, test: &HostTest, cache: NoCacheArg, quiet: bool) -> Result<HostRun> {
     let mut progress = ProgressLine::new("host", quiet);
     let beds = cache.source(&mut |n| progress.warn(n));
+    let scene = &super::args::run_alone(scene.clone());
     let run = run_host_test(scene, &beds, test, &mut |p| progress.update(p))
         .context("running the damper on its host");
     if let Ok(r) = &run {

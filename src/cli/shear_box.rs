@@ -199,7 +199,7 @@ fn run_all(
         };
         seeds.into_iter().map(move |seed| (s, seed))
     }) {
-        let mut scene = base.clone();
+        let mut scene = super::args::run_alone(base.clone());
         scene.simulation.seed = seed;
         let scene = &scene;
         let label = format!("shear-box {} seed {seed}", scene.name);

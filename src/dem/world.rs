@@ -31,10 +31,12 @@
 //! all (nothing could change it).
 //!
 //! **Threads.** A bed of one block (the thesis bed) is one serial loop.
-//! A larger bed's blocks can run side by side on all threads, each writing
-//! only its own particles, pairs and books; whether they do is decided by
-//! timing both ways as the world steps ([`thread_choice`]). Both ways give
-//! the same bits; the tests compare them.
+//! A larger bed's blocks can run side by side on the threads the world is
+//! given ([`World::set_step_threads`]; none but the caller's unless it is),
+//! each writing only its own particles, pairs and books; whether they do is
+//! decided by timing both ways as the world steps ([`thread_choice`]). Both
+//! ways give the same bits; the tests compare them. The step's buffers,
+//! threads and timing are its [`StepWorkspace`], not the world's state.
 //!
 //! [`block_size`]: super::step::block_size
 //! [`thread_choice`]: super::step::thread_choice
@@ -60,11 +62,11 @@ use super::particles::Particles;
 use super::step::block_size::spans_blocks;
 use super::step::books::{self, Books};
 use super::step::checks::{self, Diagnosis, Limits};
-use super::step::forces::{ForceScratch, ForceStage};
+use super::step::forces::ForceStage;
 use super::step::integrate::{KickSums, VelocityVerlet};
-use super::step::neighbour_update::{OrderScratch, PerParticle};
-use super::step::team::Team;
+use super::step::neighbour_update::PerParticle;
 use super::step::thread_choice::ThreadChoice;
+use super::step::workspace::StepWorkspace;
 use super::step::{clump_motion, drive, neighbour_update};
 use super::walls::Walls;
 
@@ -143,12 +145,9 @@ pub struct World {
     /// Overlap of particle `i` with wall `w` at the previous step (m), at
     /// `i * n_walls + w`; negative: the gap. Always current.
     wall_gaps: Vec<f64>,
-    /// Buffers of the step, kept from step to step.
-    scratch: StepScratch,
-    /// Whether steps run on one core or on all threads.
-    threads: ThreadChoice,
-    /// Step on the calling thread only (beds driven side by side).
-    one_thread: bool,
+    /// What the step works with: buffers, threads, the serial/parallel
+    /// choice. Not state: a clone gets a new one of the same thread count.
+    workspace: StepWorkspace,
     /// Total force of the walls on the particles at the current step (N).
     wall_force: DVec3,
     /// The same, wall by wall.
@@ -176,20 +175,6 @@ pub struct World {
     pub fastest_collision: Option<CollisionSteps>,
 }
 
-/// Buffers of the step, kept from step to step so that the step allocates
-/// nothing once they have grown.
-#[derive(Debug, Clone, Default)]
-struct StepScratch {
-    /// Per particle block: what its half kick found.
-    kick_sums: Vec<KickSums>,
-    /// The force stage's books and pair slots.
-    forces: ForceScratch,
-    /// The renumbering's keys and order.
-    order: OrderScratch,
-    /// The threads a parallel step runs its blocks on.
-    team: Team,
-}
-
 impl World {
     /// Builds a world and evaluates the initial forces (no history, no ledger).
     pub fn new(
@@ -215,9 +200,7 @@ impl World {
             step_stored_change_j: 0.0,
             wall_states: Vec::new(),
             wall_gaps: Vec::new(),
-            scratch: StepScratch::default(),
-            threads: ThreadChoice::default(),
-            one_thread: false,
+            workspace: StepWorkspace::default(),
             wall_force: DVec3::ZERO,
             wall_force_by_wall: Vec::new(),
             baseline: LedgerSnapshot::default(),
@@ -356,7 +339,7 @@ impl World {
             &mut self.neighbours,
             &mut self.particles,
             per_particle,
-            &mut self.scratch.order,
+            &mut self.workspace.order,
             rebuild,
         );
     }
@@ -514,7 +497,7 @@ impl World {
     /// threads, several blocks, and the parallel step timed faster (or
     /// forced). The results are the same bits either way.
     pub fn splits_across_threads(&self) -> bool {
-        self.can_split() && (self.forced_split() || self.threads.parallel())
+        self.can_split() && (self.forced_split() || self.workspace.choice.parallel())
     }
 
     /// Times the serial and the parallel step anew from the next step on
@@ -524,20 +507,34 @@ impl World {
     ///
     /// [`TRIAL_STEPS`]: super::TRIAL_STEPS
     pub fn retime_threads(&mut self) {
-        self.threads = ThreadChoice::default();
+        self.workspace.choice = ThreadChoice::default();
     }
 
-    /// Steps on the calling thread only (`true`), or as the world chooses:
-    /// beds driven side by side take one thread each, so that N beds on P
-    /// threads keep P busy, not P × P. The same bits either way.
-    pub fn step_on_one_thread(&mut self, yes: bool) {
-        self.one_thread = yes;
+    /// Lets a step use `threads` threads, the caller's included (a new
+    /// world's steps run on the caller alone). Whoever runs worlds side by
+    /// side gives each its share of the cores, so that N beds on P cores
+    /// keep P threads busy, not N × P. The same bits whatever the count.
+    pub fn set_step_threads(&mut self, threads: usize) {
+        if self.workspace.threads() != threads.max(1) {
+            self.workspace = StepWorkspace::new(threads);
+        }
     }
 
-    /// Whether a step can split across threads: several threads in the
-    /// pool and several blocks of particles.
+    /// Threads a step may use, the caller's included.
+    pub fn step_threads(&self) -> usize {
+        self.workspace.threads()
+    }
+
+    /// Helper threads the step's team has started (none until a step of
+    /// several blocks first splits).
+    pub fn step_helpers_started(&self) -> usize {
+        self.workspace.team.helpers_started()
+    }
+
+    /// Whether a step can split across threads: several threads given and
+    /// several blocks of particles.
     fn can_split(&self) -> bool {
-        !self.one_thread && rayon::current_num_threads() > 1 && spans_blocks(self.particles.len())
+        self.workspace.threads() > 1 && spans_blocks(self.particles.len())
     }
 
     /// Whether the split is forced ([`Numerics::parallel_min_pairs`] below
@@ -556,10 +553,13 @@ impl World {
     pub fn step(&mut self, wall_displacement_m: f64) -> Result<(), DemError> {
         let dt = self.numerics.dt_s;
         let started = Stopwatch::start();
-        let parallel = self.threads.pick(self.can_split(), self.forced_split());
+        let parallel = self
+            .workspace
+            .choice
+            .pick(self.can_split(), self.forced_split());
         let verlet = self.integrator();
         // 1. Integration: half kick and drift; a position that is not finite stops.
-        let (sums, team) = (&mut self.scratch.kick_sums, &mut self.scratch.team);
+        let (sums, team) = (&mut self.workspace.kick_sums, &mut self.workspace.team);
         let team = parallel.then_some(team);
         let mut drift = verlet.kick_drift(&mut self.particles, &self.neighbours, sums, team);
         if !self.particles.clumps.is_empty() {
@@ -596,12 +596,12 @@ impl World {
         self.compute_forces(dt, true, parallel)?;
         // 5. Integration: second half kick, each block first adding the
         //    forces its pairs from earlier blocks left.
-        let shares = self.scratch.forces.cross_shares(
+        let shares = self.workspace.forces.cross_shares(
             &self.neighbours,
             self.particles.len(),
             self.pp_law.has_friction(),
         );
-        let (sums, team) = (&mut self.scratch.kick_sums, &mut self.scratch.team);
+        let (sums, team) = (&mut self.workspace.kick_sums, &mut self.workspace.team);
         let team = parallel.then_some(team);
         let mut kick = verlet.kick(&mut self.particles, shares, sums, drift.work, team);
         if !self.particles.clumps.is_empty() {
@@ -617,7 +617,7 @@ impl World {
         );
         self.time_s += dt;
         self.steps += 1;
-        self.threads.record(started.elapsed());
+        self.workspace.choice.record(started.elapsed());
         // 7. Every few thousand steps, the energy books must still close.
         if self.steps % self.numerics.energy_check_steps == 0 {
             self.check_energy()?;
@@ -664,7 +664,7 @@ impl World {
         self.wall_force_by_wall
             .resize(self.walls.len(), DVec3::ZERO);
         let stage = ForceStage {
-            team: parallel.then_some(&mut self.scratch.team),
+            team: parallel.then_some(&mut self.workspace.team),
             defer_cross,
             limits: Limits {
                 min_steps_per_collision: self.numerics.min_steps_per_collision,
@@ -679,7 +679,7 @@ impl World {
             neighbours: &mut self.neighbours,
             wall_states: &mut self.wall_states,
             wall_gaps: &mut self.wall_gaps,
-            scratch: &mut self.scratch.forces,
+            scratch: &mut self.workspace.forces,
             books: Books {
                 ledger: &mut self.ledger,
                 stored_change_j: &mut self.step_stored_change_j,

@@ -236,8 +236,18 @@ pub struct EnsembleRun {
     pub others: Vec<ShakeRun>,
 }
 
+/// How `threads` threads are shared by `beds` beds: how many beds step at
+/// once, and how many threads each of their steps may use (a bed driven
+/// alone gets them all; 6 beds on 2 threads step 2 at a time, one thread
+/// each; 2 beds on 8 threads 4 each). Never more than `threads` in all.
+pub fn thread_shares(threads: usize, beds: u32) -> (usize, usize) {
+    let threads = threads.max(1);
+    let at_once = threads.min(beds.max(1) as usize);
+    (at_once, threads / at_once)
+}
+
 /// Drives `beds` beds of `scene` (seeds [`bed_seed`] of its seed) alike
-/// through the rig of `setup`, at most `threads` stepping at once, judged
+/// through the rig of `setup` on `threads` threads in all ([`thread_shares`]), judged
 /// together; the first bed on the calling thread with `observers` and
 /// `progress`, each other bed's rig noise seeded as its bed. The first
 /// bed's summary carries the ensemble.
@@ -252,7 +262,7 @@ pub fn run_ensemble_shake(
 ) -> Result<EnsembleRun, SceneError> {
     check_beds(beds)?;
     let started = crate::clock::Stopwatch::start();
-    let threads = threads.clamp(1, beds as usize);
+    let (threads, step_threads) = thread_shares(threads, beds);
     let mass_kg = scene.particle_mass_kg();
     let judge = EnsembleJudge::new(
         scene.drive_length(),
@@ -263,6 +273,7 @@ pub fn run_ensemble_shake(
     let bed_scene = |k: u32| {
         let mut s = scene.clone();
         s.simulation.seed = bed_seed(scene.simulation.seed, k);
+        s.simulation.step_threads = step_threads;
         s
     };
     let bed_setup = |k: u32| ShakeSetup {
@@ -451,6 +462,23 @@ fn ensemble_warnings(e: &EnsembleSummary) -> Vec<crate::warning::RunWarning> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Beds share the threads without taking more than there are: one bed
+    /// takes them all, more beds than threads one each, fewer a share.
+    #[test]
+    fn beds_share_the_threads_and_never_take_more() {
+        assert_eq!(thread_shares(2, 1), (1, 2));
+        assert_eq!(thread_shares(2, 6), (2, 1));
+        assert_eq!(thread_shares(8, 2), (2, 4));
+        assert_eq!(thread_shares(0, 0), (1, 1));
+        for threads in 1..=16 {
+            for beds in 1..=20 {
+                let (at_once, each) = thread_shares(threads, beds);
+                assert!(at_once * each <= threads, "{threads} threads, {beds} beds");
+                assert!(at_once >= 1 && each >= 1 && at_once <= beds as usize);
+            }
+        }
+    }
 
     #[test]
     fn the_first_bed_is_the_seeds_own_and_ensembles_of_nearby_seeds_share_none() {

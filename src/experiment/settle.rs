@@ -268,6 +268,7 @@ fn pour(
         gravity_vector(Orientation::Vertical, g),
         numerics,
     )?;
+    world.set_step_threads(scene.simulation.step_threads);
     let fall_s = if g > 0.0 {
         (2.0 * column / g).sqrt()
     } else {
@@ -361,7 +362,7 @@ pub fn rebuild_settled_world(
     if let Some(skin) = scene.body_skin_ratio() {
         numerics.skin_ratio = skin;
     }
-    let world = World::new(
+    let mut world = World::new(
         particles,
         Walls::closed_cylinder(
             0.5 * scene.enclosure.inner_diameter_m,
@@ -372,6 +373,7 @@ pub fn rebuild_settled_world(
         gravity_vector(scene.enclosure.orientation, scene.simulation.gravity_mps2),
         numerics,
     )?;
+    world.set_step_threads(scene.simulation.step_threads);
     Ok(world)
 }
 
@@ -683,6 +685,7 @@ pub fn prepare_drive(bed: &SettledBed, scene: &Scene, dt_s: f64) -> Result<World
     world.set_contact_laws(laws.particle_particle, laws.particle_wall)?;
     world.set_dt_s(dt_s);
     world.numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
+    world.set_step_threads(scene.simulation.step_threads);
     world.start_ledger();
     Ok(world)
 }

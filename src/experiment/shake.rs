@@ -528,11 +528,9 @@ pub fn run_shake_on_bed_judged(
 ) -> Result<ShakeRun, SceneError> {
     let started = Stopwatch::start();
     let dt = scene.drive_dt_s(&setup.drive);
+    // The step's threads are the scene's: an ensemble gives each of its
+    // beds its share.
     let mut world = prepare_drive(bed, scene, dt)?;
-    if judged.0.beds() > 1 {
-        // Beds driven side by side each take one thread.
-        world.step_on_one_thread(true);
-    }
     let mut observers = Observers(observers);
     if observers.wants_particle_dissipation() {
         world.track_particle_dissipation(true);

@@ -136,7 +136,7 @@ impl ShakePlan {
     }
 
     /// Drives the planned beds (from `source`: settled now or read from the
-    /// bed cache), at most `threads` stepping at once; the first bed on the
+    /// bed cache), on `threads` threads in all; the first bed on the
     /// calling thread with `observers` and `progress`. The thread count never
     /// changes a number, only how long it takes.
     pub fn run(

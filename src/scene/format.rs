@@ -276,6 +276,16 @@ pub struct SimulationSpec {
         skip_serializing_if = "is_default_parallel_min_pairs"
     )]
     pub parallel_min_pairs: usize,
+    /// Threads a bed's step may use, the caller's included: set by whoever
+    /// runs the scene (`vlab shake` gives a bed driven alone every thread,
+    /// each of beds driven side by side its share), never read from or
+    /// written to a scene file. 1 unless set; the same bits whatever it is.
+    #[serde(skip, default = "one_thread")]
+    pub step_threads: usize,
+}
+
+fn one_thread() -> usize {
+    1
 }
 
 fn default_steps_per_contact() -> f64 {

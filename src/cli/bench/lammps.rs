@@ -35,7 +35,7 @@ use vlab::experiment::settle::SettledBed;
 use vlab::export::lammps_deck::{INPUT_FILE, LammpsExport, MIN_EXPORT_CYCLES, lammps_deck};
 use vlab::scene::{Scene, SceneOverrides};
 
-use super::{BenchRow, Run, Speedup, drive_once, proc_stat_cpu_s, single_pool};
+use super::{BenchRow, Run, Speedup, drive_once, proc_stat_cpu_s};
 use crate::cli::progress::ProgressLine;
 
 /// What `--lammps` needs, for its refusal.
@@ -245,7 +245,6 @@ pub fn lammps_rows(
         );
     }
     let n = bed.world.particles.len();
-    let one = single_pool(1)?;
     let mut vlab_runs = Vec::new();
     let mut lmp_runs = Vec::new();
     let mut loop_runs = Vec::new();
@@ -253,9 +252,8 @@ pub fn lammps_rows(
     let mut vlab_steps = 0;
     let mut version = String::new();
     for _ in 0..repeats {
-        let (run, steps, _) = one
-            .install(|| drive_once(bed, scene, cycles, progress))
-            .context("driving the thesis bed")?;
+        let (run, steps, _) =
+            drive_once(bed, scene, cycles, 1, progress).context("driving the thesis bed")?;
         vlab_runs.push(run);
         vlab_steps = steps;
         let (run, log) = lmp_once(&dir.0)?;

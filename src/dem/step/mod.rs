@@ -44,3 +44,12 @@ pub mod isa;
 pub mod neighbour_update;
 pub mod team;
 pub mod thread_choice;
+pub mod wake;
+pub mod workspace;
+
+/// The primitives [`wake`] is written against: std's here, `loom`'s in the
+/// model test that includes it.
+mod sync {
+    pub use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+    pub use std::sync::{Condvar, Mutex};
+}

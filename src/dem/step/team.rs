@@ -22,15 +22,22 @@
 //! cache still holds (driven 5 000-sphere bed on two threads: 5 % faster
 //! than blocks taken in turn from one counter).
 //!
-//! The helpers are started at the first parallel phase, as many as the
-//! current rayon pool has threads, less the caller, which works too.
+//! A team runs on as many threads as it is given ([`Team::new`]), the
+//! caller's included: whoever runs worlds side by side gives each its share
+//! of the cores, so that N beds on P cores keep P threads busy, not N × P.
+//! The helpers are started at the first parallel phase. How a phase is
+//! handed out and how a helper sleeps and is woken is [`super::wake`].
 
 use std::any::Any;
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
-use std::sync::atomic::{AtomicBool, AtomicPtr, AtomicU64, AtomicUsize, Ordering};
-use std::sync::{Arc, Condvar, Mutex, PoisonError};
+use std::sync::atomic::{AtomicPtr, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+
+use crossbeam_utils::CachePadded;
+
+use super::wake::{Bell, Look};
 
 /// How long a helper goes on looking for work, spinning and then yielding,
 /// before it sleeps until woken.
@@ -44,11 +51,18 @@ const SPINS_BEFORE_YIELD: u32 = 200;
 
 /// A persistent team of helper threads for the blocks of a step.
 ///
-/// Cloning gives a team that has started no threads yet; dropping one stops
-/// and joins its helpers.
-#[derive(Default)]
+/// Dropping one stops and joins its helpers.
 pub struct Team {
+    /// Threads the team runs blocks on, the caller's included.
+    threads: usize,
     crew: Option<Crew>,
+}
+
+impl Default for Team {
+    /// A team of one thread: the caller.
+    fn default() -> Self {
+        Team::new(1)
+    }
 }
 
 /// The helpers of a started team and what they share with the caller.
@@ -57,32 +71,30 @@ struct Crew {
     helpers: Vec<JoinHandle<()>>,
 }
 
-/// What the caller and the helpers share.
+/// What the caller and the helpers share. The words the caller writes
+/// every phase and the helpers read (the bell's epoch, `open`, `inside`)
+/// each have a cache line of their own.
 #[derive(Default)]
 struct Shared {
-    /// Counts the phases handed out (the first is 1); a helper that sees it
-    /// change looks for the phase at `job`.
-    epoch: AtomicU64,
+    /// The epoch of the phases handed out (the first is 1); a helper that
+    /// sees it change looks for the phase at `job`.
+    bell: Bell,
     /// The phase under way, on the caller's stack until the caller has
     /// closed it and `inside` is zero.
     job: AtomicPtr<Job<'static>>,
     /// The epoch of the phase helpers may still join; 0 once the caller has
     /// taken the last block and closed it.
-    open: AtomicU64,
+    open: CachePadded<AtomicU64>,
     /// Helpers between asking to join a phase and leaving it.
-    inside: AtomicUsize,
-    /// Helpers asleep, waiting for `wake`.
-    sleeping: AtomicUsize,
-    quit: AtomicBool,
-    lock: Mutex<()>,
-    wake: Condvar,
+    inside: CachePadded<AtomicUsize>,
 }
 
 /// One phase: `count` blocks, each run by `run(index)` exactly once.
 struct Job<'a> {
     /// Blocks taken from the front (high 32 bits) and from the back (low
-    /// 32 bits); they meet when their sum reaches `count`.
-    ends: AtomicU64,
+    /// 32 bits); they meet when their sum reaches `count`. Every thread
+    /// takes from it, so it has a cache line of its own.
+    ends: CachePadded<AtomicU64>,
     count: usize,
     run: &'a (dyn Fn(usize) + Sync),
     /// What a block that panicked on a helper panicked with.
@@ -129,12 +141,6 @@ impl Job<'_> {
     }
 }
 
-impl Clone for Team {
-    fn clone(&self) -> Self {
-        Team::default()
-    }
-}
-
 impl std::fmt::Debug for Team {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Team")
@@ -144,17 +150,31 @@ impl std::fmt::Debug for Team {
 }
 
 impl Team {
-    /// Threads the team runs blocks on, the caller included (1 until its
-    /// helpers have started).
+    /// A team of `threads` threads, the caller's included (at least 1); its
+    /// helpers start at its first phase of several blocks.
+    pub fn new(threads: usize) -> Self {
+        Team {
+            threads: threads.max(1),
+            crew: None,
+        }
+    }
+
+    /// Threads the team runs blocks on, the caller's included.
     pub fn threads(&self) -> usize {
-        self.crew.as_ref().map_or(1, |c| c.helpers.len() + 1)
+        self.threads
+    }
+
+    /// Helper threads started so far (none before the first phase of
+    /// several blocks, and none for a team of one).
+    pub fn helpers_started(&self) -> usize {
+        self.crew.as_ref().map_or(0, |c| c.helpers.len())
     }
 
     /// Runs `f` on every item, on the caller and the helpers side by side,
-    /// each item once, and returns when all are done. Starts (or restarts)
-    /// the helpers so that the team has as many threads as the current rayon
-    /// pool; where threads cannot be started the items run on the caller. A
-    /// panic in `f` is raised again here once every thread has stopped.
+    /// each item once, and returns when all are done. Starts the helpers
+    /// at the first phase; where threads cannot be started the items run
+    /// on the caller. A panic in `f` is raised again here once every thread
+    /// has stopped.
     pub fn for_each<T: Send>(&mut self, items: impl IntoIterator<Item = T>, f: impl Fn(T) + Sync) {
         let slots: Vec<Mutex<Option<T>>> = items.into_iter().map(|t| Mutex::new(Some(t))).collect();
         let run = |i: usize| {
@@ -166,20 +186,23 @@ impl Team {
                 f(item);
             }
         };
-        match self.crew_for(rayon::current_num_threads()) {
-            Some(crew) if slots.len() > 1 => crew.run(slots.len(), &run),
-            _ => (0..slots.len()).for_each(run),
+        if slots.len() < 2 {
+            return (0..slots.len()).for_each(run);
+        }
+        match self.crew() {
+            Some(crew) => crew.run(slots.len(), &run),
+            None => (0..slots.len()).for_each(run),
         }
     }
 
-    /// The crew of `threads` threads, started if need be.
-    fn crew_for(&mut self, threads: usize) -> Option<&Crew> {
-        if threads < 2 {
+    /// The crew of the team's helpers, started if need be; `None` for a
+    /// team of one, or where threads cannot be started.
+    fn crew(&mut self) -> Option<&Crew> {
+        if self.threads < 2 {
             return None;
         }
-        if self.threads() != threads {
-            self.crew = None;
-            self.crew = Crew::start(threads - 1);
+        if self.crew.is_none() {
+            self.crew = Crew::start(self.threads - 1);
         }
         self.crew.as_ref()
     }
@@ -220,7 +243,7 @@ impl Crew {
     /// Runs the `count` blocks of `run` on the caller and every helper.
     fn run(&self, count: usize, run: &(dyn Fn(usize) + Sync)) {
         let job = Job {
-            ends: AtomicU64::new(0),
+            ends: CachePadded::new(AtomicU64::new(0)),
             count,
             run,
             panic: Mutex::new(None),
@@ -244,13 +267,9 @@ impl Crew {
         // phase is open.
         let finish = Finish(s);
         s.job.store(ptr, Ordering::SeqCst);
-        let epoch = s.epoch.load(Ordering::SeqCst) + 1;
+        let epoch = s.bell.epoch() + 1;
         s.open.store(epoch, Ordering::SeqCst);
-        s.epoch.store(epoch, Ordering::SeqCst);
-        if s.sleeping.load(Ordering::SeqCst) > 0 {
-            drop(s.lock.lock().unwrap_or_else(PoisonError::into_inner));
-            s.wake.notify_all();
-        }
+        s.bell.ring(epoch);
         job.work(false);
         drop(finish);
         let panic = job
@@ -292,10 +311,7 @@ fn wait_until(done: impl Fn() -> bool) {
 
 impl Drop for Crew {
     fn drop(&mut self) {
-        let s = &*self.shared;
-        s.quit.store(true, Ordering::SeqCst);
-        drop(s.lock.lock().unwrap_or_else(PoisonError::into_inner));
-        s.wake.notify_all();
+        self.shared.bell.stop();
         for h in self.helpers.drain(..) {
             // A helper's panics are caught and reported by `run`; nothing
             // is left to report here.
@@ -332,41 +348,28 @@ fn help(s: &Shared, from_back: bool) {
 }
 
 /// Waits for an epoch other than `seen`: spinning, then yielding, then,
-/// after [`PARK_AFTER`], asleep. `None` when the team stops.
+/// after [`PARK_AFTER`], asleep ([`Bell::sleep`]). `None` when the team
+/// stops.
 fn next_epoch(s: &Shared, seen: u64) -> Option<u64> {
     let started = Instant::now();
     let mut spins = 0u32;
     loop {
-        if s.quit.load(Ordering::Acquire) {
-            return None;
-        }
-        let epoch = s.epoch.load(Ordering::Acquire);
-        if epoch != seen {
-            return Some(epoch);
+        match s.bell.look(seen) {
+            Look::Quit => return None,
+            Look::Phase(epoch) => return Some(epoch),
+            Look::Nothing => {}
         }
         if spins < SPINS_BEFORE_YIELD {
             spins += 1;
             std::hint::spin_loop();
-            continue;
-        }
-        if started.elapsed() < PARK_AFTER {
+        } else if started.elapsed() < PARK_AFTER {
             std::thread::yield_now();
-            continue;
+        } else {
+            return match s.bell.sleep(seen) {
+                Look::Phase(epoch) => Some(epoch),
+                _ => None,
+            };
         }
-        // Asleep until the caller hands out a phase (it looks at `sleeping`
-        // after it moves the epoch, we at the epoch after we count ourselves
-        // asleep, so one of us sees the other) or the team stops.
-        let guard = s.lock.lock().unwrap_or_else(PoisonError::into_inner);
-        s.sleeping.fetch_add(1, Ordering::SeqCst);
-        let guard = s
-            .wake
-            .wait_while(guard, |_| {
-                s.epoch.load(Ordering::SeqCst) == seen && !s.quit.load(Ordering::SeqCst)
-            })
-            .unwrap_or_else(PoisonError::into_inner);
-        s.sleeping.fetch_sub(1, Ordering::SeqCst);
-        drop(guard);
-        spins = 0;
     }
 }
 
@@ -374,99 +377,87 @@ fn next_epoch(s: &Shared, seen: u64) -> Option<u64> {
 mod tests {
     use super::*;
 
-    fn in_pool<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("a pool")
-            .install(f)
+    /// Fewer rounds under Miri, which runs a thousand times slower.
+    fn rounds(native: usize, miri: usize) -> usize {
+        if cfg!(miri) { miri } else { native }
     }
 
     /// Every item is run exactly once, on more than one thread when the
-    /// pool has several, and the team is reused from phase to phase.
+    /// team has several, and the team is reused from phase to phase.
     #[test]
     fn every_item_runs_once_across_the_threads() {
-        in_pool(3, || {
-            let mut team = Team::default();
-            for round in 0..200usize {
-                let mut out = vec![0usize; 37];
-                let names = Mutex::new(std::collections::BTreeSet::new());
-                team.for_each(out.iter_mut().enumerate(), |(i, o)| {
-                    *o += i * round + 1;
-                    let name = std::thread::current().name().map(str::to_owned);
-                    names.lock().unwrap().insert(name);
-                    std::thread::sleep(Duration::from_micros(20));
-                });
-                let want: Vec<usize> = (0..37).map(|i| i * round + 1).collect();
-                assert_eq!(out, want, "round {round}");
-                if round == 199 {
-                    assert!(names.lock().unwrap().len() > 1, "one thread did it all");
-                }
-            }
-            assert_eq!(team.threads(), 3);
-        });
+        let mut team = Team::new(3);
+        let n = rounds(200, 6);
+        let names = Mutex::new(std::collections::BTreeSet::new());
+        for round in 0..n {
+            let mut out = vec![0usize; 37];
+            team.for_each(out.iter_mut().enumerate(), |(i, o)| {
+                *o += i * round + 1;
+                let name = std::thread::current().name().map(str::to_owned);
+                names.lock().unwrap().insert(name);
+                std::thread::sleep(Duration::from_micros(20));
+            });
+            let want: Vec<usize> = (0..37).map(|i| i * round + 1).collect();
+            assert_eq!(out, want, "round {round}");
+        }
+        assert!(names.lock().unwrap().len() > 1, "one thread did it all");
+        assert_eq!((team.threads(), team.helpers_started()), (3, 2));
     }
 
     /// A helper that has gone to sleep is woken by the next phase.
     #[test]
     fn a_sleeping_helper_wakes_for_the_next_phase() {
-        in_pool(2, || {
-            let mut team = Team::default();
-            let mut hits = [0u8; 4];
-            team.for_each(hits.iter_mut(), |h| *h += 1);
-            std::thread::sleep(PARK_AFTER * 5);
-            team.for_each(hits.iter_mut(), |h| *h += 1);
-            assert_eq!(hits, [2; 4]);
-        });
+        let mut team = Team::new(2);
+        let mut hits = [0u8; 4];
+        team.for_each(hits.iter_mut(), |h| *h += 1);
+        std::thread::sleep(PARK_AFTER * 5);
+        team.for_each(hits.iter_mut(), |h| *h += 1);
+        assert_eq!(hits, [2; 4]);
     }
 
-    /// One thread in the pool: everything on the caller, no helper started.
+    /// A team of one: everything on the caller, no helper started.
     #[test]
-    fn one_thread_runs_on_the_caller() {
-        in_pool(1, || {
-            let mut team = Team::default();
-            let caller = std::thread::current().id();
-            team.for_each(0..8, |_| assert_eq!(std::thread::current().id(), caller));
-            assert_eq!(team.threads(), 1);
-        });
+    fn a_team_of_one_runs_on_the_caller() {
+        let mut team = Team::default();
+        let caller = std::thread::current().id();
+        team.for_each(0..8, |_| assert_eq!(std::thread::current().id(), caller));
+        assert_eq!((team.threads(), team.helpers_started()), (1, 0));
     }
 
     /// A panic in a block reaches the caller with its own message, from the
     /// caller's blocks and from a helper's, and the team still works.
     #[test]
     fn a_panicking_block_panics_the_caller() {
-        in_pool(2, || {
-            let mut team = Team::default();
-            let text = |p: &Box<dyn Any + Send>| {
-                let s = p.downcast_ref::<&str>().map(|s| s.to_string());
-                s.or_else(|| p.downcast_ref::<String>().cloned())
-            };
-            let message = |r: std::thread::Result<()>| text(&r.expect_err("the phase panicked"));
-            let r = catch_unwind(AssertUnwindSafe(|| {
-                team.for_each(0..16, |i| assert!(i != 0, "block 0"));
-            }));
-            assert_eq!(message(r).as_deref(), Some("block 0"));
-            // A helper's: only a helper panics, so retry until one has
-            // joined a phase (it takes the first block from the back).
-            let on_helper = (0..50).find_map(|_| {
-                catch_unwind(AssertUnwindSafe(|| {
-                    team.for_each(0..16, |_| {
-                        std::thread::sleep(Duration::from_micros(50));
-                        let name = std::thread::current().name().map(str::to_owned);
-                        let helper = name.is_some_and(|n| n.starts_with("vlab-step"));
-                        assert!(!helper, "a helper's block");
-                    });
-                }))
-                .err()
-            });
-            let payload = on_helper.expect("a helper joined one of 50 phases");
-            assert_eq!(text(&payload).as_deref(), Some("a helper's block"));
-            let mut n = AtomicUsize::new(0);
-            team.for_each(0..16, |_| {
-                n.fetch_add(1, Ordering::Relaxed);
-            });
-            assert_eq!(*n.get_mut(), 16);
+        let mut team = Team::new(2);
+        let text = |p: &Box<dyn Any + Send>| {
+            let s = p.downcast_ref::<&str>().map(|s| s.to_string());
+            s.or_else(|| p.downcast_ref::<String>().cloned())
+        };
+        let message = |r: std::thread::Result<()>| text(&r.expect_err("the phase panicked"));
+        let r = catch_unwind(AssertUnwindSafe(|| {
+            team.for_each(0..16, |i| assert!(i != 0, "block 0"));
+        }));
+        assert_eq!(message(r).as_deref(), Some("block 0"));
+        // A helper's: only a helper panics, so retry until one has joined a
+        // phase (it takes the first block from the back).
+        let on_helper = (0..50).find_map(|_| {
+            catch_unwind(AssertUnwindSafe(|| {
+                team.for_each(0..16, |_| {
+                    std::thread::sleep(Duration::from_micros(50));
+                    let name = std::thread::current().name().map(str::to_owned);
+                    let helper = name.is_some_and(|n| n.starts_with("vlab-step"));
+                    assert!(!helper, "a helper's block");
+                });
+            }))
+            .err()
         });
+        let payload = on_helper.expect("a helper joined one of 50 phases");
+        assert_eq!(text(&payload).as_deref(), Some("a helper's block"));
+        let mut n = AtomicUsize::new(0);
+        team.for_each(0..16, |_| {
+            n.fetch_add(1, Ordering::Relaxed);
+        });
+        assert_eq!(*n.get_mut(), 16);
     }
 
     /// Runs `f` on its own thread and fails if it has not finished within
@@ -488,20 +479,23 @@ mod tests {
     /// yielding, asleep): every phase finishes with every item run once. (A
     /// first version waited for every helper to finish every phase; a
     /// helper that read the epoch when it started, not 0, missed its first
-    /// phase and hung here.)
+    /// phase and hung here.) Every interleaving of the sleep and the wake
+    /// is the model test's (`tests/team_wake_model.rs`).
     #[test]
     fn no_phase_is_lost_however_the_gaps_fall() {
-        within(Duration::from_secs(60), || {
-            in_pool(2, || {
-                for _ in 0..300 {
-                    let mut team = Team::default();
+        let (teams, phases) = (rounds(300, 3), rounds(1500, 8));
+        within(
+            Duration::from_secs(if cfg!(miri) { 3600 } else { 60 }),
+            move || {
+                for _ in 0..teams {
+                    let mut team = Team::new(2);
                     let mut v = [0u8; 4];
                     team.for_each(v.iter_mut(), |h| *h += 1);
                     assert_eq!(v, [1; 4]);
                 }
-                let mut team = Team::default();
+                let mut team = Team::new(2);
                 let mut x = 0x2545_f491_4f6c_dd1d_u64;
-                for _ in 0..1500 {
+                for _ in 0..phases {
                     x ^= x << 13;
                     x ^= x >> 7;
                     x ^= x << 17;
@@ -514,8 +508,8 @@ mod tests {
                     team.for_each(v.iter_mut(), |h| *h += 1);
                     assert_eq!(v, [1; 10]);
                 }
-            })
-        });
+            },
+        );
     }
 
     /// The two ends take blocks from the front and from the back until they
@@ -525,7 +519,7 @@ mod tests {
     fn the_two_ends_take_every_block_once() {
         let run = |_: usize| {};
         let job = Job {
-            ends: AtomicU64::new(0),
+            ends: CachePadded::new(AtomicU64::new(0)),
             count: 7,
             run: &run,
             panic: Mutex::new(None),
@@ -544,5 +538,20 @@ mod tests {
         assert_eq!(back, [6, 5, 4]);
         assert_eq!(job.take(false), None);
         assert_eq!(job.take(true), None);
+    }
+
+    /// The words the caller writes every phase and the helpers read lie on
+    /// cache lines of their own (a helper's look at the epoch does not stall
+    /// the caller's count of who is inside).
+    #[test]
+    fn the_hot_words_have_cache_lines_of_their_own() {
+        let s = Shared::default();
+        let line = |p: *const u8| p as usize / 64;
+        let epoch = line((&*s.bell.epoch as *const AtomicU64).cast());
+        let open = line((&*s.open as *const AtomicU64).cast());
+        let inside = line((&*s.inside as *const AtomicUsize).cast());
+        let sleeping = line((&*s.bell.sleeping as *const AtomicUsize).cast());
+        let all = std::collections::BTreeSet::from([epoch, open, inside, sleeping]);
+        assert_eq!(all.len(), 4, "epoch, open, inside, sleeping share a line");
     }
 }
