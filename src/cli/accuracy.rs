@@ -14,7 +14,9 @@ use vlab::atomic_write::OutputDir;
 use vlab::experiment::shake::{resolve_rig, shake_drive};
 use vlab::rig::ShakerKind;
 use vlab::scene::Scene;
-use vlab::study::accuracy::{AccuracyEvent, AccuracyPlan, AccuracyReport, run_accuracy};
+use vlab::study::accuracy::{
+    AccuracyEvent, AccuracyPlan, AccuracyReport, DemAccuracy, run_accuracy,
+};
 
 use super::args;
 
@@ -103,23 +105,10 @@ pub fn run(a: AccuracyArgs, quiet: bool) -> Result<()> {
     Ok(())
 }
 
-fn print_summary(r: &AccuracyReport, dir: &std::path::Path) {
-    let s = &r.summary;
-    let d = &s.dem;
-    let i = &s.impact;
-    let y = &s.yang;
+/// Study (a): the default time step against the reference, the integrator's
+/// error and order, the seeds' spread.
+fn print_dem_study(d: &DemAccuracy) {
     let pct = |x: f64| 100.0 * x;
-    println!(
-        "{} damper, {} Hz, Gamma {}: {} particles, {} thread{}, {:.0} s in all{}",
-        s.scene,
-        s.plan.freq_hz,
-        s.plan.gamma,
-        s.n_particles,
-        s.threads,
-        if s.threads == 1 { "" } else { "s" },
-        s.wall_s,
-        if s.quick { " (--quick)" } else { "" }
-    );
     println!(
         "  (a) DEM: default dt {:.3e} s = {:.3} x Rayleigh ({:.3e} s); reference {} x Rayleigh",
         d.default_dt_s, d.default_dt_over_rayleigh, d.rayleigh_step_s, d.reference_dt_over_rayleigh
@@ -142,6 +131,26 @@ fn print_summary(r: &AccuracyReport, dir: &std::path::Path) {
         println!("      stopped: {f}");
     }
     println!("      dominant: {}", d.dominant);
+}
+
+fn print_summary(r: &AccuracyReport, dir: &std::path::Path) {
+    let s = &r.summary;
+    let d = &s.dem;
+    let i = &s.impact;
+    let y = &s.yang;
+    let pct = |x: f64| 100.0 * x;
+    println!(
+        "{} damper, {} Hz, Gamma {}: {} particles, {} thread{}, {:.0} s in all{}",
+        s.scene,
+        s.plan.freq_hz,
+        s.plan.gamma,
+        s.n_particles,
+        s.threads,
+        if s.threads == 1 { "" } else { "s" },
+        s.wall_s,
+        if s.quick { " (--quick)" } else { "" }
+    );
+    print_dem_study(d);
     println!(
         "  (b) collision at {:.2} m/s, {} steps per contact: overlap {:+.2e}, duration {:+.2e} (eq. 5.10) {:+.2e} (exact), restitution {:+.2e}; orders {} / {} / {}",
         i.speed_mps,

@@ -234,6 +234,20 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
             d => format!(", the last {d} samples left out"),
         }
     );
+    print_figures(&r);
+    print_harmonics(&r);
+    if let (Some(l), Some(dir)) = (drawn, &a.plots) {
+        println!(
+            "  force-displacement loop: {:.4e} J enclosed per cycle (the record as it is, before the phase correction); loop.svg/png and phasor.svg/png in {}",
+            l.energy_per_cycle_j,
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// The figures of Yang's method with their +-, and the phase correction.
+fn print_figures(r: &Analysis) {
     let pm = |e: Option<f64>, digits: usize| {
         e.map_or(
             format!(
@@ -278,6 +292,10 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
     if r.force_polarity.reversed {
         println!("  force polarity reversed: corrected");
     }
+}
+
+/// The first five harmonics' force, velocity, phase and power.
+fn print_harmonics(r: &Analysis) {
     println!("  harmonic   freq [Hz]   force [N]   velocity [m/s]   phase [deg]   power [W]");
     for h in r.per_harmonic.iter().take(5) {
         println!(
@@ -293,14 +311,6 @@ pub fn run(a: AnalyzeArgs) -> Result<()> {
     if r.per_harmonic.iter().take(5).any(|h| h.power_w < 0.0) {
         println!("{NEGATIVE_HARMONIC_POWER}");
     }
-    if let (Some(l), Some(dir)) = (drawn, &a.plots) {
-        println!(
-            "  force-displacement loop: {:.4e} J enclosed per cycle (the record as it is, before the phase correction); loop.svg/png and phasor.svg/png in {}",
-            l.energy_per_cycle_j,
-            dir.display()
-        );
-    }
-    Ok(())
 }
 
 /// The record's force-displacement loop over the analysed window (with the
@@ -317,41 +327,9 @@ fn draw_plots(trace: &Trace, r: &Analysis, a: &AnalyzeArgs, dir: &Path) -> Resul
     let l = force_loop(&force, accel, trace.sample_rate_hz, r.n_periods)?;
     let made = OutputDir::prepare(dir)
         .with_context(|| format!("cannot create output folder {}", dir.display()))?;
-    let mut series = vec![Series {
-        name: format!(
-            "record, {} cycles: {:.4} J per cycle enclosed",
-            r.n_periods, l.energy_per_cycle_j
-        ),
-        points: l
-            .displacement_m
-            .iter()
-            .zip(&l.force_n)
-            .map(|(x, f)| (x * 1e3, *f))
-            .collect(),
-        style: SeriesStyle::Line,
-    }];
-    let first = r.per_harmonic.first();
-    if let Some(h) = first {
-        let (x1, f1) = (h.velocity_amp_mps / (2.0 * PI * h.freq_hz), h.force_amp_n);
-        // The force leads the velocity by the phase, the velocity the
-        // displacement by 90 degrees.
-        let lead = h.phase_rad + 0.5 * PI;
-        series.push(Series {
-            name: format!(
-                "drive frequency, phase-corrected: {:.4} J per cycle",
-                h.power_w / h.freq_hz
-            ),
-            points: (0..=200)
-                .map(|k| {
-                    let t = 2.0 * PI * k as f64 / 200.0;
-                    (x1 * t.cos() * 1e3, f1 * (t + lead).cos())
-                })
-                .collect(),
-            style: SeriesStyle::Line,
-        });
-    }
+    let series = loop_series(r, &l);
     let loop_title = "Force against displacement: the loop's area is the energy per cycle";
-    let phasor = first.map(phasor_series);
+    let phasor = r.per_harmonic.first().map(phasor_series);
     made.keep_if_ok((|| -> Result<()> {
         for ext in ["svg", "png"] {
             plot_xy_svg(
@@ -375,6 +353,44 @@ fn draw_plots(trace: &Trace, r: &Analysis, a: &AnalyzeArgs, dir: &Path) -> Resul
         Ok(())
     })())?;
     Ok(l)
+}
+
+/// The loop of the record and the drive frequency's part of it,
+/// phase-corrected, as an ellipse (displacement in mm, force in N).
+fn loop_series(r: &Analysis, l: &ForceLoop) -> Vec<Series> {
+    let mut series = vec![Series {
+        name: format!(
+            "record, {} cycles: {:.4} J per cycle enclosed",
+            r.n_periods, l.energy_per_cycle_j
+        ),
+        points: l
+            .displacement_m
+            .iter()
+            .zip(&l.force_n)
+            .map(|(x, f)| (x * 1e3, *f))
+            .collect(),
+        style: SeriesStyle::Line,
+    }];
+    if let Some(h) = r.per_harmonic.first() {
+        let (x1, f1) = (h.velocity_amp_mps / (2.0 * PI * h.freq_hz), h.force_amp_n);
+        // The force leads the velocity by the phase, the velocity the
+        // displacement by 90 degrees.
+        let lead = h.phase_rad + 0.5 * PI;
+        series.push(Series {
+            name: format!(
+                "drive frequency, phase-corrected: {:.4} J per cycle",
+                h.power_w / h.freq_hz
+            ),
+            points: (0..=200)
+                .map(|k| {
+                    let t = 2.0 * PI * k as f64 / 200.0;
+                    (x1 * t.cos() * 1e3, f1 * (t + lead).cos())
+                })
+                .collect(),
+            style: SeriesStyle::Line,
+        });
+    }
+    series
 }
 
 /// The velocity, the force as measured and the force as phase-corrected at

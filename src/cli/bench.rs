@@ -459,60 +459,31 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
     let scene = Scene::thesis();
     let mut progress = ProgressLine::new("bench", quiet);
     let mut rows = Vec::new();
-    let mut configs = vec![1usize];
-    if cores > 1 {
-        configs.push(cores);
-    }
+    let configs = if cores > 1 { vec![1, cores] } else { vec![1] };
     let thesis_bed = match a.beds_only {
         false => Some(thesis_rows(&scene, &a, &configs, &mut progress, &mut rows)?),
         true => None,
     };
     let mut lammps_speedups = Vec::new();
     let lammps = match a.lammps {
-        true => {
-            let bed = match thesis_bed {
-                Some(bed) => bed,
-                // Without the thesis rows: the bed from the cache, else settled.
-                None => a
-                    .cache
-                    .source(&mut |n| progress.warn(n))
-                    .settle(&scene, &mut |p| progress.update(p))
-                    .context("settling the thesis bed")?,
-            };
-            Some(lammps::lammps_rows(
-                &scene,
-                &bed,
-                a.lammps_cycles,
-                a.repeats,
-                &mut progress,
-                &mut rows,
-                &mut lammps_speedups,
-            )?)
-        }
+        true => Some(lammps_part(
+            &a,
+            &scene,
+            thesis_bed,
+            &mut progress,
+            &mut rows,
+            &mut lammps_speedups,
+        )?),
         false => None,
     };
     for &n in &a.beds.0 {
         bed_rows(&Bed::Lattice(n), &a, &configs, &mut rows)?;
     }
-    let mut poured_beds = Vec::new();
-    if !a.poured.0.is_empty() {
-        let source = a.cache.source(&mut |n| progress.warn(n));
-        for p in &a.poured.0 {
-            let (world, made) = poured_bed(p, &source, &configs, &mut progress)?;
-            poured_beds.push(made);
-            let bed = match p.prolate {
-                true => Bed::Prolates(world),
-                false => Bed::Poured(world),
-            };
-            bed_rows(&bed, &a, &configs, &mut rows)?;
-        }
-    }
+    let poured_beds = poured_rows(&a, &configs, &mut progress, &mut rows)?;
     progress.finish();
-    let yang = if a.beds_only {
-        None
-    } else {
-        Some(bench_yang_power(5.0, 40_000.0, 40.0, 20).context("timing Yang's method")?)
-    };
+    let yang = (!a.beds_only)
+        .then(|| bench_yang_power(5.0, 40_000.0, 40.0, 20).context("timing Yang's method"))
+        .transpose()?;
     let mut all_speedups = speedups(&rows);
     all_speedups.extend(lammps_speedups);
     let report = BenchReport {
@@ -536,6 +507,61 @@ pub fn run(a: BenchArgs, quiet: bool) -> Result<()> {
         print_report(&report, &scene, a.repeats);
     }
     Ok(())
+}
+
+/// The LAMMPS rows: the thesis bed (this run's, else from the cache or
+/// settled) driven by vlab and by lmp alike.
+fn lammps_part(
+    a: &BenchArgs,
+    scene: &Scene,
+    thesis_bed: Option<SettledBed>,
+    progress: &mut ProgressLine,
+    rows: &mut Vec<BenchRow>,
+    speedups: &mut Vec<Speedup>,
+) -> Result<lammps::LammpsComparison> {
+    let bed = match thesis_bed {
+        Some(bed) => bed,
+        // Without the thesis rows: the bed from the cache, else settled.
+        None => a
+            .cache
+            .source(&mut |n| progress.warn(n))
+            .settle(scene, &mut |p| progress.update(p))
+            .context("settling the thesis bed")?,
+    };
+    lammps::lammps_rows(
+        scene,
+        &bed,
+        a.lammps_cycles,
+        a.repeats,
+        progress,
+        rows,
+        speedups,
+    )
+}
+
+/// The rows of each `--poured` bed (settled or from the cache), and how
+/// each was made ready.
+fn poured_rows(
+    a: &BenchArgs,
+    configs: &[usize],
+    progress: &mut ProgressLine,
+    rows: &mut Vec<BenchRow>,
+) -> Result<Vec<PouredReport>> {
+    let mut poured_beds = Vec::new();
+    if a.poured.0.is_empty() {
+        return Ok(poured_beds);
+    }
+    let source = a.cache.source(&mut |n| progress.warn(n));
+    for p in &a.poured.0 {
+        let (world, made) = poured_bed(p, &source, configs, progress)?;
+        poured_beds.push(made);
+        let bed = match p.prolate {
+            true => Bed::Prolates(world),
+            false => Bed::Poured(world),
+        };
+        bed_rows(&bed, a, configs, rows)?;
+    }
+    Ok(poured_beds)
 }
 
 fn write_csv(path: &std::path::Path, report: &BenchReport) -> Result<()> {
@@ -601,66 +627,8 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
         report.step_loops,
         repeats
     );
-    for p in &report.poured_beds {
-        let made = match (p.settle_wall_s, p.read_wall_s) {
-            (Some(w), _) => format!(
-                "settled here in {w:.1} s on {} thread(s), {:.2} M particle-steps/s",
-                p.settle_threads,
-                p.settle_particle_steps_per_s.unwrap_or(f64::NAN) / 1e6
-            ),
-            (None, Some(r)) => format!("read from the bed cache in {r:.2} s"),
-            (None, None) => String::new(),
-        };
-        let what = match p.bodies {
-            Some(n) => format!(
-                "{n} prolates of {} sub-spheres (volume of a {} mm sphere each)",
-                p.particles / n.max(1),
-                p.diameter_m * 1e3
-            ),
-            None => format!("{} spheres of {} mm", p.particles, p.diameter_m * 1e3),
-        };
-        println!(
-            "  poured bed: {what} in a cylinder 40 mm across, {} mm long, packing {:.3} ({} settling steps, {:.3} s simulated); {}",
-            p.inner_length_m * 1e3,
-            p.packing_fraction,
-            p.settle_steps,
-            p.settle_time_s,
-            made
-        );
-    }
-    for r in &report.rows {
-        let how = match (r.threads, r.split_across_threads) {
-            _ if r.copies > 1 => format!("{} x 1 thread", r.copies),
-            (1, _) => "1 thread ".to_string(),
-            (t, true) => format!("{t} threads"),
-            (t, false) => format!("{t} threads (step stays on one: few pairs)"),
-        };
-        let per_cpu = r
-            .particle_steps_per_cpu_s
-            .map_or("CPU time below the clock's 10 ms".into(), |x| {
-                format!("{:6.2} M per CPU s", x / 1e6)
-            });
-        println!(
-            "  {:44} {:7} {:6} particles {:10} {:6.2} M particle-steps/s, fastest {:6.2} M ({}; {} steps, {:.2} s)",
-            r.case,
-            r.bed,
-            r.particles,
-            how,
-            r.particle_steps_per_s / 1e6,
-            r.fastest_particle_steps_per_s / 1e6,
-            per_cpu,
-            r.steps,
-            r.wall_s
-        );
-        if let (Some(listed), Some(touching)) =
-            (r.listed_pairs_per_particle, r.touching_pairs_per_particle)
-        {
-            println!(
-                "  {:44} pairs a particle: {listed:.2} listed, {touching:.2} touching",
-                ""
-            );
-        }
-    }
+    report.poured_beds.iter().for_each(print_poured);
+    report.rows.iter().for_each(print_row);
     for s in &report.speedups {
         println!(
             "  speed-up, {} ({} particles): x{:.2} fastest against fastest, x{:.2} median of paired runs",
@@ -684,6 +652,71 @@ fn print_report(report: &BenchReport, scene: &Scene, repeats: u32) {
     }
 }
 
+/// How a poured bed was made: what it holds, its packing, and whether it
+/// was settled here or read from the cache.
+fn print_poured(p: &PouredReport) {
+    let made = match (p.settle_wall_s, p.read_wall_s) {
+        (Some(w), _) => format!(
+            "settled here in {w:.1} s on {} thread(s), {:.2} M particle-steps/s",
+            p.settle_threads,
+            p.settle_particle_steps_per_s.unwrap_or(f64::NAN) / 1e6
+        ),
+        (None, Some(r)) => format!("read from the bed cache in {r:.2} s"),
+        (None, None) => String::new(),
+    };
+    let what = match p.bodies {
+        Some(n) => format!(
+            "{n} prolates of {} sub-spheres (volume of a {} mm sphere each)",
+            p.particles / n.max(1),
+            p.diameter_m * 1e3
+        ),
+        None => format!("{} spheres of {} mm", p.particles, p.diameter_m * 1e3),
+    };
+    println!(
+        "  poured bed: {what} in a cylinder 40 mm across, {} mm long, packing {:.3} ({} settling steps, {:.3} s simulated); {}",
+        p.inner_length_m * 1e3,
+        p.packing_fraction,
+        p.settle_steps,
+        p.settle_time_s,
+        made
+    );
+}
+
+/// A row: its rate, fastest rate, CPU rate and pairs a particle.
+fn print_row(r: &BenchRow) {
+    let how = match (r.threads, r.split_across_threads) {
+        _ if r.copies > 1 => format!("{} x 1 thread", r.copies),
+        (1, _) => "1 thread ".to_string(),
+        (t, true) => format!("{t} threads"),
+        (t, false) => format!("{t} threads (step stays on one: few pairs)"),
+    };
+    let per_cpu = r
+        .particle_steps_per_cpu_s
+        .map_or("CPU time below the clock's 10 ms".into(), |x| {
+            format!("{:6.2} M per CPU s", x / 1e6)
+        });
+    println!(
+        "  {:44} {:7} {:6} particles {:10} {:6.2} M particle-steps/s, fastest {:6.2} M ({}; {} steps, {:.2} s)",
+        r.case,
+        r.bed,
+        r.particles,
+        how,
+        r.particle_steps_per_s / 1e6,
+        r.fastest_particle_steps_per_s / 1e6,
+        per_cpu,
+        r.steps,
+        r.wall_s
+    );
+    if let (Some(listed), Some(touching)) =
+        (r.listed_pairs_per_particle, r.touching_pairs_per_particle)
+    {
+        println!(
+            "  {:44} pairs a particle: {listed:.2} listed, {touching:.2} touching",
+            ""
+        );
+    }
+}
+
 /// All threads against one for every case that ran both, and the
 /// frictionless thesis drive against the thesis drive on one thread.
 fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
@@ -702,40 +735,7 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
                 other,
             ));
         }
-        let Some(kind) = [Bed::LATTICE, Bed::POURED, Bed::PROLATES]
-            .into_iter()
-            .find(|k| k.steps == base.case)
-        else {
-            continue;
-        };
-        for host in rows
-            .iter()
-            .filter(|r| r.copies > 1 && r.particles == base.particles && r.case == kind.copies)
-        {
-            out.push(Speedup::between(
-                format!(
-                    "what the host gives work that shares nothing: {} 1-thread copies at once over 1, {} bed",
-                    host.copies, base.bed
-                ),
-                base,
-                host,
-            ));
-            for split in rows.iter().filter(|r| {
-                r.case == kind.steps
-                    && r.particles == base.particles
-                    && r.threads == host.copies
-                    && r.split_across_threads
-            }) {
-                out.push(Speedup::between(
-                    format!(
-                        "{} threads on one bed against {} copies at once (1 = all the host gives), {} bed",
-                        split.threads, host.copies, base.bed
-                    ),
-                    host,
-                    split,
-                ));
-            }
-        }
+        host_speedups(rows, base, &mut out);
     }
     // The prolate bed against spheres of as many (sub-)spheres, 1 thread:
     // what a body costs beyond its spheres.
@@ -767,6 +767,45 @@ fn speedups(rows: &[BenchRow]) -> Vec<Speedup> {
         ));
     }
     out
+}
+
+/// For a bed's 1-thread row `base`: what the host gives copies that share
+/// nothing over it, and one bed split across threads against those copies.
+fn host_speedups(rows: &[BenchRow], base: &BenchRow, out: &mut Vec<Speedup>) {
+    let Some(kind) = [Bed::LATTICE, Bed::POURED, Bed::PROLATES]
+        .into_iter()
+        .find(|k| k.steps == base.case)
+    else {
+        return;
+    };
+    for host in rows
+        .iter()
+        .filter(|r| r.copies > 1 && r.particles == base.particles && r.case == kind.copies)
+    {
+        out.push(Speedup::between(
+            format!(
+                "what the host gives work that shares nothing: {} 1-thread copies at once over 1, {} bed",
+                host.copies, base.bed
+            ),
+            base,
+            host,
+        ));
+        for split in rows.iter().filter(|r| {
+            r.case == kind.steps
+                && r.particles == base.particles
+                && r.threads == host.copies
+                && r.split_across_threads
+        }) {
+            out.push(Speedup::between(
+                format!(
+                    "{} threads on one bed against {} copies at once (1 = all the host gives), {} bed",
+                    split.threads, host.copies, base.bed
+                ),
+                host,
+                split,
+            ));
+        }
+    }
 }
 
 /// The case names of a kind of bed's rows.

@@ -2,14 +2,14 @@
 //! for one machine or to check vlab against another DEM code. The work is
 //! [`vlab::export::lammps_deck`]'s; this is its command line.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
 use vlab::atomic_write::OutputDir;
 use vlab::export::lammps_deck::{
-    ContactTranslation, DATA_FILE, INPUT_FILE, LammpsExport, RECORD_FILE, lammps_deck,
+    ContactTranslation, DATA_FILE, DeckSummary, INPUT_FILE, LammpsExport, RECORD_FILE, lammps_deck,
 };
 
 use super::args;
@@ -83,7 +83,13 @@ fn run_lammps(a: LammpsArgs, quiet: bool) -> Result<()> {
     let deck = made.keep_if_ok(result)?;
     let written = deck.write(&a.out);
     made.keep_if_ok(written)?;
-    let s = &deck.summary;
+    print_deck(&deck.summary, &a.out);
+    Ok(())
+}
+
+/// What the deck holds, how vlab's contacts were translated, and how to
+/// run it.
+fn print_deck(s: &DeckSummary, out: &Path) {
     println!(
         "LAMMPS deck for the {} damper at {} Hz, Gamma {}: {} spheres ({:.4} kg), {} cycles (the last {} the window) = {} steps of {:e} s",
         s.scene,
@@ -115,9 +121,8 @@ fn run_lammps(a: LammpsArgs, quiet: bool) -> Result<()> {
     );
     println!(
         "  wrote {}/{{{INPUT_FILE}, {DATA_FILE}, export.json}}; run: cd {} && lmp -in {INPUT_FILE} (or mpirun -np N lmp -in {INPUT_FILE}); then vlab replay {}/{RECORD_FILE}",
-        a.out.display(),
-        a.out.display(),
-        a.out.display()
+        out.display(),
+        out.display(),
+        out.display()
     );
-    Ok(())
 }

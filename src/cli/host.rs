@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
-use vlab::atomic_write::{OutputDir, write_bytes_atomic};
+use vlab::atomic_write::OutputDir;
 use vlab::experiment::host_test::{Damper, HostRun, HostTest, run_host_test};
 use vlab::host::{DEFAULT_HOST, Excitation, HostSpec};
 use vlab::rig::{RigFile, RigSpec};
@@ -204,12 +204,6 @@ pub fn excitation_text(e: &Excitation) -> String {
 pub fn write_records(dir: &Path, run: &HostRun) -> Result<()> {
     run.write_records(dir)
         .with_context(|| format!("writing the records into {}", dir.display()))
-}
-
-/// Writes `text` to `path` atomically.
-pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    write_bytes_atomic(path, text.as_bytes())
-        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Frequencies in Hz, ascending.

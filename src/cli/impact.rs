@@ -143,7 +143,9 @@ impl ImpactArgs {
         })
     }
 
-    fn setup(&self) -> Result<ImpactSetup> {
+    /// The sphere's material: the preset of `--material` with the flags'
+    /// own values over it.
+    fn material(&self) -> Material {
         let name = match self.material {
             MaterialName::Acrylic => "acrylic",
             MaterialName::Steel => "steel",
@@ -159,6 +161,11 @@ impl ImpactArgs {
         if let Some(rho) = self.density_kgm3 {
             material.density_kgm3 = rho;
         }
+        material
+    }
+
+    fn setup(&self) -> Result<ImpactSetup> {
+        let material = self.material();
         let target = match self.against {
             Against::Sphere => {
                 if self.wall_youngs_pa.is_some() || self.wall_poisson.is_some() {

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 
+use glam::DVec3;
 use vlab::atomic_write::write_atomic;
+use vlab::dem::ContactLaw;
 use vlab::dem::clumps::ClumpTemplate;
 use vlab::experiment::press::{
     NormalPoint, PressConfig, TangentialPoint, half_size_m, heights_m, normal_curve,
@@ -53,22 +55,7 @@ pub struct PressArgs {
 }
 
 pub fn run(a: PressArgs) -> Result<()> {
-    if !(a.max_deformation > 0.0 && a.max_deformation <= 0.5) {
-        bail!(
-            "--max-deformation = {}: must be in (0, 0.5] (a fraction of the body's half-size along the press)",
-            a.max_deformation
-        );
-    }
-    if !(a.preload > 0.0 && a.preload <= a.max_deformation) {
-        bail!(
-            "--preload = {}: must be in (0, {}] (a fraction of the half-size, at most --max-deformation)",
-            a.preload,
-            a.max_deformation
-        );
-    }
-    if !(10..=100_000).contains(&a.points) {
-        bail!("--points = {}: must be in [10, 100000]", a.points);
-    }
+    check(&a)?;
     let scene = Scene::load_or_thesis(a.scene.as_deref())?;
     let shape = scene.particles.shape;
     let template = match scene.particle_body()? {
@@ -115,21 +102,7 @@ pub fn run(a: PressArgs) -> Result<()> {
         last.force_n,
         last.touching
     );
-    let slid = tangential_pts.last().map_or(0.0, |p| p.force_n);
-    println!(
-        "  tangential  held at {:.4} of the half-size, slid {:.2} um: {:.4} N (mu times the normal force there: {:.4} N)",
-        a.preload,
-        tangential_pts.last().map_or(0.0, |p| p.displacement_m) * 1e6,
-        slid,
-        law.friction
-            * vlab::experiment::press::normal_force_n(
-                &law,
-                &template,
-                &heights_m(&template, normal),
-                a.preload * half_m
-            )
-            .0
-    );
+    print_held(&a, &law, &template, normal, &tangential_pts, half_m);
     let ripple = ripple_report(shape, config, &template, &normal_pts, half_m);
     if let Some(r) = &ripple {
         println!("  {}", r.text);
@@ -139,6 +112,54 @@ pub fn run(a: PressArgs) -> Result<()> {
         println!("wrote {}", dir.display());
     }
     Ok(())
+}
+
+/// The flags' ranges, each refusal naming the flag.
+fn check(a: &PressArgs) -> Result<()> {
+    if !(a.max_deformation > 0.0 && a.max_deformation <= 0.5) {
+        bail!(
+            "--max-deformation = {}: must be in (0, 0.5] (a fraction of the body's half-size along the press)",
+            a.max_deformation
+        );
+    }
+    if !(a.preload > 0.0 && a.preload <= a.max_deformation) {
+        bail!(
+            "--preload = {}: must be in (0, {}] (a fraction of the half-size, at most --max-deformation)",
+            a.preload,
+            a.max_deformation
+        );
+    }
+    if !(10..=100_000).contains(&a.points) {
+        bail!("--points = {}: must be in [10, 100000]", a.points);
+    }
+    Ok(())
+}
+
+/// The tangential curve's end: how far the body slid at the preload and
+/// the force that held it, against mu times the normal force there.
+fn print_held(
+    a: &PressArgs,
+    law: &ContactLaw,
+    template: &ClumpTemplate,
+    normal: DVec3,
+    tangential_pts: &[TangentialPoint],
+    half_m: f64,
+) {
+    let slid = tangential_pts.last().map_or(0.0, |p| p.force_n);
+    println!(
+        "  tangential  held at {:.4} of the half-size, slid {:.2} um: {:.4} N (mu times the normal force there: {:.4} N)",
+        a.preload,
+        tangential_pts.last().map_or(0.0, |p| p.displacement_m) * 1e6,
+        slid,
+        law.friction
+            * vlab::experiment::press::normal_force_n(
+                law,
+                template,
+                &heights_m(template, normal),
+                a.preload * half_m
+            )
+            .0
+    );
 }
 
 /// A toroid lying flat: its ripple depth, exact and by eq. 5.19.

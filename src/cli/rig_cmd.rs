@@ -31,18 +31,7 @@ pub fn run(a: RigArgs) -> Result<()> {
         if a.print {
             bail!("--print needs a rig NAME: one of {}", all_names());
         }
-        for (name, kind) in builtin_rigs() {
-            let description = match kind {
-                RigKind::Shaker => RigSpec::builtin(name)?.description,
-                RigKind::DropTest => DropRigSpec::builtin(name)?.description,
-                RigKind::Host => HostSpec::builtin(name)?.description,
-            };
-            println!("{name:14} {kind:10} {description}");
-        }
-        println!(
-            "(vlab rig NAME --print shows a rig's file; copy it, edit it, pass it with --rig FILE)"
-        );
-        return Ok(());
+        return list();
     };
     let Some((_, kind)) = builtin_rigs().find(|(n, _)| *n == name) else {
         bail!(
@@ -54,9 +43,31 @@ pub fn run(a: RigArgs) -> Result<()> {
         print!("{}", builtin_toml(&name).unwrap_or_default());
         return Ok(());
     }
+    describe(&name, kind)
+}
+
+/// Every built-in rig, its kind and what it is.
+fn list() -> Result<()> {
+    for (name, kind) in builtin_rigs() {
+        let description = match kind {
+            RigKind::Shaker => RigSpec::builtin(name)?.description,
+            RigKind::DropTest => DropRigSpec::builtin(name)?.description,
+            RigKind::Host => HostSpec::builtin(name)?.description,
+        };
+        println!("{name:14} {kind:10} {description}");
+    }
+    println!(
+        "(vlab rig NAME --print shows a rig's file; copy it, edit it, pass it with --rig FILE)"
+    );
+    Ok(())
+}
+
+/// What one built-in rig is: a drop rig's plate and rate, a host's modes, a
+/// shaker rig's enclosure, rate and phase error.
+fn describe(name: &str, kind: RigKind) -> Result<()> {
     match kind {
         RigKind::DropTest => {
-            let d = DropRigSpec::builtin(&name)?;
+            let d = DropRigSpec::builtin(name)?;
             println!("{} ({kind} rig): {}", d.name, d.description);
             println!(
                 "  plate rings at {:.0} Hz on its transducer; force sampled at {} Hz",
@@ -65,7 +76,7 @@ pub fn run(a: RigArgs) -> Result<()> {
             );
         }
         RigKind::Host => {
-            let h = HostSpec::builtin(&name)?;
+            let h = HostSpec::builtin(name)?;
             println!("{} ({kind}): {}", h.name, h.description);
             for (i, m) in h.modes.iter().enumerate() {
                 println!(
@@ -81,7 +92,7 @@ pub fn run(a: RigArgs) -> Result<()> {
             }
         }
         RigKind::Shaker => {
-            let r = RigSpec::builtin(&name)?;
+            let r = RigSpec::builtin(name)?;
             println!("{} ({kind} rig): {}", r.name, r.description);
             println!(
                 "  enclosure above the gauge {} kg; default shaker {}; sample rate {} Hz",

@@ -9,7 +9,7 @@ use clap::Args;
 
 use vlab::atomic_write::OutputDir;
 use vlab::drive::Drive;
-use vlab::experiment::damper::StepObserver;
+use vlab::experiment::damper::{Steadiness, StepObserver};
 use vlab::experiment::ensemble::{DEFAULT_BEDS, EnsembleSummary, unsteady_reasons};
 use vlab::experiment::ensemble_summary::{LONGER_DRIVE_SCALE, longer_drive_rel};
 use vlab::experiment::shake::{DemTruth, ShakeSummary, default_out_dir, percent_or_unknown};
@@ -342,6 +342,21 @@ fn print_ensemble(e: &EnsembleSummary) {
         100.0 * longer_drive_rel(window),
         100.0 * LONGER_DRIVE_SCALE
     );
+    print_mean_series(st);
+    print_bed_rows(e);
+    println!(
+        "    wall time {:.1} s for {} beds on {} thread{} (settling included), {:.2} M particle-steps/s",
+        e.wall_time_s,
+        e.beds,
+        e.threads,
+        if e.threads == 1 { "" } else { "s" },
+        e.particle_steps_per_s / 1e6
+    );
+}
+
+/// The beds' mean series: its drift across the window, its warm-up and
+/// whether it alternates.
+fn print_mean_series(st: &Steadiness) {
     let drift = match (st.drift_rel, st.drift_stderr_rel) {
         (Some(r), Some(err)) => format!("{:+.2} % +- {:.2} %", 100.0 * r, 100.0 * err),
         _ => "not known".into(),
@@ -356,6 +371,10 @@ fn print_ensemble(e: &EnsembleSummary) {
             ""
         }
     );
+}
+
+/// Each bed's efficiency, with its own window's +-, and the measured one.
+fn print_bed_rows(e: &EnsembleSummary) {
     println!("    bed  seed        efficiency DEM (its window's +-)   measured");
     let d = efficiency_decimals(e.dem_efficiency.stderr);
     for r in &e.rows {
@@ -371,14 +390,6 @@ fn print_ensemble(e: &EnsembleSummary) {
             r.measured_efficiency
         );
     }
-    println!(
-        "    wall time {:.1} s for {} beds on {} thread{} (settling included), {:.2} M particle-steps/s",
-        e.wall_time_s,
-        e.beds,
-        e.threads,
-        if e.threads == 1 { "" } else { "s" },
-        e.particle_steps_per_s / 1e6
-    );
 }
 
 /// What the DEM knows.

@@ -4,17 +4,14 @@
 //! folder, all of them in one plot per test, and the scenes ordered by
 //! their shear stiffness.
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
-use serde::Serialize;
-
-use vlab::atomic_write::{OutputDir, write_atomic};
-use vlab::experiment::shear_box::{BoxRun, BoxTest, Loading, ShearBox, run_test};
+use vlab::atomic_write::OutputDir;
+use vlab::experiment::shear_box::{BoxRun, BoxTest, Loading, ShearBox};
 use vlab::scene::Scene;
-use vlab::signals::{Series, SeriesStyle, plot_xy_svg};
+use vlab::study::shear_box_series::{ShearBoxEvent, ShearBoxOutcome, ShearBoxPlan};
 
 use super::args;
 use super::cache_cmd::NoCacheArg;
@@ -77,15 +74,6 @@ pub struct ShearBoxArgs {
     cache: NoCacheArg,
 }
 
-/// One scene's tests on the bed of one seed, as the JSON summary gives them.
-#[derive(Debug, Serialize)]
-struct SceneRuns {
-    scene: String,
-    particles: String,
-    seed: u64,
-    runs: Vec<BoxRun>,
-}
-
 pub fn run(a: ShearBoxArgs, quiet: bool) -> Result<()> {
     check(&a)?;
     let scenes = load_scenes(&a)?;
@@ -100,13 +88,14 @@ pub fn run(a: ShearBoxArgs, quiet: bool) -> Result<()> {
         .unwrap_or_else(|| PathBuf::from("signals/shear-box"));
     let made = OutputDir::prepare(&out_dir)
         .with_context(|| format!("cannot create output folder {}", out_dir.display()))?;
-    let result = run_all(&a, &scenes, tests, &out_dir, quiet);
-    let all = made.keep_if_ok(result)?;
-    write_summary(&out_dir, &all)?;
-    for &test in tests {
-        plot_test(&out_dir, &all, test)?;
-    }
-    print_table(&all, tests, &out_dir);
+    let plan = ShearBoxPlan {
+        scenes,
+        seeds: a.seeds.clone(),
+        tests: tests.iter().map(|&t| (t, loading(&a, t))).collect(),
+    };
+    let outcome = made.keep_if_ok(run_all(&plan, a.cache, quiet))?;
+    made.keep_if_ok(outcome.write(&out_dir).map_err(anyhow::Error::from))?;
+    print_table(&outcome, tests, &out_dir);
     Ok(())
 }
 
@@ -169,7 +158,9 @@ fn load_scenes(a: &ShearBoxArgs) -> Result<Vec<Scene>> {
                 scene.name
             );
         }
-        scenes.push(scene);
+        // The beds are settled and tested one at a time, each on every
+        // thread.
+        scenes.push(super::args::run_alone(scene));
     }
     Ok(scenes)
 }
@@ -183,178 +174,41 @@ fn chapter_8_spheres() -> Scene {
     scene
 }
 
-fn run_all(
-    a: &ShearBoxArgs,
-    scenes: &[Scene],
-    tests: &[BoxTest],
-    out_dir: &Path,
-    quiet: bool,
-) -> Result<Vec<SceneRuns>> {
-    let mut all = Vec::new();
-    for (base, seed) in scenes.iter().flat_map(|s| {
-        let seeds = if a.seeds.is_empty() {
-            vec![s.simulation.seed]
-        } else {
-            a.seeds.clone()
-        };
-        seeds.into_iter().map(move |seed| (s, seed))
-    }) {
-        let mut scene = super::args::run_alone(base.clone());
-        scene.simulation.seed = seed;
-        let scene = &scene;
-        let label = format!("shear-box {} seed {seed}", scene.name);
-        let mut progress = ProgressLine::new(&label, quiet);
-        let beds = a.cache.source(&mut |n| progress.warn(n));
-        let bed = beds
-            .settle(scene, &mut |p| progress.update(p))
-            .with_context(|| format!("settling {} in the box", scene.name))?;
-        let folder = if a.seeds.len() > 1 {
-            out_dir.join(&scene.name).join(format!("seed-{seed}"))
-        } else {
-            out_dir.join(&scene.name)
-        };
-        let mut runs = Vec::new();
-        for &test in tests {
-            let loading = Loading {
-                preload_n: match test {
-                    BoxTest::Normal => a.normal_preload_n,
-                    BoxTest::Shear => a.shear_preload_n,
-                },
-                speed_mps: a.speed_mps,
-                travel_m: match test {
-                    BoxTest::Normal => a.normal_travel_m,
-                    BoxTest::Shear => a.shear_travel_m,
-                },
-                points: a.points,
-            };
-            let run = run_test(&bed, scene, &ShearBox::THESIS, test, loading, &mut |p| {
-                progress.update(p)
-            })
-            .with_context(|| format!("the {} test of {}", test.as_str(), scene.name))?;
-            write_curve(&folder, &run)?;
-            runs.push(run);
-        }
-        progress.finish();
-        all.push(SceneRuns {
-            scene: scene.name.clone(),
-            particles: describe_particles(scene),
-            seed,
-            runs,
-        });
-    }
-    Ok(all)
-}
-
-fn describe_particles(scene: &Scene) -> String {
-    let p = &scene.particles;
-    format!(
-        "{} {}s of the volume of a {} m sphere",
-        p.count,
-        p.shape.as_str(),
-        p.diameter_m
-    )
-}
-
-/// `normal.csv` or `shear.csv` in the scene's folder.
-fn write_curve(dir: &Path, run: &BoxRun) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let path = dir.join(format!("{}.csv", run.test.as_str()));
-    let (d, f) = match run.test {
-        BoxTest::Normal => ("z_test_m", "f_test_z_n"),
-        BoxTest::Shear => ("x_test_m", "f_test_x_n"),
+/// The loading of `test` from the flags.
+fn loading(a: &ShearBoxArgs, test: BoxTest) -> Loading {
+    let (preload_n, travel_m) = match test {
+        BoxTest::Normal => (a.normal_preload_n, a.normal_travel_m),
+        BoxTest::Shear => (a.shear_preload_n, a.shear_travel_m),
     };
-    write_atomic(&path, |w| {
-        writeln!(
-            w,
-            "# vlab shear-box {} test: pre-load {} N held (z_test,0 = {:.6e} m), then {} m/s",
-            run.test.as_str(),
-            run.loading.preload_n,
-            run.preload_displacement_m,
-            run.loading.speed_mps
-        )?;
-        writeln!(w, "{d},{f},table_load_n,rings_up_n")?;
-        for p in &run.points {
-            writeln!(
-                w,
-                "{:.9e},{:.6e},{:.6e},{:.6e}",
-                p.displacement_m, p.force_n, p.table_load_n, p.rings_up_n
-            )?;
-        }
-        Ok(())
-    })
-    .with_context(|| format!("cannot write {}", path.display()))
-}
-
-fn write_summary(out_dir: &Path, all: &[SceneRuns]) -> Result<()> {
-    let path = out_dir.join("shear_box.json");
-    let text = serde_json::to_string_pretty(all)?;
-    write_atomic(&path, |w| writeln!(w, "{text}"))
-        .with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// The scenes in the order given, each once.
-fn scene_names(all: &[SceneRuns]) -> Vec<&str> {
-    let mut names: Vec<&str> = Vec::new();
-    for s in all {
-        if !names.contains(&s.scene.as_str()) {
-            names.push(&s.scene);
-        }
+    Loading {
+        preload_n,
+        speed_mps: a.speed_mps,
+        travel_m,
+        points: a.points,
     }
-    names
 }
 
-/// The runs of `test` on every seed of scene `name`.
-fn runs_of<'a>(all: &'a [SceneRuns], name: &str, test: BoxTest) -> Vec<&'a BoxRun> {
-    all.iter()
-        .filter(|s| s.scene == name)
-        .filter_map(|s| s.runs.iter().find(|r| r.test == test))
-        .collect()
-}
-
-/// One plot of every scene's curve of `test` (over several seeds, their
-/// mean point by point), in mm and N, as SVG and PNG.
-fn plot_test(out_dir: &Path, all: &[SceneRuns], test: BoxTest) -> Result<()> {
-    let series: Vec<Series> = scene_names(all)
-        .into_iter()
-        .filter_map(|name| {
-            let runs = runs_of(all, name, test);
-            let first = runs.first()?;
-            let n = runs.len() as f64;
-            let points = (0..first.points.len())
-                .map(|k| {
-                    let f = runs.iter().map(|r| r.points[k].force_n).sum::<f64>() / n;
-                    (first.points[k].displacement_m * 1e3, f)
-                })
-                .collect();
-            Some(Series {
-                name: if runs.len() > 1 {
-                    format!("{name} (mean of {} beds)", runs.len())
-                } else {
-                    name.to_string()
-                },
-                points,
-                style: SeriesStyle::Line,
-            })
-        })
-        .collect();
-    let (title, x, y) = match test {
-        BoxTest::Normal => (
-            "Normal force-displacement (thesis Fig. 8.16-8.17)",
-            "z_test (mm)",
-            "F_test,z on the base (N)",
-        ),
-        BoxTest::Shear => (
-            "Shear force-displacement (thesis Fig. 8.18-8.19)",
-            "x_test (mm)",
-            "F_test,x on the fixed container (N)",
-        ),
-    };
-    for ext in ["svg", "png"] {
-        let path = out_dir.join(format!("{}.{ext}", test.as_str()));
-        plot_xy_svg(&path, title, x, y, &series)
-            .with_context(|| format!("cannot draw {}", path.display()))?;
-    }
-    Ok(())
+/// The plan run with a progress line per bed.
+fn run_all(plan: &ShearBoxPlan, cache: NoCacheArg, quiet: bool) -> Result<ShearBoxOutcome> {
+    let mut line: Option<ProgressLine> = None;
+    let beds = cache.source(&mut |n| eprintln!("{n}"));
+    let outcome = plan.run(&beds, &mut |event| match event {
+        ShearBoxEvent::Bed { scene, seed } => {
+            let label = format!("shear-box {} seed {seed}", scene.name);
+            line = Some(ProgressLine::new(&label, quiet));
+        }
+        ShearBoxEvent::Progress(p) => {
+            if let Some(l) = &mut line {
+                l.update(p);
+            }
+        }
+        ShearBoxEvent::BedDone => {
+            if let Some(mut l) = line.take() {
+                l.finish();
+            }
+        }
+    });
+    Ok(outcome?)
 }
 
 /// The mean force over a curve (N): the area under it over its travel,
@@ -394,7 +248,7 @@ fn with_se(mean: f64, se: f64) -> String {
     }
 }
 
-fn print_table(all: &[SceneRuns], tests: &[BoxTest], out_dir: &Path) {
+fn print_table(outcome: &ShearBoxOutcome, tests: &[BoxTest], out_dir: &Path) {
     for &test in tests {
         println!(
             "{} test ({}):",
@@ -409,8 +263,8 @@ fn print_table(all: &[SceneRuns], tests: &[BoxTest], out_dir: &Path) {
             "scene", "beds", "z_test,0 (mm)", "F at 1/2 (N)", "mean F (N)"
         );
         let mut order: Vec<(f64, f64, &str)> = Vec::new();
-        for name in scene_names(all) {
-            let runs = runs_of(all, name, test);
+        for name in outcome.scene_names() {
+            let runs = outcome.runs_of(name, test);
             if runs.is_empty() {
                 continue;
             }

@@ -15,8 +15,8 @@ use vlab::atomic_write::OutputDir;
 use vlab::rig::ShakerKind;
 use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::study::sweep::{
-    RowStatus, Shard, Steady, SweepEvent, SweepFile, SweepPlan, SweepRow, merge_shards, phase_name,
-    run_sweep, summarise,
+    ConditionSummary, RowStatus, Shard, Steady, SweepEvent, SweepFile, SweepPlan, SweepRow,
+    merge_shards, phase_name, run_sweep, summarise,
 };
 use vlab::study::sweep_peak::{SeriesPeak, series_peaks};
 use vlab::study::sweep_plot::plot_sweep;
@@ -352,31 +352,7 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
     println!(
         "  fill   orientation  freq    Gamma   efficiency (DEM +- se)  +- from    measured  phase"
     );
-    for s in &summary {
-        if s.status == RowStatus::Ok {
-            println!(
-                "  {:.3}  {:<11}  {:>5}  {:>6}   {:.3} +- {:<9}       {:<9}  {:.3}     {}",
-                s.fill_ratio,
-                s.orientation.as_str(),
-                s.freq_hz,
-                s.gamma,
-                s.efficiency,
-                plus_minus(s.efficiency_se),
-                s.se_from,
-                s.efficiency_measured,
-                phase_name(s.phase)
-            );
-        } else {
-            println!(
-                "  {:.3}  {:<11}  {:>5}  {:>6}   {}",
-                s.fill_ratio,
-                s.orientation.as_str(),
-                s.freq_hz,
-                s.gamma,
-                s.status.as_str()
-            );
-        }
-    }
+    summary.iter().for_each(print_condition);
     if summary.iter().any(|s| s.se_from == "window") {
         println!(
             "  (+- from window: one bed's cycles alone, which leaves out how far another packing of the damper reads (at 40 Hz, Gamma 20 the beds spread twice as far as a window claims; docs/accuracy.md); --beds N or several --seeds measure it)"
@@ -388,6 +364,34 @@ fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result
         println!("  wrote {}", p.display());
     }
     Ok(())
+}
+
+/// One condition's row: its efficiency with the +- and where that comes
+/// from, the measured one and the phase; or why it has none.
+fn print_condition(s: &ConditionSummary) {
+    if s.status == RowStatus::Ok {
+        println!(
+            "  {:.3}  {:<11}  {:>5}  {:>6}   {:.3} +- {:<9}       {:<9}  {:.3}     {}",
+            s.fill_ratio,
+            s.orientation.as_str(),
+            s.freq_hz,
+            s.gamma,
+            s.efficiency,
+            plus_minus(s.efficiency_se),
+            s.se_from,
+            s.efficiency_measured,
+            phase_name(s.phase)
+        );
+    } else {
+        println!(
+            "  {:.3}  {:<11}  {:>5}  {:>6}   {}",
+            s.fill_ratio,
+            s.orientation.as_str(),
+            s.freq_hz,
+            s.gamma,
+            s.status.as_str()
+        );
+    }
 }
 
 /// Where each series' DEM efficiency peaks against Gamma (a parabola in

@@ -454,6 +454,9 @@ impl BedCache {
 
     /// The bed of `scene` from the cache: `Ok(None)` when there is none,
     /// `Err` (a warning's text) when there is one that cannot be used.
+    ///
+    /// Over 80 lines: a cached bed read and checked in order (header, physics,
+    /// scene, particles), each refusal with its own words.
     pub fn load(&self, scene: &Scene) -> Result<Option<SettledBed>, String> {
         let path = self.path_for(scene);
         let started = Stopwatch::start();

@@ -251,6 +251,10 @@ pub fn thread_shares(threads: usize, beds: u32) -> (usize, usize) {
 /// together; the first bed on the calling thread with `observers` and
 /// `progress`, each other bed's rig noise seeded as its bed. The first
 /// bed's summary carries the ensemble.
+///
+/// Over 80 lines: the beds' closures (judge, scenes, setups, the give-up guard)
+/// and the scoped threads that run them share borrows of the caller's observers
+/// and progress; split, each helper would take them all.
 pub fn run_ensemble_shake(
     scene: &Scene,
     setup: &ShakeSetup,
@@ -352,6 +356,9 @@ pub fn run_ensemble_shake(
 }
 
 /// The ensemble's figures from its beds' runs.
+///
+/// Over 80 lines: the ensemble's figures filled field by field, each from the
+/// beds' runs and the ones before it.
 fn summarise(
     runs: &[ShakeRun],
     judge: &EnsembleJudge,

@@ -455,11 +455,66 @@ pub struct DecayOutcome {
     pub ensemble: Option<DecayEnsemble>,
 }
 
+/// Why a free decay could not be measured.
+#[derive(Debug, thiserror::Error)]
+pub enum DecayError {
+    /// The first bed's record could not be analysed.
+    #[error(transparent)]
+    Analysis(SceneError),
+    /// The record holds fewer than two successive peaks.
+    #[error("the decay has no two successive peaks to compare: lengthen the record (duration_s)")]
+    NoPeaks,
+    /// Another bed's decay failed.
+    #[error("the other beds' decays: {0}")]
+    OtherBeds(SceneError),
+}
+
 /// Yang's structure-independent energy per cycle at an estimate's
 /// frequency and amplitude (from a map of the damper), or `None`.
 pub type MapEnergy<'a> = &'a dyn Fn(&DecayEstimate) -> Option<f64>;
 
 impl DecayOutcome {
+    /// The free decay `test` of `scene` measured from `first`, the first
+    /// bed's run (the caller runs it, with its progress): both methods'
+    /// analysis, `skip_s` of the record left out first (a hammer's blow);
+    /// with `beds` > 1 the other beds' decays, from `source` side by side
+    /// ([`run_decays`]), and their ensemble.
+    pub fn measure(
+        scene: &crate::scene::Scene,
+        test: super::host_test::HostTest,
+        first: HostRun,
+        source: &crate::experiment::bed_cache::BedSource,
+        beds: u32,
+        skip_s: f64,
+    ) -> Result<DecayOutcome, DecayError> {
+        use crate::experiment::ensemble::bed_seed;
+        let g = scene.simulation.gravity_mps2;
+        let analysis =
+            analyse_decay(&first, &test.host, skip_s, g).map_err(DecayError::Analysis)?;
+        if analysis.log_decrement.is_empty() {
+            return Err(DecayError::NoPeaks);
+        }
+        let ensemble = if beds > 1 {
+            let mut all = vec![analysis.clone()];
+            all.extend(
+                run_decays(scene, source, &test, 1..beds, skip_s, g)
+                    .map_err(DecayError::OtherBeds)?,
+            );
+            let seeds: Vec<u64> = (0..beds)
+                .map(|k| bed_seed(scene.simulation.seed, k))
+                .collect();
+            Some(DecayEnsemble::of(&seeds, &all))
+        } else {
+            None
+        };
+        Ok(DecayOutcome {
+            test,
+            run: first,
+            analysis,
+            ensemble,
+        })
+    }
+
     /// `decay.csv`: one row per estimate of each method, with the truth of
     /// the same cycle and, where `map` gives it, Yang's energy.
     pub fn csv(&self, map: MapEnergy<'_>) -> String {

@@ -348,6 +348,10 @@ fn rate(v: &[f64], i0: usize, i1: usize, span_s: f64) -> f64 {
 
 /// One stepped-sine point of `run` (driven at `freq_hz`), its record from
 /// `record_from_s` on.
+///
+/// Over 80 lines: one point's chain as a lab works it, the receptance with its
+/// phase correction, the drive point's acceleration, then the balanced periods,
+/// each step reading the last's slices.
 fn measure_point(
     run: &HostRun,
     test: &HostTest,
@@ -534,6 +538,10 @@ fn ensemble_point(each: &[FrfPoint]) -> FrfPoint {
 
 /// Runs the stepped sine `plan` of `test` (its excitation replaced by each
 /// sine), the frequencies in parallel, each from the same settled bed.
+///
+/// Over 80 lines: the beds settled once, then the frequencies side by side,
+/// each over every bed, all through the closures that make a bed's scene and
+/// test.
 pub fn run_stepped_sine(
     scene: &Scene,
     beds: &BedSource,

@@ -372,6 +372,9 @@ pub fn linear_peak_gamma(test: &HostTest, particle_mass_kg: f64, g_mps2: f64) ->
 
 /// Runs `test` on the particles of `scene` (settled from `beds`), or without
 /// them for the other dampers, reporting progress.
+///
+/// Over 80 lines: one time loop coupling the host's modes, the damper's world
+/// and the rig's channels sample by sample; its parts share that state.
 pub fn run_host_test(
     scene: &Scene,
     beds: &BedSource,

@@ -190,6 +190,11 @@ pub fn run_measured_shake_observed(
 
 /// [`run_measured_shake_observed`] as bed `judged.1` of the beds the judge
 /// `judged.0` decides for together (an ensemble, [`crate::experiment::ensemble`]).
+///
+/// Over 80 lines: the drive through the rig and its measurement in the
+/// order a lab works (the shaker and the DAQ set up, the drive, the record
+/// cut to the steady window, the phase calibration, Yang's method, the
+/// comparison with the DEM), each step using the ones before.
 pub fn run_measured_shake_judged(
     scene: &Scene,
     world: &mut World,

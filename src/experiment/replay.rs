@@ -708,6 +708,9 @@ fn record_truth(record: &EnclosureRecord, inputs: &ReplayInputs) -> RecordTruth 
 /// Calibrates the rig as a shake calibrates it (the recorded motion is a
 /// prescribed drive: the same helper, frequencies, amplitudes and window) and
 /// measures the pushed record with Yang's method, against the record's truth.
+///
+/// Over 80 lines: the calibration and the measurement of one record, in the
+/// order a shake does them, sharing the record's channels.
 fn measure_replay(
     record: &EnclosureRecord,
     options: &ReplayOptions,

@@ -307,6 +307,9 @@ impl DemTruth {
     /// Warnings a user must see: impacts beyond yield, a record that is not
     /// steady, collisions resolved with too few steps; each with the scene
     /// key that lifts it, where one does.
+    ///
+    /// Over 80 lines: one check after another, each with its own words and the
+    /// key that lifts it.
     pub fn warnings(&self, freq_hz: f64, steps_per_contact: f64, bodies: bool) -> Vec<RunWarning> {
         let mut w = Vec::new();
         if let Some(y) = &self.yield_velocity_mps {
@@ -612,6 +615,9 @@ impl ShakeRun {
     /// `summary.json` last; the file names end up in `summary.files`.
     /// `others` are the other beds of its ensemble (none for one bed): their
     /// energies per cycle go into `cycles.csv` beside this bed's.
+    ///
+    /// Over 80 lines: the run's files one after the other, each a few lines,
+    /// `summary.json` last with the names of all.
     pub fn write(
         &mut self,
         dir: &Path,

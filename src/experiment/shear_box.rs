@@ -264,6 +264,10 @@ const WINDOW_S: f64 = 1e-3;
 
 /// Runs one test on `bed`, settled from `scene`, the box's scene
 /// ([`ShearBox::scene`]), under its contact laws.
+///
+/// Over 80 lines: one servo-controlled test, step by step: the pre-load, then
+/// the loading and the curve's sampling, all moving the same world, table and
+/// servo state; split, every part would take them all.
 pub fn run_test(
     bed: &SettledBed,
     scene: &Scene,

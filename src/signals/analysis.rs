@@ -394,6 +394,10 @@ fn calibration_range_warning(table: &PhaseCalibration, freq_hz: f64) -> Option<A
 }
 
 /// Yang's method on `trace` with `options` (see the module docs).
+///
+/// Over 80 lines: the report filled field by field from Yang's power, the
+/// period-by-period spread and the record's metadata, each figure from the ones
+/// before.
 pub fn analyse_trace(trace: &Trace, options: &AnalysisOptions) -> Result<Analysis, AnalysisError> {
     let mut warnings: Vec<AnalysisWarning> = Vec::new();
     let drive = drive_freq(trace, options, &mut warnings)?;

@@ -1336,6 +1336,8 @@ mod tests {
         std::fs::remove_dir_all(dir).ok();
     }
 
+    /// Over 80 lines: one test per kind of plot in turn, each a few lines
+    /// drawing it and reading the file back.
     #[test]
     fn log_plots_and_heat_maps_render_as_svg_and_png() {
         let dir = std::env::temp_dir().join(format!("vlab-plot-more-{}", std::process::id()));
@@ -1448,6 +1450,9 @@ mod tests {
     /// bottom `HEAT_MAP_BOTTOM_PX` hold the legend and the footnote); exact
     /// pixel bounds. One test over both figures: the fixtures are its
     /// length, and each assertion reads against the fixture above it.
+    ///
+    /// Over 80 lines: one test drawing each kind of plot and checking where its
+    /// legend lands; the kinds share the checks.
     #[test]
     fn legends_are_drawn_outside_the_data_area() {
         let dir = std::env::temp_dir().join(format!("vlab-plot-legend-{}", std::process::id()));

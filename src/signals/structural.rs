@@ -1100,6 +1100,10 @@ impl Frf {
 ///
 /// Errors: lengths differ, `sample_rate_hz` not positive, `block_len` below 8
 /// or above the record length, `overlap` outside `[0, 1)`, non-finite samples.
+///
+/// Over 80 lines: Welch's estimate in one pass, the checks, the window, the
+/// blocks' auto- and cross-spectra, then H1, H2 and the coherence, which share
+/// the block buffers.
 pub fn welch_frf(
     input: &[f64],
     output: &[f64],
@@ -1275,6 +1279,9 @@ fn parabola_max(u0: f64, y0: f64, y1: f64, u2: f64, y2: f64) -> Option<(f64, f64
 /// Errors: lengths differ or below 3, non-finite values, `freq_hz` not
 /// strictly increasing, a negative magnitude or no positive one, or no
 /// half-power crossing within the data on one side (named in the error).
+///
+/// Over 80 lines: the input checks, each refusal with its own words, then the
+/// two half-power crossings interpolated on either side of the peak.
 pub fn half_power(freq_hz: &[f64], magnitude: &[f64]) -> Result<HalfPower> {
     check_same_len("freq_hz", freq_hz, "magnitude", magnitude)?;
     check_min_len("freq_hz", freq_hz, 3, "half_power")?;
@@ -1989,6 +1996,9 @@ mod tests {
         assert!(err < 1e-9, "static deflection rel err {err:.2e} > 1e-9");
     }
 
+    /// Over 80 lines: one test of one system, read top to bottom (the
+    /// noise-free FRF, then noise on each side and the bias each estimator
+    /// takes); split, its setup would be passed around.
     #[test]
     fn welch_frf_of_sdof_h1_h2_and_noise_bias_directions() {
         // SDOF f_n = 40 Hz, ζ = 0.05, white force (σ = 1 N) at 5 kHz,
@@ -2546,6 +2556,8 @@ mod tests {
         }
     }
 
+    /// Over 80 lines: a table of refusals, one short case each; its length is
+    /// the number of refusals.
     #[test]
     fn every_validation_error_names_parameter_and_unit() {
         let fs = 1_000.0;

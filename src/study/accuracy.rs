@@ -602,6 +602,9 @@ pub struct AccuracyReport {
 }
 
 /// Runs the three studies of `plan` on `scene` with the rig `rig`.
+///
+/// Over 80 lines: the three studies in turn, each a few lines, with progress
+/// between them.
 pub fn run_accuracy(
     scene: &Scene,
     rig: &RigSpec,
@@ -829,6 +832,9 @@ fn drive(
 }
 
 /// Study (a) from the runs.
+///
+/// Over 80 lines: study (a)'s figures filled field by field from the runs, each
+/// from the ones before.
 fn dem_study(
     scene: &Scene,
     plan: &AccuracyPlan,
@@ -1969,6 +1975,9 @@ mod plots {
     }
 
     /// `accuracy.svg`: every study's error against its run time.
+    ///
+    /// Over 80 lines: one figure's series, a few lines each, that share the
+    /// axes' range; split, the range and the rows would be passed to each.
     fn accuracy_plot(
         dir: &Path,
         rows: &[AccuracyRow],

@@ -4,12 +4,16 @@
 //! motional phases read from DEM truth (`phases`), accuracy against run time
 //! (`accuracy`) and the bouncing-bed onset predicted from the scene alone
 //! (`predict`, thesis eq. 6.11-6.13); a sweep as the dissipation map a host
-//! model closes on (`dissipation_map`).
+//! model closes on (`dissipation_map`), and the host's response predicted
+//! from it (`host_prediction`); the shear box over scenes and seeds
+//! (`shear_box_series`).
 
 pub mod accuracy;
 pub mod dissipation_map;
+pub mod host_prediction;
 pub mod phases;
 pub mod predict;
+pub mod shear_box_series;
 pub mod sweep;
 pub mod sweep_peak;
 #[cfg(feature = "plot")]

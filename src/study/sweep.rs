@@ -682,6 +682,8 @@ pub fn run_condition(plan: &SweepPlan, beds: &dyn BedProvider, c: &Condition) ->
     }
 }
 
+/// Over 80 lines: one sweep row assembled field by field from the shake's
+/// summary, its ensemble and the phase observer.
 fn try_condition(
     plan: &SweepPlan,
     beds: &dyn BedProvider,

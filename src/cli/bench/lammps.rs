@@ -32,7 +32,9 @@ use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
 use vlab::experiment::settle::SettledBed;
-use vlab::export::lammps_deck::{INPUT_FILE, LammpsExport, MIN_EXPORT_CYCLES, lammps_deck};
+use vlab::export::lammps_deck::{
+    DeckSummary, INPUT_FILE, LammpsExport, MIN_EXPORT_CYCLES, lammps_deck,
+};
 use vlab::scene::{Scene, SceneOverrides};
 
 use super::{BenchRow, Run, Speedup, drive_once, proc_stat_cpu_s};
@@ -222,6 +224,65 @@ pub fn lammps_rows(
 ) -> Result<LammpsComparison> {
     let (freq_hz, gamma) = (40.0, 20.0);
     let cycles = cycles.max(MIN_EXPORT_CYCLES);
+    let (dir, s) = deck_in_temp(scene, bed, cycles, (freq_hz, gamma))?;
+    let s = &s;
+    let n = bed.world.particles.len();
+    let t = in_turns(scene, bed, (cycles, repeats), (&dir, s), progress)?;
+    let vlab_row = BenchRow::new(VLAB_CASE, 1, false, n, t.vlab_steps, &t.vlab_runs);
+    let process_row = BenchRow::new(LMP_PROCESS_CASE, 1, false, n, s.steps, &t.lmp_runs);
+    let loop_row = BenchRow::new(LMP_LOOP_CASE, 1, false, n, s.steps, &t.loop_runs);
+    let over_process = Speedup::between(
+        "vlab over LAMMPS per core (1 thread each), against the whole lmp process".into(),
+        &process_row,
+        &vlab_row,
+    );
+    let over_loop = Speedup::between(
+        "vlab over LAMMPS per core (1 thread each), against LAMMPS' Loop time (its run only)"
+            .into(),
+        &loop_row,
+        &vlab_row,
+    );
+    let comparison = LammpsComparison {
+        lammps_version: t.version,
+        deck: format!(
+            "vlab export lammps --freq {freq_hz} --gamma {gamma} --cycles {cycles} --steady-cycles {STEADY_CYCLES}"
+        ),
+        particles: n,
+        cycles,
+        dt_s: s.dt_s,
+        vlab_steps: t.vlab_steps,
+        lammps_steps: s.steps,
+        runs: t.vlab_runs.len(),
+        vlab_timed: "the drive's stepping loop on one thread (wall forces every step, \
+                     energy ledger every cycle; no trace written), not the copy of the bed",
+        lammps_process_timed: "lmp -in in.damper, 1 process, OMP_NUM_THREADS=1: start-up, \
+                               read_data, the run, its record (a row every 20 steps) and thermo",
+        lammps_loop_timed: "LAMMPS' Loop time from its log: the run with its record and thermo, \
+                            not the start-up or read_data",
+        vlab_wall_s: vlab_row.run_wall_s.clone(),
+        lammps_process_wall_s: process_row.run_wall_s.clone(),
+        lammps_loop_s: loop_row.run_wall_s.clone(),
+        lammps_loop_cpu_use_percent: t.cpu_use,
+        vlab_particle_steps_per_s: vlab_row.particle_steps_per_s,
+        lammps_process_particle_steps_per_s: process_row.particle_steps_per_s,
+        lammps_loop_particle_steps_per_s: loop_row.particle_steps_per_s,
+        vlab_over_lammps_process: over_process.median_paired,
+        vlab_over_lammps_loop: over_loop.median_paired,
+    };
+    rows.extend([vlab_row, process_row, loop_row]);
+    speedups.extend([over_process, over_loop]);
+    Ok(comparison)
+}
+
+/// The deck of `vlab export lammps --cycles N --steady-cycles 2` for the
+/// drive `(freq_hz, gamma)`, written into a temporary folder, checked to
+/// step as vlab does.
+fn deck_in_temp(
+    scene: &Scene,
+    bed: &SettledBed,
+    cycles: u32,
+    (freq_hz, gamma): (f64, f64),
+) -> Result<(TempDir, DeckSummary)> {
     // The scene `vlab export lammps --cycles N --steady-cycles 2` resolves.
     let deck_scene = SceneOverrides {
         cycles: Some(cycles),
@@ -236,26 +297,45 @@ pub fn lammps_rows(
     let deck = lammps_deck(&deck_scene, bed, &export).context("writing the LAMMPS deck")?;
     let dir = TempDir::new()?;
     deck.write(&dir.0).context("writing the LAMMPS deck")?;
-    let s = &deck.summary;
     let vlab_dt_s = scene.drive_dt_s(&scene.drive(freq_hz, gamma)?);
+    let s = deck.summary;
     if (vlab_dt_s / s.dt_s - 1.0).abs() > 1e-12 {
         bail!(
             "the deck's time step {:e} s is not vlab's {vlab_dt_s:e} s",
             s.dt_s
         );
     }
+    Ok((dir, s))
+}
+
+/// What the runs in turns gave: vlab's and lmp's wall and CPU times, the
+/// loop's by LAMMPS' own count, the steps and LAMMPS' version.
+#[derive(Default)]
+struct Turns {
+    vlab_runs: Vec<Run>,
+    lmp_runs: Vec<Run>,
+    loop_runs: Vec<Run>,
+    cpu_use: Vec<f64>,
+    vlab_steps: u64,
+    version: String,
+}
+
+/// vlab's drive of `cycles` and lmp's run of the deck in `dir`, in turns,
+/// `repeats` times; lmp must run the deck's steps on the bed's spheres.
+fn in_turns(
+    scene: &Scene,
+    bed: &SettledBed,
+    (cycles, repeats): (u32, u32),
+    (dir, s): (&TempDir, &DeckSummary),
+    progress: &mut ProgressLine,
+) -> Result<Turns> {
     let n = bed.world.particles.len();
-    let mut vlab_runs = Vec::new();
-    let mut lmp_runs = Vec::new();
-    let mut loop_runs = Vec::new();
-    let mut cpu_use = Vec::new();
-    let mut vlab_steps = 0;
-    let mut version = String::new();
+    let mut t = Turns::default();
     for _ in 0..repeats {
         let (run, steps, _) =
             drive_once(bed, scene, cycles, 1, progress).context("driving the thesis bed")?;
-        vlab_runs.push(run);
-        vlab_steps = steps;
+        t.vlab_runs.push(run);
+        t.vlab_steps = steps;
         let (run, log) = lmp_once(&dir.0)?;
         if log.steps != s.steps || log.atoms != n {
             bail!(
@@ -265,62 +345,19 @@ pub fn lammps_rows(
                 s.steps
             );
         }
-        lmp_runs.push(run);
+        t.lmp_runs.push(run);
         // The loop's CPU time by LAMMPS' own count of its CPU use.
-        loop_runs.push(Run {
+        t.loop_runs.push(Run {
             wall_s: log.loop_s,
             cpu_s: match log.cpu_use_percent.is_finite() {
                 true => log.loop_s * log.cpu_use_percent / 100.0,
                 false => 0.0,
             },
         });
-        cpu_use.push(log.cpu_use_percent);
-        version = log.version;
+        t.cpu_use.push(log.cpu_use_percent);
+        t.version = log.version;
     }
-    let vlab_row = BenchRow::new(VLAB_CASE, 1, false, n, vlab_steps, &vlab_runs);
-    let process_row = BenchRow::new(LMP_PROCESS_CASE, 1, false, n, s.steps, &lmp_runs);
-    let loop_row = BenchRow::new(LMP_LOOP_CASE, 1, false, n, s.steps, &loop_runs);
-    let over_process = Speedup::between(
-        "vlab over LAMMPS per core (1 thread each), against the whole lmp process".into(),
-        &process_row,
-        &vlab_row,
-    );
-    let over_loop = Speedup::between(
-        "vlab over LAMMPS per core (1 thread each), against LAMMPS' Loop time (its run only)"
-            .into(),
-        &loop_row,
-        &vlab_row,
-    );
-    let comparison = LammpsComparison {
-        lammps_version: version,
-        deck: format!(
-            "vlab export lammps --freq {freq_hz} --gamma {gamma} --cycles {cycles} --steady-cycles {STEADY_CYCLES}"
-        ),
-        particles: n,
-        cycles,
-        dt_s: s.dt_s,
-        vlab_steps,
-        lammps_steps: s.steps,
-        runs: vlab_runs.len(),
-        vlab_timed: "the drive's stepping loop on a 1-thread pool (wall forces every step, \
-                     energy ledger every cycle; no trace written), not the copy of the bed",
-        lammps_process_timed: "lmp -in in.damper, 1 process, OMP_NUM_THREADS=1: start-up, \
-                               read_data, the run, its record (a row every 20 steps) and thermo",
-        lammps_loop_timed: "LAMMPS' Loop time from its log: the run with its record and thermo, \
-                            not the start-up or read_data",
-        vlab_wall_s: vlab_row.run_wall_s.clone(),
-        lammps_process_wall_s: process_row.run_wall_s.clone(),
-        lammps_loop_s: loop_row.run_wall_s.clone(),
-        lammps_loop_cpu_use_percent: cpu_use,
-        vlab_particle_steps_per_s: vlab_row.particle_steps_per_s,
-        lammps_process_particle_steps_per_s: process_row.particle_steps_per_s,
-        lammps_loop_particle_steps_per_s: loop_row.particle_steps_per_s,
-        vlab_over_lammps_process: over_process.median_paired,
-        vlab_over_lammps_loop: over_loop.median_paired,
-    };
-    rows.extend([vlab_row, process_row, loop_row]);
-    speedups.extend([over_process, over_loop]);
-    Ok(comparison)
+    Ok(t)
 }
 
 /// The comparison's lines of the text report.

@@ -8,13 +8,13 @@
 use std::f64::consts::TAU;
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
-use vlab::experiment::ensemble::{bed_seed, check_beds};
+use vlab::experiment::ensemble::check_beds;
 use vlab::experiment::host_decay::{
-    DecayEnsemble, DecayEstimate, DecayOutcome, analyse_decay, run_decays,
+    DecayEnsemble, DecayError, DecayEstimate, DecayOutcome, MapEnergy,
 };
 use vlab::experiment::host_test::Damper;
 use vlab::host::Excitation;
@@ -55,82 +55,43 @@ pub struct DecayArgs {
 }
 
 pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
-    let excitation = match a.hammer_n_s {
-        Some(j) => Excitation::Hammer { impulse_n_s: j },
-        None => Excitation::Release { x0_m: a.x0_m },
-    };
-    excitation.validate().map_err(|e| {
-        anyhow::Error::from(e.renamed(if a.hammer_n_s.is_some() {
-            "--hammer-n-s"
-        } else {
-            "--x0-m"
-        }))
-    })?;
+    let excitation = excitation(&a)?;
     check_beds(a.beds).map_err(|e| anyhow::Error::from(e).context("--beds"))?;
     let (scene, test) = a.common.test(excitation, a.duration_s)?;
-    let beds = if test.damper == Damper::Particles {
-        a.beds
-    } else {
-        1
+    let beds = match test.damper {
+        Damper::Particles => a.beds,
+        _ => 1,
     };
     let map = match &a.map {
         Some(path) => {
             let file =
                 SweepFile::read(path).with_context(|| format!("--map {}", path.display()))?;
-            Some(
-                dissipation_map(
-                    &file,
-                    Some(scene.enclosure.orientation),
-                    None,
-                    MapSource::Yang,
-                )
-                .with_context(|| format!("--map {}", path.display()))?,
-            )
+            let o = Some(scene.enclosure.orientation);
+            let map = dissipation_map(&file, o, None, MapSource::Yang);
+            Some(map.with_context(|| format!("--map {}", path.display()))?)
         }
         None => None,
     };
     let out = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from("signals").join(format!(
-            "host-decay-{}-{}",
-            test.host.name,
-            damper_slug(test.damper)
-        ))
+        let name = format!("host-decay-{}-{}", test.host.name, damper_slug(test.damper));
+        PathBuf::from("signals").join(name)
     });
     let made = OutputDir::prepare(&out)
         .with_context(|| format!("cannot create output folder {}", out.display()))?;
-    let analysed = made.keep_if_ok((|| {
-        let run = run_test(&scene, &test, a.common.cache, quiet)?;
-        // A hammer's blow is over in 0.5 ms; the record starts after it.
-        let skip = if a.hammer_n_s.is_some() { 2e-3 } else { 0.0 };
-        let g = scene.simulation.gravity_mps2;
-        let analysis = analyse_decay(&run, &test.host, skip, g)?;
-        if analysis.log_decrement.is_empty() {
-            bail!("the decay has no two successive peaks to compare: lengthen --duration-s");
-        }
-        let ensemble = if beds > 1 {
-            let source = a.common.cache.source(&mut |n| eprintln!("{n}"));
-            let mut all = vec![analysis.clone()];
-            all.extend(
-                run_decays(&scene, &source, &test, 1..beds, skip, g)
-                    .context("the other beds' decays")?,
-            );
-            let seeds: Vec<u64> = (0..beds)
-                .map(|k| bed_seed(scene.simulation.seed, k))
-                .collect();
-            Some(DecayEnsemble::of(&seeds, &all))
-        } else {
-            None
-        };
-        Ok((run, analysis, ensemble))
+    // A hammer's blow is over in 0.5 ms; the record starts after it.
+    let skip_s = if a.hammer_n_s.is_some() { 2e-3 } else { 0.0 };
+    let outcome = made.keep_if_ok((|| {
+        let first = run_test(&scene, &test, a.common.cache, quiet)?;
+        let source = a.common.cache.source(&mut |n| eprintln!("{n}"));
+        DecayOutcome::measure(&scene, test.clone(), first, &source, beds, skip_s).map_err(|e| {
+            match e {
+                DecayError::NoPeaks => anyhow::anyhow!(
+                    "the decay has no two successive peaks to compare: lengthen --duration-s"
+                ),
+                e => e.into(),
+            }
+        })
     })())?;
-    let (run, analysis, ensemble) = analysed;
-    let outcome = DecayOutcome {
-        test,
-        run,
-        analysis,
-        ensemble,
-    };
-    let (test, run, analysis) = (&outcome.test, &outcome.run, &outcome.analysis);
     let g = scene.simulation.gravity_mps2;
     // Yang's structure-independent energy per cycle at a point's f and Γ.
     let yang_energy = |e: &DecayEstimate| {
@@ -140,6 +101,33 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
             d.efficiency * 4.0 * v * v * m.particle_mass_kg
         })
     };
+    print_decay(&outcome, &yang_energy, map.is_some());
+    if let Some(e) = &outcome.ensemble {
+        print_ensemble(e);
+    }
+    outcome
+        .write(&out, &yang_energy)
+        .with_context(|| format!("writing into {}", out.display()))?;
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// The release or the hammer blow of the flags, checked.
+fn excitation(a: &DecayArgs) -> Result<Excitation> {
+    let (excitation, flag) = match a.hammer_n_s {
+        Some(j) => (Excitation::Hammer { impulse_n_s: j }, "--hammer-n-s"),
+        None => (Excitation::Release { x0_m: a.x0_m }, "--x0-m"),
+    };
+    excitation
+        .validate()
+        .map_err(|e| anyhow::Error::from(e.renamed(flag)))?;
+    Ok(excitation)
+}
+
+/// The first bed's decay: each method's estimates against the truth, and
+/// what the damper took over the decay.
+fn print_decay(outcome: &DecayOutcome, yang_energy: MapEnergy<'_>, with_map: bool) {
+    let (test, run, analysis) = (&outcome.test, &outcome.run, &outcome.analysis);
     println!(
         "{} on {}, {}: {} steps of {:.3e} s, {:.1} s wall; the bare host's loss factor {:.4}",
         test.damper.label(),
@@ -152,7 +140,7 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
     );
     println!(
         "  method          t_s     Gamma   eta (+- reading)     eta_true  damper J/cycle: method  host's work  dissipated{}",
-        if map.is_some() { "  Yang's map" } else { "" }
+        if with_map { "  Yang's map" } else { "" }
     );
     for (name, points) in outcome.methods() {
         for e in points {
@@ -178,14 +166,6 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         analysis.true_damper_energy_sum_j,
         analysis.true_damper_dissipated_sum_j
     );
-    if let Some(e) = &outcome.ensemble {
-        print_ensemble(e);
-    }
-    outcome
-        .write(&out, &yang_energy)
-        .with_context(|| format!("writing into {}", out.display()))?;
-    println!("wrote {}", out.display());
-    Ok(())
 }
 
 /// The beds' decays cycle by cycle: the mean loss factor with the error of

@@ -15,7 +15,9 @@ use vlab::atomic_write::OutputDir;
 use vlab::experiment::host_frf::{FrfPoint, SteppedSine};
 use vlab::experiment::host_frf_outcome::{FrfMaps, RandomFrfOutcome, SteppedSineOutcome};
 use vlab::experiment::host_test::HostTest;
+use vlab::host::DissipationMap;
 use vlab::host::{Excitation, PeriodicRandom};
+use vlab::scene::Scene;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
 use vlab::study::sweep::SweepFile;
 
@@ -76,39 +78,8 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
             damper_slug(test.damper)
         ))
     });
-    // The map: the DEM's efficiency for the model, Yang's for the
-    // structure-independent figure at each point's frequency and Γ.
-    let maps = match &a.map {
-        Some(path) => {
-            let file =
-                SweepFile::read(path).with_context(|| format!("--map {}", path.display()))?;
-            let of = |source| {
-                dissipation_map(&file, Some(scene.enclosure.orientation), None, source)
-                    .with_context(|| format!("--map {}", path.display()))
-            };
-            Some((of(MapSource::Dem)?, of(MapSource::Yang)?))
-        }
-        None => None,
-    };
-    let plan = SteppedSine {
-        freqs_hz: a.freqs.clone().map(|f| f.0).unwrap_or_default(),
-        force_n: a.force_n,
-        settle_cycles: a.settle_cycles,
-        record_cycles: a.record_cycles,
-        beds: a.beds,
-    };
-    if a.random.is_none() {
-        plan.validate().map_err(|e| {
-            let flag = match e.key.as_str() {
-                "record_cycles" => "--record-cycles",
-                "settle_cycles" => "--settle-cycles",
-                "force_n" => "--force-n",
-                "beds" => "--beds",
-                _ => "--freq",
-            };
-            anyhow::Error::from(e.renamed(flag))
-        })?;
-    }
+    let maps = maps(&a, &scene)?;
+    let plan = stepped_sine(&a)?;
     let made = OutputDir::prepare(&out)
         .with_context(|| format!("cannot create output folder {}", out.display()))?;
     if let Some(key) = &a.random {
@@ -139,6 +110,45 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
     made.keep_if_ok(written)?;
     println!("wrote {}", out.display());
     Ok(())
+}
+
+/// The map of `--map`: the DEM's efficiency for the model, Yang's for the
+/// structure-independent figure at each point's frequency and Γ.
+fn maps(a: &FrfArgs, scene: &Scene) -> Result<Option<(DissipationMap, DissipationMap)>> {
+    let Some(path) = &a.map else {
+        return Ok(None);
+    };
+    let file = SweepFile::read(path).with_context(|| format!("--map {}", path.display()))?;
+    let of = |source| {
+        dissipation_map(&file, Some(scene.enclosure.orientation), None, source)
+            .with_context(|| format!("--map {}", path.display()))
+    };
+    Ok(Some((of(MapSource::Dem)?, of(MapSource::Yang)?)))
+}
+
+/// The stepped sine of the flags, checked unless the test is the random
+/// one (a refusal names the flag).
+fn stepped_sine(a: &FrfArgs) -> Result<SteppedSine> {
+    let plan = SteppedSine {
+        freqs_hz: a.freqs.clone().map(|f| f.0).unwrap_or_default(),
+        force_n: a.force_n,
+        settle_cycles: a.settle_cycles,
+        record_cycles: a.record_cycles,
+        beds: a.beds,
+    };
+    if a.random.is_none() {
+        plan.validate().map_err(|e| {
+            let flag = match e.key.as_str() {
+                "record_cycles" => "--record-cycles",
+                "settle_cycles" => "--settle-cycles",
+                "force_n" => "--force-n",
+                "beds" => "--beds",
+                _ => "--freq",
+            };
+            anyhow::Error::from(e.renamed(flag))
+        })?;
+    }
+    Ok(plan)
 }
 
 /// What the damper power's +- holds: the record's periods, and the
@@ -184,7 +194,6 @@ fn error_note(points: &[FrfPoint]) -> String {
 /// the peak against the comparisons and the half-power loss factor.
 fn report(o: &SteppedSineOutcome) {
     let (test, plan, measured) = (&o.test, &o.plan, &o.measured);
-    let (empty, solid) = (&o.empty, &o.solid);
     println!(
         "{} on {}, {} N stepped sine: {} frequencies in {:.1} s wall ({} + {} cycles each)",
         test.damper.label(),
@@ -203,54 +212,76 @@ fn report(o: &SteppedSineOutcome) {
             ""
         }
     );
-    for (k, p) in measured.points.iter().enumerate() {
+    for k in 0..measured.points.len() {
+        report_point(o, k);
+    }
+    println!("{}", error_note(&measured.points));
+    report_peak(o);
+    if o.predicted.is_some() {
         println!(
-            "  {:7.2}  {:10.4}  {:5.2}  {:8.5}  {:8.5}  {:8.5} +- {:7.5}            {:10.5}  {:10.5}{}",
-            p.freq_hz,
-            p.receptance().norm() * 1e3,
-            p.gamma,
-            p.power_input_w,
-            p.host_storage_w,
-            p.damper_power_w,
-            p.damper_power_stderr_w,
-            p.true_damper_work_w,
-            p.true_damper_w,
-            o.predicted_receptance(k).map_or(String::new(), |h| format!(
-                "        {:10.4}  {:12.5}",
-                h * 1e3,
-                o.yang_map_w[k]
-            ))
+            "  map-based prediction of the same {} frequencies: {:.1} ms",
+            measured.points.len(),
+            o.predict_ms
         );
-        if p.damper_power_stderr_w.is_nan() {
-            // The balance uses the record's whole periods less the first
-            // and the last.
-            let why = if plan.record_cycles < 18 {
-                "fewer than 16 balanced periods (the first and last recorded cycles are not used)"
-            } else {
-                "the record's periods are correlated over about its length (the host's response beats)"
-            };
-            println!("           +- not known: {why}; more --record-cycles");
-        }
-        for w in &p.warnings {
-            eprintln!("warning: {} Hz: {w}", p.freq_hz);
-        }
-        for (what, other) in [("the empty host", empty), ("the solid mass", solid)] {
-            for w in other.points.get(k).map_or(&[][..], |q| &q.warnings[..]) {
-                eprintln!(
-                    "warning: {} Hz, {what} (the comparison, and the dB against it): {w}",
-                    p.freq_hz
-                );
-            }
-        }
-        if !p.steady {
-            println!(
-                "           not steady: the host's stored energy moved by {:.4} W over the record ({:+.1} % of the input; booked in the balance, but the damper is not at its steady state: more --settle-cycles)",
-                p.host_storage_w,
-                100.0 * p.host_storage_w / p.power_input_w
+    }
+}
+
+/// Frequency `k` of the stepped sine: its row, why its +- is not known,
+/// its warnings and the empty host's and solid mass's, and whether it
+/// was steady.
+fn report_point(o: &SteppedSineOutcome, k: usize) {
+    let p = &o.measured.points[k];
+    println!(
+        "  {:7.2}  {:10.4}  {:5.2}  {:8.5}  {:8.5}  {:8.5} +- {:7.5}            {:10.5}  {:10.5}{}",
+        p.freq_hz,
+        p.receptance().norm() * 1e3,
+        p.gamma,
+        p.power_input_w,
+        p.host_storage_w,
+        p.damper_power_w,
+        p.damper_power_stderr_w,
+        p.true_damper_work_w,
+        p.true_damper_w,
+        o.predicted_receptance(k).map_or(String::new(), |h| format!(
+            "        {:10.4}  {:12.5}",
+            h * 1e3,
+            o.yang_map_w[k]
+        ))
+    );
+    if p.damper_power_stderr_w.is_nan() {
+        // The balance uses the record's whole periods less the first and
+        // the last.
+        let why = if o.plan.record_cycles < 18 {
+            "fewer than 16 balanced periods (the first and last recorded cycles are not used)"
+        } else {
+            "the record's periods are correlated over about its length (the host's response beats)"
+        };
+        println!("           +- not known: {why}; more --record-cycles");
+    }
+    for w in &p.warnings {
+        eprintln!("warning: {} Hz: {w}", p.freq_hz);
+    }
+    for (what, other) in [("the empty host", &o.empty), ("the solid mass", &o.solid)] {
+        for w in other.points.get(k).map_or(&[][..], |q| &q.warnings[..]) {
+            eprintln!(
+                "warning: {} Hz, {what} (the comparison, and the dB against it): {w}",
+                p.freq_hz
             );
         }
     }
-    println!("{}", error_note(&measured.points));
+    if !p.steady {
+        println!(
+            "           not steady: the host's stored energy moved by {:.4} W over the record ({:+.1} % of the input; booked in the balance, but the damper is not at its steady state: more --settle-cycles)",
+            p.host_storage_w,
+            100.0 * p.host_storage_w / p.power_input_w
+        );
+    }
+}
+
+/// The peak against the empty host's and the solid mass's, and the
+/// half-power loss factors.
+fn report_peak(o: &SteppedSineOutcome) {
+    let (measured, empty, solid) = (&o.measured, &o.empty, &o.solid);
     println!(
         "  peak {:.4} mm/N at {:.2} Hz: {:+.1} dB against the empty host ({:.4} mm/N at {:.2} Hz), {:+.1} dB against the solid mass ({:.4} mm/N at {:.2} Hz)",
         measured.peak_m_per_n * 1e3,
@@ -276,13 +307,6 @@ fn report(o: &SteppedSineOutcome) {
         ),
         (None, Some(why)) => println!("  no half-power loss factor: {why}"),
         _ => {}
-    }
-    if o.predicted.is_some() {
-        println!(
-            "  map-based prediction of the same {} frequencies: {:.1} ms",
-            measured.points.len(),
-            o.predict_ms
-        );
     }
 }
 

@@ -1,0 +1,125 @@
+//! The host's steady response to a stepped sine predicted from a sweep's
+//! dissipation map (describing function and harmonic balance,
+//! [`crate::host::map_model`]), in milliseconds: the outcome `vlab host
+//! predict` prints, with its `predict.csv` and `predict.json`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::atomic_write::write_bytes_atomic;
+use crate::host::map_model::{SteadyResponse, stepped_sine};
+use crate::host::{DissipationMap, HostSpec};
+use crate::scene::SceneError;
+
+use super::dissipation_map::MapSource;
+
+/// A finished prediction: each frequency's response with its count of
+/// roots, and the frequencies the map had to be extrapolated for.
+pub struct HostPrediction {
+    pub host: HostSpec,
+    /// Where the map came from (the sweep's file), as the summary names it.
+    pub map_label: String,
+    pub source: MapSource,
+    pub force_n: f64,
+    /// The map's particle mass (kg), points and whether it measured the
+    /// apparent mass.
+    pub particle_mass_kg: f64,
+    pub map_points: usize,
+    pub has_apparent_mass: bool,
+    /// Each frequency's steady response and how many roots it had.
+    pub points: Vec<(SteadyResponse, usize)>,
+    /// The map's words on each response outside it.
+    pub warnings: Vec<String>,
+    pub elapsed_ms: f64,
+}
+
+impl HostPrediction {
+    /// Predicts `host`'s response to `force_n` at each of `freqs_hz` with
+    /// the damper of `map` (labelled `map_label`, of `source`'s efficiency).
+    pub fn run(
+        map: &DissipationMap,
+        map_label: String,
+        source: MapSource,
+        host: HostSpec,
+        freqs_hz: &[f64],
+        force_n: f64,
+    ) -> HostPrediction {
+        let started = Instant::now();
+        let points = stepped_sine(map, &host, freqs_hz, force_n);
+        let elapsed_ms = started.elapsed().as_secs_f64() * 1e3;
+        let warnings = points
+            .iter()
+            .filter_map(|(p, _)| map.outside(p.freq_hz, p.damper.gamma))
+            .collect();
+        HostPrediction {
+            host,
+            map_label,
+            source,
+            force_n,
+            particle_mass_kg: map.particle_mass_kg,
+            map_points: map.columns.iter().map(Vec::len).sum(),
+            has_apparent_mass: map.has_apparent_mass(),
+            points,
+            warnings,
+            elapsed_ms,
+        }
+    }
+
+    /// `predict.csv`: one row per frequency.
+    pub fn csv(&self) -> String {
+        let mut csv = String::from(
+            "freq_hz,amplitude_m,amplitude_if_more_damping_m,amplitude_if_less_damping_m,phase_rad,receptance_m_per_n,gamma,efficiency,efficiency_se,damping_n_s_per_m,apparent_mass_kg,damper_energy_per_cycle_j,extrapolated,roots\n",
+        );
+        for (p, roots) in &self.points {
+            csv.push_str(&format!(
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                p.freq_hz,
+                p.amplitude_m,
+                p.amplitude_if_more_damping_m,
+                p.amplitude_if_less_damping_m,
+                p.phase_rad,
+                p.amplitude_m / self.force_n,
+                p.damper.gamma,
+                p.damper.efficiency,
+                p.damper.efficiency_se,
+                p.damper.damping_n_s_per_m,
+                p.damper.apparent_mass_kg,
+                p.damper_energy_per_cycle_j,
+                p.damper.extrapolated,
+                roots
+            ));
+        }
+        csv
+    }
+
+    /// `predict.json`: the host, the map, the force, the time taken, the
+    /// warnings and every response.
+    pub fn summary(&self) -> serde_json::Value {
+        let points = self.points.iter();
+        serde_json::json!({
+            "host": self.host,
+            "map": self.map_label,
+            "source": match self.source { MapSource::Yang => "yang", MapSource::Dem => "dem" },
+            "force_n": self.force_n,
+            "elapsed_ms": self.elapsed_ms,
+            "warnings": self.warnings,
+            "points": points.map(|(p, r)| serde_json::json!({"response": p, "roots": r})).collect::<Vec<_>>(),
+        })
+    }
+
+    /// Writes `predict.csv` and `predict.json` into `dir` (made if need
+    /// be), each file atomically.
+    pub fn write(&self, dir: &Path) -> Result<(), SceneError> {
+        let io = |path: std::path::PathBuf, text: std::io::Result<String>| {
+            text.and_then(|t| write_bytes_atomic(&path, t.as_bytes()))
+                .map_err(|source| SceneError::Write { path, source })
+        };
+        std::fs::create_dir_all(dir).map_err(|source| SceneError::Write {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        io(dir.join("predict.csv"), Ok(self.csv()))?;
+        let json = serde_json::to_string_pretty(&self.summary()).map_err(std::io::Error::other);
+        io(dir.join("predict.json"), json)
+    }
+}
