@@ -3,21 +3,14 @@
 //! tangential force-deformation curves (thesis Section 5.4, Fig. 5.8 and
 //! 5.10), and for a toroid lying flat the depth of its ripples (eq. 5.19).
 
-use std::io::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 
-use glam::DVec3;
-use vlab::atomic_write::write_atomic;
-use vlab::dem::ContactLaw;
-use vlab::dem::clumps::ClumpTemplate;
-use vlab::experiment::press::{
-    NormalPoint, PressConfig, TangentialPoint, half_size_m, heights_m, normal_curve,
-    tangential_curve, toroid_ripple_m,
-};
-use vlab::scene::{Scene, ShapeKind, contact_laws};
+use vlab::experiment::press::{NormalPoint, PressConfig};
+use vlab::experiment::press_outcome::{PressOutcome, PressPlan};
+use vlab::scene::Scene;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Config {
@@ -57,43 +50,27 @@ pub struct PressArgs {
 pub fn run(a: PressArgs) -> Result<()> {
     check(&a)?;
     let scene = Scene::load_or_thesis(a.scene.as_deref())?;
-    let shape = scene.particles.shape;
-    let template = match scene.particle_body()? {
-        Some(b) => b.template,
-        None => ClumpTemplate::sphere(scene.radius_m(), scene.particle_material().density_kgm3),
+    let plan = PressPlan {
+        config: match a.config {
+            Config::Horizontal => PressConfig::Horizontal,
+            Config::Vertical => PressConfig::Vertical,
+        },
+        max_deformation: a.max_deformation,
+        preload: a.preload,
+        points: a.points,
     };
-    let config = match a.config {
-        Config::Horizontal => PressConfig::Horizontal,
-        Config::Vertical => PressConfig::Vertical,
-    };
-    let (normal, slide) = config.axes(shape);
-    let half_m = half_size_m(&template, normal);
-    let law = contact_laws(&scene).particle_wall;
-    let normal_pts = normal_curve(
-        &law,
-        &template,
-        normal,
-        a.max_deformation * half_m,
-        a.points,
-    );
-    let tangential_pts = tangential_curve(
-        &law,
-        &template,
-        (normal, slide),
-        a.preload * half_m,
-        (4.0 * a.preload * half_m * law.friction, a.points),
-    );
-    let last = normal_pts.last().copied().unwrap_or(NormalPoint {
+    let o = PressOutcome::run(&scene, plan)?;
+    let last = o.normal.last().copied().unwrap_or(NormalPoint {
         deformation_m: 0.0,
         force_n: 0.0,
         touching: 0,
     });
     println!(
         "{} ({} sub-spheres) pressed {} onto a plate of the enclosure's material: half-size {:.3} mm along the press",
-        shape.as_str(),
-        template.len(),
-        config.as_str(),
-        half_m * 1e3
+        o.shape.as_str(),
+        o.sub_spheres,
+        plan.config.as_str(),
+        o.half_m * 1e3
     );
     println!(
         "  normal      at {:.4} of the half-size ({:.2} um): {:.4} N, {} sub-sphere(s) touching",
@@ -102,13 +79,28 @@ pub fn run(a: PressArgs) -> Result<()> {
         last.force_n,
         last.touching
     );
-    print_held(&a, &law, &template, normal, &tangential_pts, half_m);
-    let ripple = ripple_report(shape, config, &template, &normal_pts, half_m);
-    if let Some(r) = &ripple {
-        println!("  {}", r.text);
+    let held = o.tangential.last();
+    println!(
+        "  tangential  held at {:.4} of the half-size, slid {:.2} um: {:.4} N (mu times the normal force there: {:.4} N)",
+        a.preload,
+        held.map_or(0.0, |p| p.displacement_m) * 1e6,
+        held.map_or(0.0, |p| p.force_n),
+        o.friction * o.preload_normal_n
+    );
+    if let Some(r) = &o.ripple {
+        println!(
+            "  ripples     {:.2} um deep between the {} sub-spheres (eq. 5.19: {:.2} um; {:.2e} of the tube radius, {:.2e} of the centre circle's diameter 2a): deeper than that the multi-sphere toroid is stiffer than the smooth one (Section 5.4.4); {} of the curve's points are deeper",
+            r.exact_m * 1e6,
+            r.sub_spheres,
+            r.eq_5_19_m * 1e6,
+            r.exact_m / o.half_m,
+            r.exact_m / (2.0 * r.centre_radius_m),
+            r.points_deeper
+        );
     }
     if let Some(dir) = &a.out {
-        write_out(dir, &normal_pts, &tangential_pts, half_m, ripple.as_ref())?;
+        o.write(dir)
+            .with_context(|| format!("writing into {}", dir.display()))?;
         println!("wrote {}", dir.display());
     }
     Ok(())
@@ -132,118 +124,5 @@ fn check(a: &PressArgs) -> Result<()> {
     if !(10..=100_000).contains(&a.points) {
         bail!("--points = {}: must be in [10, 100000]", a.points);
     }
-    Ok(())
-}
-
-/// The tangential curve's end: how far the body slid at the preload and
-/// the force that held it, against mu times the normal force there.
-fn print_held(
-    a: &PressArgs,
-    law: &ContactLaw,
-    template: &ClumpTemplate,
-    normal: DVec3,
-    tangential_pts: &[TangentialPoint],
-    half_m: f64,
-) {
-    let slid = tangential_pts.last().map_or(0.0, |p| p.force_n);
-    println!(
-        "  tangential  held at {:.4} of the half-size, slid {:.2} um: {:.4} N (mu times the normal force there: {:.4} N)",
-        a.preload,
-        tangential_pts.last().map_or(0.0, |p| p.displacement_m) * 1e6,
-        slid,
-        law.friction
-            * vlab::experiment::press::normal_force_n(
-                law,
-                template,
-                &heights_m(template, normal),
-                a.preload * half_m
-            )
-            .0
-    );
-}
-
-/// A toroid lying flat: its ripple depth, exact and by eq. 5.19.
-struct Ripple {
-    exact_m: f64,
-    eq_5_19_m: f64,
-    text: String,
-}
-
-fn ripple_report(
-    shape: ShapeKind,
-    config: PressConfig,
-    template: &ClumpTemplate,
-    curve: &[NormalPoint],
-    half_m: f64,
-) -> Option<Ripple> {
-    if shape != ShapeKind::Toroid || config != PressConfig::Horizontal {
-        return None;
-    }
-    let b = template.radii_m.first().copied()?;
-    let a = template.offsets_m.first()?.length();
-    let n = template.len();
-    let (exact_m, eq_5_19_m) = toroid_ripple_m(a, b, n);
-    let beyond = curve.iter().filter(|p| p.deformation_m > exact_m).count();
-    Some(Ripple {
-        exact_m,
-        eq_5_19_m,
-        text: format!(
-            "ripples     {:.2} um deep between the {n} sub-spheres (eq. 5.19: {:.2} um; {:.2e} of the tube radius, {:.2e} of the centre circle's diameter 2a): deeper than that the multi-sphere toroid is stiffer than the smooth one (Section 5.4.4); {beyond} of the curve's points are deeper",
-            exact_m * 1e6,
-            eq_5_19_m * 1e6,
-            exact_m / half_m,
-            exact_m / (2.0 * a),
-        ),
-    })
-}
-
-fn write_out(
-    dir: &Path,
-    normal: &[NormalPoint],
-    tangential: &[TangentialPoint],
-    half_m: f64,
-    ripple: Option<&Ripple>,
-) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    write_atomic(&dir.join("normal.csv"), |w| {
-        writeln!(
-            w,
-            "deformation_m,deformation_ratio,force_n,touching_sub_spheres"
-        )?;
-        for p in normal {
-            writeln!(
-                w,
-                "{:e},{:e},{:e},{}",
-                p.deformation_m,
-                p.deformation_m / half_m,
-                p.force_n,
-                p.touching
-            )?;
-        }
-        Ok(())
-    })
-    .with_context(|| format!("writing {}", dir.join("normal.csv").display()))?;
-    write_atomic(&dir.join("tangential.csv"), |w| {
-        writeln!(w, "displacement_m,displacement_ratio,force_n")?;
-        for p in tangential {
-            writeln!(
-                w,
-                "{:e},{:e},{:e}",
-                p.displacement_m,
-                p.displacement_m / half_m,
-                p.force_n
-            )?;
-        }
-        Ok(())
-    })
-    .with_context(|| format!("writing {}", dir.join("tangential.csv").display()))?;
-    let json = serde_json::json!({
-        "half_size_m": half_m,
-        "ripple_m": ripple.map(|r| r.exact_m),
-        "ripple_eq_5_19_m": ripple.map(|r| r.eq_5_19_m),
-    });
-    let text = serde_json::to_string_pretty(&json)?;
-    write_atomic(&dir.join("press.json"), |w| w.write_all(text.as_bytes()))
-        .with_context(|| format!("writing {}", dir.join("press.json").display()))?;
     Ok(())
 }

@@ -2,18 +2,17 @@
 //! against a number that tells them apart (a shape's aspect ratio, hole
 //! ratio or sphericity, a fill ratio): the figure of Terzioglu's thesis
 //! Fig. 8.11–8.12 (Γ_optimum against the shape), with each point's ± from
-//! its seeds ([`vlab::study::sweep_peak`]).
+//! its seeds ([`vlab::study::sweep_optimum`]).
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 
-use vlab::atomic_write::{OutputDir, write_atomic};
-use vlab::signals::{ErrorSeries, LogXPlot, plot_log_x};
+use vlab::atomic_write::OutputDir;
 use vlab::study::sweep::SweepFile;
-use vlab::study::sweep_peak::{SeriesPeak, series_peaks};
+use vlab::study::sweep_optimum::{OptimumPoint, pick_series, write_optimum};
+use vlab::study::sweep_peak::series_peaks;
 
 #[derive(Debug, Clone, Args)]
 pub struct OptimumArgs {
@@ -34,14 +33,6 @@ pub struct OptimumArgs {
     out: PathBuf,
 }
 
-/// One sweep's optimum.
-struct Point {
-    series: String,
-    x: f64,
-    sweep: PathBuf,
-    peak: SeriesPeak,
-}
-
 pub fn run(a: OptimumArgs) -> Result<()> {
     let mut points = Vec::new();
     for text in &a.points {
@@ -54,7 +45,7 @@ pub fn run(a: OptimumArgs) -> Result<()> {
         let file = SweepFile::read(&sweep)?;
         let peak = pick_series(series_peaks(&file), a.freq_hz)
             .with_context(|| format!("--point {text}"))?;
-        points.push(Point {
+        points.push(OptimumPoint {
             series,
             x,
             sweep,
@@ -63,12 +54,9 @@ pub fn run(a: OptimumArgs) -> Result<()> {
     }
     let made = OutputDir::prepare(&a.out)
         .with_context(|| format!("cannot create output folder {}", a.out.display()))?;
-    made.keep_if_ok(write_csv(&a.out.join("optimum.csv"), &points))?;
-    let plot = optimum_plot(&points, &a.x_label);
-    for ext in ["svg", "png"] {
-        let path = a.out.join(format!("optimum.{ext}"));
-        plot_log_x(&path, &plot).with_context(|| format!("cannot draw {}", path.display()))?;
-    }
+    let written = write_optimum(&a.out, &points, &a.x_label)
+        .with_context(|| format!("writing into {}", a.out.display()));
+    made.keep_if_ok(written)?;
     print_table(&points, &a.out);
     Ok(())
 }
@@ -89,128 +77,13 @@ fn parse_point(text: &str) -> Result<(String, f64, PathBuf)> {
     Ok((series.trim().to_string(), x, PathBuf::from(path)))
 }
 
-/// The series at `freq_hz`, or the only one.
-fn pick_series(peaks: Vec<SeriesPeak>, freq_hz: Option<f64>) -> Result<SeriesPeak> {
-    let freqs: Vec<String> = peaks.iter().map(|p| format!("{} Hz", p.freq_hz)).collect();
-    let mut chosen: Vec<SeriesPeak> = peaks
-        .into_iter()
-        .filter(|p| freq_hz.is_none_or(|f| p.freq_hz == f))
-        .collect();
-    match chosen.len() {
-        1 => Ok(chosen.remove(0)),
-        0 => bail!(
-            "the sweep has no series{} with an ok row (it has: {})",
-            freq_hz.map_or(String::new(), |f| format!(" at {f} Hz")),
-            if freqs.is_empty() {
-                "none".into()
-            } else {
-                freqs.join(", ")
-            }
-        ),
-        n => bail!(
-            "the sweep has {n} series ({}): choose one with --freq, or a sweep of one fill ratio and orientation",
-            freqs.join(", ")
-        ),
-    }
-}
-
-/// The optimum Γ of a point and its ± (NaN when not known): the seeds' mean
-/// and standard error when at least two seeds peak inside the grid, else
-/// the peak of the seeds' mean curve.
-fn optimum(p: &SeriesPeak) -> (f64, f64) {
-    match (p.gamma_mean, p.gamma_stderr, p.of_mean) {
-        (Some(m), Some(se), _) => (m, se),
-        (_, _, Some(peak)) => (peak.gamma, f64::NAN),
-        _ => (f64::NAN, f64::NAN),
-    }
-}
-
-/// A point whose curve peaks at the grid's end (or not at all) has no
-/// optimum to plot; the table says so.
-fn beyond(p: &SeriesPeak) -> bool {
-    p.of_mean.is_none_or(|m| m.at_edge)
-}
-
-/// What to say of a point's peak beside its number.
-fn caveat(p: &SeriesPeak) -> &'static str {
-    match p.of_mean {
-        Some(peak) if peak.at_edge => "beyond the grid",
-        Some(peak) if peak.overshoots => "jumps: between the neighbours",
-        Some(_) => "",
-        None => "no peak",
-    }
-}
-
-fn write_csv(path: &Path, points: &[Point]) -> Result<()> {
-    write_atomic(path, |w| {
-        writeln!(
-            w,
-            "series,x,gamma_optimum,gamma_optimum_se,seeds,peak_efficiency,caveat,sweep"
-        )?;
-        for p in points {
-            let (g, se) = optimum(&p.peak);
-            writeln!(
-                w,
-                "{},{},{g},{se},{},{},{},{}",
-                p.series,
-                p.x,
-                p.peak.per_seed.iter().flatten().count(),
-                p.peak.of_mean.map_or(f64::NAN, |m| m.efficiency),
-                caveat(&p.peak),
-                p.sweep.display()
-            )?;
-        }
-        Ok(())
-    })
-    .with_context(|| format!("cannot write {}", path.display()))
-}
-
-fn optimum_plot(points: &[Point], x_label: &str) -> LogXPlot {
-    let mut names: Vec<&str> = Vec::new();
-    for p in points {
-        if !names.contains(&p.series.as_str()) {
-            names.push(&p.series);
-        }
-    }
-    let series = names
-        .iter()
-        .enumerate()
-        .map(|(color, name)| {
-            let mut pts: Vec<(f64, f64, f64)> = points
-                .iter()
-                .filter(|p| p.series == *name && !beyond(&p.peak))
-                .map(|p| {
-                    let (g, se) = optimum(&p.peak);
-                    (p.x, g, se)
-                })
-                .collect();
-            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-            ErrorSeries {
-                name: name.to_string(),
-                points: pts,
-                color,
-                line: true,
-            }
-        })
-        .collect();
-    LogXPlot {
-        title: "Optimum amplitude (bouncing-bed onset), +- from seeds".into(),
-        x_label: x_label.into(),
-        y_label: "Gamma_optimum".into(),
-        series,
-        markers: Vec::new(),
-        reference_y: None,
-        y_from_zero: false,
-    }
-}
-
-fn print_table(points: &[Point], out: &Path) {
+fn print_table(points: &[OptimumPoint], out: &Path) {
     println!(
         "{:<14} {:>8} {:>14} {:>6} {:>10}  note",
         "series", "x", "Gamma_opt", "seeds", "peak eff."
     );
     for p in points {
-        let (g, se) = optimum(&p.peak);
+        let (g, se) = p.optimum();
         let pm = if se.is_finite() {
             format!("{g:.2} +- {se:.2}")
         } else {
@@ -221,9 +94,9 @@ fn print_table(points: &[Point], out: &Path) {
             p.series,
             p.x,
             pm,
-            p.peak.per_seed.iter().flatten().count(),
-            p.peak.of_mean.map_or(f64::NAN, |m| m.efficiency),
-            caveat(&p.peak)
+            p.seeds(),
+            p.peak_efficiency(),
+            p.caveat()
         );
     }
     println!("wrote {}/optimum.csv and optimum.svg/png", out.display());

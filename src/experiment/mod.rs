@@ -6,7 +6,7 @@
 //! its measurement by Yang's method (`shake`, `measurement`), one shape
 //! for a shake whoever asks for it, request, plan and outcome (`shake_plan`), the drop test
 //! (`drop`), the single collision (`impact`), a body pressed onto a plate
-//! (`press`), the replay of another code's
+//! (`press`, as an experiment with its files `press_outcome`), the replay of another code's
 //! record (`replay`) and the damper on a host structure (`host_test`), its free decay
 //! (`host_decay`) and its frequency response (`host_frf`). Each builds only what it needs: a single collision has no
 //! enclosure; a drop test has one sphere, a plate and the drop rig.
@@ -26,6 +26,7 @@ pub mod host_test;
 pub mod impact;
 pub mod measurement;
 pub mod press;
+pub mod press_outcome;
 pub mod record;
 pub mod replay;
 pub mod settle;

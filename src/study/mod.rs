@@ -1,6 +1,7 @@
 //! Studies: many experiments and what they say together. Sweeps of frequency,
 //! Gamma, fill and orientation with their maps (`sweep`, `sweep_plot`) and
-//! where each series peaks (`sweep_peak`), the
+//! where each series peaks (`sweep_peak`), the optimum Γ of several sweeps
+//! against what tells them apart (`sweep_optimum`), the
 //! motional phases read from DEM truth (`phases`), accuracy against run time
 //! (`accuracy`) and the bouncing-bed onset predicted from the scene alone
 //! (`predict`, thesis eq. 6.11-6.13); a sweep as the dissipation map a host
@@ -15,6 +16,7 @@ pub mod phases;
 pub mod predict;
 pub mod shear_box_series;
 pub mod sweep;
+pub mod sweep_optimum;
 pub mod sweep_peak;
 #[cfg(feature = "plot")]
 pub mod sweep_plot;
