@@ -30,6 +30,8 @@
 //! file it writes goes through [`crate::atomic_write`].
 
 pub mod analysis;
+#[cfg(feature = "plot")]
+pub mod analysis_figures;
 pub mod bench;
 pub mod calibration;
 pub mod column_names;
