@@ -1,4 +1,4 @@
-//! The physics fingerprint of the settled-bed cache (`src/experiment/bed_cache.rs`).
+//! The physics fingerprint of the settled-bed cache (`src/experiment/bed/cache.rs`).
 //!
 //! A settled bed's bits depend on the code that settles it, not only on the
 //! scene: a change of the contact law, the integrator, the neighbour search,
@@ -7,9 +7,10 @@
 //! as `VLAB_PHYSICS_FINGERPRINT`, which the bed cache puts in its key, so a
 //! bed settled by other code is never read back:
 //!
-//! - the sources: every file below `src/dem/` and `src/scene/`, and
-//!   `src/experiment/{damper,fill,settle,bed_cache}.rs` (damper.rs holds the
-//!   contact laws and gravity that settling uses), by their path relative to
+//! - the sources: every file below `src/dem/`, `src/scene/` and
+//!   `src/experiment/bed/` (filling, settling and the cache itself), and
+//!   `src/experiment/damper.rs` (the contact laws and gravity that settling
+//!   uses), by their path relative to
 //!   the package (with `/`) and their bytes, in sorted order;
 //! - the versions of the crates whose arithmetic or random numbers reach the
 //!   bed (`glam`, `rand_core`, `rand_xoshiro`), from `Cargo.lock`;
@@ -29,14 +30,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Folders whose every file is hashed.
-const HASHED_DIRS: [&str; 2] = ["src/dem", "src/scene"];
+const HASHED_DIRS: [&str; 3] = ["src/dem", "src/scene", "src/experiment/bed"];
 /// Single files that are hashed.
-const HASHED_FILES: [&str; 4] = [
-    "src/experiment/damper.rs",
-    "src/experiment/fill.rs",
-    "src/experiment/settle.rs",
-    "src/experiment/bed_cache.rs",
-];
+const HASHED_FILES: [&str; 1] = ["src/experiment/damper.rs"];
 /// Dependencies whose code computes a bed's numbers.
 const HASHED_CRATES: [&str; 3] = ["glam", "rand_core", "rand_xoshiro"];
 

@@ -15,7 +15,7 @@ use divan::counter::ItemsCount;
 use divan::{Bencher, black_box};
 use vlab::dem::World;
 use vlab::dem::testbed::lattice_bed;
-use vlab::experiment::settle::{SettledBed, prepare_drive, settle_bed};
+use vlab::experiment::bed::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::scene::Scene;
 use vlab::signals::{PowerOptions, yang_power};
 

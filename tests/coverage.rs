@@ -44,7 +44,7 @@
 //! The figures they printed are in `docs/accuracy.md` ("Coverage" and "A
 //! longer drive").
 
-use vlab::experiment::bed_cache::BedSource;
+use vlab::experiment::bed::cache::BedSource;
 use vlab::experiment::ensemble::{DEFAULT_BEDS, unsteady_reasons};
 use vlab::experiment::ensemble_summary::longer_drive_rel;
 use vlab::experiment::shake_plan::{ShakePlan, ShakeRequest};

@@ -4,8 +4,8 @@ use glam::DVec3;
 use vlab::dem::{
     ContactLaw, DemError, Material, Numerics, Particles, RestitutionMode, Walls, World,
 };
+use vlab::experiment::bed::fill::{SceneRng, insert_in_cylinder};
 use vlab::experiment::damper::gravity_vector;
-use vlab::experiment::fill::{SceneRng, insert_in_cylinder};
 use vlab::scene::Orientation;
 
 const R: f64 = 0.0025;

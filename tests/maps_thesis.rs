@@ -323,7 +323,7 @@ fn the_thesis_damper_has_its_efficiency_peaks_where_the_thesis_has_them() {
         seeds: vec![1],
         fill_ratios: vec![],
         orientations: vec![],
-        beds: vlab::experiment::bed_cache::BedSource::Settle,
+        beds: vlab::experiment::bed::cache::BedSource::Settle,
         ensemble_beds: 1,
     };
     let dir = std::env::temp_dir().join(format!("vlab-maps-thesis-{}", std::process::id()));

@@ -4,10 +4,10 @@
 
 use std::sync::OnceLock;
 
+use vlab::experiment::bed::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::experiment::measurement::{
     CalibrationSource, ShakeExperiment, ShakeSetup, analyse, run_measured_shake,
 };
-use vlab::experiment::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::rig::{ACCEL_CHANNEL, RigFile, RigSpec, ShakerKind};
 use vlab::scene::{CyclesSpec, Scene};
 use vlab::signals::{PhaseCorrection, read_csv, write_csv};

@@ -4,7 +4,7 @@
 //!
 //! The settling law reads the scene's seed, particle count, size and
 //! material, wall material, enclosure and gravity, never its contacts
-//! (`vlab::experiment::settle`). So the beds compared here differ in what
+//! (`vlab::experiment::bed::settle`). So the beds compared here differ in what
 //! settling does read: the thesis bed; another seed with aluminium walls (a
 //! stiffer particle-wall settling law); and a third seed with 250 spheres of
 //! a softer, made-up material (E 1 GPa, ν 0.4). Each is measured from its
@@ -12,7 +12,7 @@
 
 use vlab::dem::World;
 use vlab::dem::material::effective_youngs_pa;
-use vlab::experiment::settle::{SettledBed, packing, prepare_drive, settle_bed};
+use vlab::experiment::bed::settle::{SettledBed, packing, prepare_drive, settle_bed};
 use vlab::scene::Scene;
 
 fn scene(text: &str) -> Scene {

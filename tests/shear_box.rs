@@ -6,7 +6,7 @@
 mod common;
 
 use common::{Scratch, refuses_in, vlab};
-use vlab::experiment::settle::settle_bed;
+use vlab::experiment::bed::settle::settle_bed;
 use vlab::experiment::shear_box::{BoxRun, BoxTest, Loading, ShearBox, run_test};
 use vlab::scene::Scene;
 

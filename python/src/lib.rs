@@ -17,10 +17,10 @@ use pyo3::exceptions::{PyKeyError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 use vlab::atomic_write::OutputDir;
-use vlab::experiment::bed_cache::{BedCache, BedSource};
+use vlab::experiment::bed::cache::{BedCache, BedSource};
 use vlab::experiment::damper::Progress;
 use vlab::experiment::drop::DropParticle;
-use vlab::experiment::drop_series::{DropRequest, DropSeries, sampling_warning};
+use vlab::experiment::drop::series::{DropRequest, DropSeries, sampling_warning};
 use vlab::experiment::ensemble::{DEFAULT_BEDS, EnsembleFigure};
 use vlab::experiment::ensemble_summary::EnsembleSummary;
 use vlab::experiment::measurement::CalibrationSource;

@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use vlab::experiment::bed_cache::BedSource;
+use vlab::experiment::bed::cache::BedSource;
 use vlab::experiment::shake_plan::{ShakePlan, ShakeRequest};
 use vlab::scene::{CyclesSpec, Scene};
 

@@ -26,7 +26,7 @@
 //! the all-threads step is reported against it as well.
 //!
 //! A lattice bed is ordered in space: neighbours sit next to each other in
-//! memory. The beds users drive are poured (`vlab::experiment::settle`): their
+//! memory. The beds users drive are poured (`vlab::experiment::bed::settle`): their
 //! spheres sit in memory in the order they were inserted, at random in space,
 //! so a step reads memory all over the bed, and one core and two threads both
 //! fare worse than on a lattice. `--poured` times such beds: `N` spheres of
@@ -36,7 +36,7 @@
 //! (the thesis' fill), or `prolate`, the thesis' bed of 90 prolates of
 //! aspect ratio 1.5 with 51 sub-spheres (Section 8.2), counted in
 //! sub-sphere-steps. A bed comes from the bed cache when it holds it (see
-//! `vlab::experiment::bed_cache`; `--no-cache` settles anew), and its settling
+//! `vlab::experiment::bed::cache`; `--no-cache` settles anew), and its settling
 //! is reported apart from its steps.
 
 use std::path::PathBuf;
@@ -50,9 +50,9 @@ use serde::Serialize;
 use vlab::atomic_write::write_atomic;
 use vlab::dem::testbed::lattice_bed;
 use vlab::dem::{TRIAL_STEPS, World};
-use vlab::experiment::bed_cache::BedSource;
+use vlab::experiment::bed::cache::BedSource;
+use vlab::experiment::bed::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::experiment::damper::{DrivePlan, NoObserver, run_drive};
-use vlab::experiment::settle::{SettledBed, prepare_drive, settle_bed};
 use vlab::rig::SineMotion;
 use vlab::scene::DriveLength;
 use vlab::scene::Scene;

@@ -1,11 +1,11 @@
 //! `vlab cache list|clear|path`: the settled beds kept between runs
-//! ([`vlab::experiment::bed_cache`]), and the `--no-cache` flag of the commands
+//! ([`vlab::experiment::bed::cache`]), and the `--no-cache` flag of the commands
 //! that settle a bed.
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
-use vlab::experiment::bed_cache::{BedCache, BedSource, PHYSICS_FINGERPRINT};
+use vlab::experiment::bed::cache::{BedCache, BedSource, PHYSICS_FINGERPRINT};
 
 #[derive(Debug, Clone, Args)]
 pub struct CacheArgs {

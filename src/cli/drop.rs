@@ -17,8 +17,8 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 
 use vlab::atomic_write::OutputDir;
+use vlab::experiment::drop::series::{DropRequest, DropSeries, sampling_warning};
 use vlab::experiment::drop::{DropParticle, DropSetup, DropSummary};
-use vlab::experiment::drop_series::{DropRequest, DropSeries, sampling_warning};
 use vlab::rig::{DROP_RIG, DropRigSpec, RigFile};
 use vlab::signals::ImpactParams;
 use vlab::warning::RunWarning;

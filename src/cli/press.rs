@@ -8,8 +8,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 
+use vlab::experiment::press::outcome::{PressOutcome, PressPlan};
 use vlab::experiment::press::{NormalPoint, PressConfig};
-use vlab::experiment::press_outcome::{PressOutcome, PressPlan};
 use vlab::scene::Scene;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -262,7 +262,7 @@ fn print_run(scene: &Scene) {
         ),
     };
     println!(
-        "  run              pour and settle with the settling law (vlab::experiment::settle), then drive {drive}; seed {}",
+        "  run              pour and settle with the settling law (vlab::experiment::bed::settle), then drive {drive}; seed {}",
         scene.simulation.seed
     );
 }

@@ -101,7 +101,7 @@ fn realised_restitution_with_step(beta: f64, h: f64) -> f64 {
 
 /// The β [`bisect_damping_factor`] finds for the restitutions of vlab's own
 /// scenes, written down: the thesis damper's 0.86 (both kinds of contact)
-/// and the settling law's 0.1 ([`crate::experiment::settle::SETTLE_RESTITUTION`]).
+/// and the settling law's 0.1 ([`crate::experiment::bed::settle::SETTLE_RESTITUTION`]).
 /// Each bisection costs about 0.17 s of CPU, and every vlab process asked
 /// for both before its first step (a third of a second for each of the
 /// suite's hundreds of commands). The test

@@ -1,4 +1,4 @@
-//! The damper experiment: drive a settled bed (see [`crate::experiment::settle`]).
+//! The damper experiment: drive a settled bed (see [`crate::experiment::bed::settle`]).
 //!
 //! The enclosure is driven along its axis, by a prescribed sine
 //! `u = Γ g / ω² sin ωt` ([`SineMotion`], thesis eq. 6.2) or by any other

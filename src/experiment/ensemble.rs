@@ -23,13 +23,13 @@
 use std::sync::{Condvar, Mutex, MutexGuard};
 
 use crate::dem::LedgerSnapshot;
-use crate::experiment::bed_cache::BedSource;
+use crate::experiment::bed::cache::BedSource;
+use crate::experiment::bed::settle::SettledBed;
 use crate::experiment::damper::{DriveJudge, Progress, Steadiness, StepObserver, Verdict, verdict};
 pub use crate::experiment::ensemble_summary::{
     BedRow, EnsembleFigure, EnsembleSummary, unsteady_reasons,
 };
 use crate::experiment::measurement::ShakeSetup;
-use crate::experiment::settle::SettledBed;
 use crate::experiment::shake::{ShakeRun, run_shake_on_bed_judged};
 use crate::scene::{DriveLength, Scene, SceneError};
 use crate::validation::require;

@@ -32,7 +32,8 @@ use serde::Serialize;
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::drive::Drive;
-use crate::experiment::bed_cache::BedSource;
+use crate::experiment::bed::cache::BedSource;
+use crate::experiment::bed::settle::{SettledBed, prepare_drive};
 use crate::experiment::damper::{
     DRIFT_FLOOR_REL, DriveJudge, DriveOutcome, Observers, OneBed, Progress, Steadiness,
     StepObserver, cycle_energies,
@@ -42,7 +43,6 @@ use crate::experiment::measurement::{
     Measured, ShakeExperiment, ShakeSetup, run_measured_shake_judged,
 };
 use crate::experiment::record::TruthSamples;
-use crate::experiment::settle::{SettledBed, prepare_drive};
 use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
 use crate::scene::{CyclesSpec, Scene, SceneError};
 use crate::signals::{Trace, TraceMetadata, write_csv, write_wav_with_full_scale};

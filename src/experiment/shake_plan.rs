@@ -194,7 +194,7 @@ impl ShakeOutcome {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::bed_cache::BedSource;
+    use crate::experiment::bed::cache::BedSource;
     use crate::scene::CyclesSpec;
 
     fn short_thesis() -> Scene {

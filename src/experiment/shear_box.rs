@@ -42,8 +42,8 @@ use thiserror::Error;
 use crate::dem::error::DemError;
 use crate::dem::walls::{WallShape, Walls};
 use crate::dem::world::World;
+use crate::experiment::bed::settle::SettledBed;
 use crate::experiment::damper::Progress;
-use crate::experiment::settle::SettledBed;
 use crate::scene::{Orientation, Scene, SceneError, contact_laws};
 
 /// The walls of the box, in the order of [`ShearBox::walls`].

@@ -7,7 +7,7 @@
 //! # What the deck holds
 //!
 //! - `units si`; spheres (`atom_style sphere`) read from `packing.data`:
-//!   vlab's settled packing ([`settle_bed`](crate::experiment::settle::settle_bed)),
+//!   vlab's settled packing ([`settle_bed`](crate::experiment::bed::settle::settle_bed)),
 //!   positions, velocities, spins, diameters and densities; enclosure axis z,
 //!   floor at z = 0, lid at the scene's inner length;
 //! - `pair_style granular`, `hertz/material` (thesis eq. 5.7 with E* of eq.
@@ -77,7 +77,7 @@ use crate::dem::contact::Tangential;
 use crate::dem::material::{effective_shear_pa, effective_youngs_pa};
 use crate::dem::{ContactLaw, Particles, RestitutionMode};
 use crate::drive::Drive;
-use crate::experiment::settle::SettledBed;
+use crate::experiment::bed::settle::SettledBed;
 use crate::experiment::shake::{TRUTH_SAMPLE_RATE_HZ, shake_drive};
 use crate::scene::contact_laws;
 use crate::scene::{DriveLength, transient_cycles};

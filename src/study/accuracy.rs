@@ -66,12 +66,12 @@ use serde::Serialize;
 
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::{LedgerBalance, LedgerSnapshot, World};
+use crate::experiment::bed::settle::{SettledBed, prepare_drive, settle_bed};
 use crate::experiment::damper::{
     DriveOutcome, DrivePlan, Kinematics, SineMotion, StepObserver, run_drive,
 };
 use crate::experiment::impact::{ImpactSetup, Target, run_impact};
 use crate::experiment::record::{TruthRecorder, TruthSamples};
-use crate::experiment::settle::{SettledBed, prepare_drive, settle_bed};
 use crate::rig::{Daq, RigSpec, transducer_force_n};
 use crate::scene::DriveLength;
 use crate::scene::{Orientation, Scene, SceneError};

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::atomic_write::write_atomic;
-use crate::experiment::bed_cache::BedSource;
+use crate::experiment::bed::cache::BedSource;
 use crate::experiment::damper::Progress;
 use crate::experiment::shear_box::{BoxRun, BoxTest, Loading, ShearBox, ShearBoxError, run_test};
 use crate::scene::{Scene, SceneError};

@@ -37,9 +37,9 @@ use rayon::prelude::*;
 use serde::{Serialize, Serializer};
 
 use crate::atomic_write::write_atomic;
-use crate::experiment::bed_cache::BedSource;
+use crate::experiment::bed::cache::BedSource;
+use crate::experiment::bed::settle::SettledBed;
 use crate::experiment::ensemble::{BedProvider, EnsembleFigure, bed_seed};
-use crate::experiment::settle::SettledBed;
 use crate::experiment::shake::{check_record_window, resolve_rig, shake_drive};
 use crate::experiment::shake_plan::{ShakePlan, ShakeRequest};
 use crate::rig::{RigFile, RigSpec, ShakerKind};

@@ -16,7 +16,7 @@ use std::cell::RefCell;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use vlab::dem::World;
-use vlab::experiment::bed_cache::BedSource;
+use vlab::experiment::bed::cache::BedSource;
 use vlab::experiment::damper::{Kinematics, Progress, StepObserver};
 use vlab::experiment::shake::ShakeSummary;
 use vlab::experiment::shake_plan::{ShakePlan, ShakeRequest};

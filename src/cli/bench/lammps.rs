@@ -31,7 +31,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use serde::Serialize;
 
-use vlab::experiment::settle::SettledBed;
+use vlab::experiment::bed::settle::SettledBed;
 use vlab::export::lammps_deck::{
     DeckSummary, INPUT_FILE, LammpsExport, MIN_EXPORT_CYCLES, lammps_deck,
 };

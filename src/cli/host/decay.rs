@@ -1,7 +1,7 @@
 //! `vlab host decay`: the host released from a displacement (or struck by a
 //! hammer) and left to ring down; the loss factor against amplitude by the
 //! logarithmic decrement and the Hilbert envelope
-//! ([`vlab::experiment::host_decay`]), each held against the DEM's energies,
+//! ([`vlab::experiment::host_test::decay`]), each held against the DEM's energies,
 //! and, with `--map`, against Yang's structure-independent figure at the same
 //! frequency and Γ.
 
@@ -13,10 +13,10 @@ use clap::Args;
 
 use vlab::atomic_write::OutputDir;
 use vlab::experiment::ensemble::check_beds;
-use vlab::experiment::host_decay::{
+use vlab::experiment::host_test::Damper;
+use vlab::experiment::host_test::decay::{
     DecayEnsemble, DecayError, DecayEstimate, DecayOutcome, MapEnergy,
 };
-use vlab::experiment::host_test::Damper;
 use vlab::host::Excitation;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
 use vlab::study::sweep::SweepFile;

@@ -3,7 +3,7 @@
 //! against the host without particles and with their mass as a solid, the
 //! power-input estimate of the damper's dissipation against the DEM's, and
 //! with `--map` the map-based prediction beside it) or by a periodic random
-//! force (H1, H2 and coherence). [`vlab::experiment::host_frf`] does the work.
+//! force (H1, H2 and coherence). [`vlab::experiment::host_test::frf`] does the work.
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -12,9 +12,9 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
-use vlab::experiment::host_frf::{FrfPoint, SteppedSine};
-use vlab::experiment::host_frf_outcome::{FrfMaps, RandomFrfOutcome, SteppedSineOutcome};
 use vlab::experiment::host_test::HostTest;
+use vlab::experiment::host_test::frf::{FrfPoint, SteppedSine};
+use vlab::experiment::host_test::frf_outcome::{FrfMaps, RandomFrfOutcome, SteppedSineOutcome};
 use vlab::host::DissipationMap;
 use vlab::host::{Excitation, PeriodicRandom};
 use vlab::scene::Scene;
@@ -154,7 +154,7 @@ fn stepped_sine(a: &FrfArgs) -> Result<SteppedSine> {
 /// What the damper power's +- holds: the record's periods, and the
 /// bed-to-bed part where it was measured.
 fn error_note(points: &[FrfPoint]) -> String {
-    use vlab::experiment::bed_spread::BedToBed;
+    use vlab::experiment::host_test::bed_spread::BedToBed;
     if let Some(BedToBed::Ensemble { beds }) = points.first().map(|p| p.bed_to_bed) {
         return format!(
             "  the damper's +- is one sigma of the mean over the {beds} beds run at each frequency, from their spread (Student's t on {}), never less than their records' errors make it",

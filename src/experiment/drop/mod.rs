@@ -90,6 +90,8 @@ use crate::stats::mean_std;
 use crate::validation::{self, Bound, InvalidParameter, in_range, non_negative, positive, require};
 use crate::warning::{FileKey, RunWarning};
 
+pub mod series;
+
 /// Gravity of the drop scene, m/s^2 (as the thesis scene).
 pub const DROP_GRAVITY_MPS2: f64 = 9.81;
 /// Default sphere diameter, m (the thesis' 5 mm spheres).

@@ -23,10 +23,10 @@ use rayon::prelude::*;
 use realfft::num_complex::Complex64;
 use serde::Serialize;
 
-use super::bed_cache::BedSource;
-use super::bed_spread::{BedToBed, is_thesis_damper};
-use super::host_test::{Damper, HostRun, HostTest, run_host_test};
+use crate::experiment::bed::cache::BedSource;
 use crate::experiment::ensemble::bed_seed;
+use crate::experiment::host_test::bed_spread::{BedToBed, is_thesis_damper};
+use crate::experiment::host_test::{Damper, HostRun, HostTest, run_host_test};
 use crate::host::Excitation;
 use crate::rig::{ACCEL_CHANNEL, FORCE_CHANNEL, RigSpec};
 use crate::scene::{Scene, SceneError};
@@ -84,7 +84,7 @@ pub fn bed_to_bed(scene: &Scene, test: &HostTest, plan: &SteppedSine, freq_hz: f
 pub const POWER_HARMONICS: usize = 10;
 
 /// How a stepped sine is run: each frequency from a steady response of the
-/// host ([`super::host_test::particles_guess`] with particles),
+/// host ([`crate::experiment::host_test::particles_guess`] with particles),
 /// `settle_cycles` to settle, then `record_cycles` measured.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SteppedSine {

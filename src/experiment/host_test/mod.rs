@@ -26,15 +26,20 @@ use crate::warning::RunWarning;
 use serde::Serialize;
 
 use crate::dem::{LedgerBalance, World};
-use crate::experiment::bed_cache::BedSource;
+use crate::experiment::bed::cache::BedSource;
+use crate::experiment::bed::settle::prepare_drive;
 use crate::experiment::damper::Progress;
-use crate::experiment::settle::prepare_drive;
 use crate::host::dynamics::sine_steady_state;
 use crate::host::{Excitation, HostDynamics, HostEnergy, HostMotion, HostSpec, Payload};
 use crate::rig::{Daq, EnclosureMotion, RigSpec};
 use crate::scene::{Scene, SceneError};
 use crate::signals::{Trace, TraceMetadata};
 use crate::validation::{Bound, InvalidParameter, in_range};
+
+pub mod bed_spread;
+pub mod decay;
+pub mod frf;
+pub mod frf_outcome;
 
 /// What the enclosure holds.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

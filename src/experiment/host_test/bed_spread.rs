@@ -11,7 +11,7 @@
 //! that used to add it is retired. The host's stepped sine does the same
 //! with `--beds N` ([`BedToBed::Ensemble`]); one bed there adds the part
 //! measured over 20 beds at four points of the built-in host
-//! ([`crate::experiment::host_frf::bed_to_bed`]) and nothing elsewhere.
+//! ([`crate::experiment::host_test::frf::bed_to_bed`]) and nothing elsewhere.
 
 use serde::Serialize;
 

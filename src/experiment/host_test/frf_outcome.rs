@@ -3,14 +3,16 @@
 //! map-based prediction and Yang's map beside it), or a periodic random
 //! test's H1, H2 and coherence, each as an outcome that writes its own
 //! files (`frf.csv`, `frf.json`, the figures), so that the command line only
-//! prints. The measurements are [`super::host_frf`]'s.
+//! prints. The measurements are [`crate::experiment::host_test::frf`]'s.
 
 use std::path::{Path, PathBuf};
 
-use super::bed_cache::BedSource;
-use super::host_frf::{SteppedSine, SteppedSineResult, random_frf, run_stepped_sine};
-use super::host_test::{Damper, HostRun, HostTest};
 use crate::atomic_write::write_bytes_atomic;
+use crate::experiment::bed::cache::BedSource;
+use crate::experiment::host_test::frf::{
+    SteppedSine, SteppedSineResult, random_frf, run_stepped_sine,
+};
+use crate::experiment::host_test::{Damper, HostRun, HostTest};
 use crate::host::map_model::{DissipationMap, SteadyResponse, stepped_sine};
 use crate::host::{Excitation, PeriodicRandom};
 use crate::scene::{Scene, SceneError};
@@ -57,7 +59,7 @@ impl SteppedSineOutcome {
         test: &HostTest,
         plan: &SteppedSine,
         maps: Option<FrfMaps<'_>>,
-        done: &(dyn Fn(&super::host_frf::FrfPoint) + Sync),
+        done: &(dyn Fn(&crate::experiment::host_test::frf::FrfPoint) + Sync),
     ) -> Result<Self, SceneError> {
         let mut measured = run_stepped_sine(scene, beds, test, plan, done)?;
         if let Some(m) = maps {

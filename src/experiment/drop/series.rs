@@ -11,11 +11,11 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use super::drop::{
+use crate::atomic_write::write_bytes_atomic;
+use crate::experiment::drop::{
     DROP_FRICTION, DROP_GRAVITY_MPS2, DropEstimate, DropNumerics, DropOutcome, DropParticle,
     DropSetup, DropSummary, millimetres, run_drop, summarise_drops,
 };
-use crate::atomic_write::write_bytes_atomic;
 use crate::rig::DropRigSpec;
 use crate::scene::SceneError;
 use crate::scene::validity::yield_warning;
@@ -242,7 +242,7 @@ impl DropSeries {
     /// restitution as lines.
     #[cfg(feature = "plot")]
     fn plot(&self, dir: &Path) -> Result<(), SceneError> {
-        use super::drop::millimetres;
+        use crate::experiment::drop::millimetres;
         use crate::signals::{Series, SeriesStyle, plot_xy_svg_spanning};
         let s = &self.summary;
         let mut series: Vec<Series> = s

@@ -4,7 +4,7 @@
 //! depends only on what shapes the bed: the particles, the enclosure, the
 //! settling law, gravity, the orientation and the seed — not on the contacts
 //! under test or the drive (the settling law is fixed, see
-//! [`crate::experiment::settle`]) — and on the code that settles it. A bed is
+//! [`crate::experiment::bed::settle`]) — and on the code that settles it. A bed is
 //! stored under a key made of exactly those, plus the bed-file format and
 //! vlab's version.
 //!
@@ -13,8 +13,8 @@
 //! The code's part of the key is [`PHYSICS_FINGERPRINT`], computed by the
 //! package's `build.rs` when vlab is compiled: an FNV-1a 64 hash of
 //!
-//! - the bytes and paths of every file below `src/dem/` and `src/scene/` and
-//!   of `src/experiment/{damper,fill,settle,bed_cache}.rs` (the contact laws,
+//! - the bytes and paths of every file below `src/dem/`, `src/scene/` and
+//!   `src/experiment/bed/`, and of `src/experiment/damper.rs` (the contact laws,
 //!   integrator, neighbour search, walls, the scene's figures, the filling and
 //!   the settling schedule, and this file's own encoding);
 //! - the `Cargo.lock` versions of `glam`, `rand_core` and `rand_xoshiro`,
@@ -65,8 +65,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic_write::write_bytes_atomic;
 use crate::dem::Particles;
+use crate::experiment::bed::settle::{
+    SETTLING_VERSION, SettledBed, rebuild_settled_world, settle_bed,
+};
 use crate::experiment::damper::Progress;
-use crate::experiment::settle::{SETTLING_VERSION, SettledBed, rebuild_settled_world, settle_bed};
 use crate::scene::{Scene, SceneError};
 use crate::warning::RunWarning;
 
@@ -795,7 +797,7 @@ mod tests {
 
     #[test]
     fn a_cached_bed_drives_to_the_same_bits_as_a_fresh_one() {
-        use crate::experiment::settle::prepare_drive;
+        use crate::experiment::bed::settle::prepare_drive;
         let scene = small_scene();
         let dir = std::env::temp_dir().join(format!("vlab-bed-cache-test-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);

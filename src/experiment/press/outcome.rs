@@ -1,4 +1,4 @@
-//! The press of [`super::press`] as an experiment: a scene's particle and a
+//! The press of [`crate::experiment::press`] as an experiment: a scene's particle and a
 //! plan (which way, how deep, how hard held) in, both curves, the force
 //! that held the body and, for a toroid lying flat, its ripples (thesis eq.
 //! 5.19) out, with the files a lab keeps (`normal.csv`, `tangential.csv`,
@@ -12,7 +12,7 @@ use crate::dem::clumps::ClumpTemplate;
 use crate::scene::particle_shape::ShapeKind;
 use crate::scene::{Scene, SceneError, contact_laws};
 
-use super::press::{
+use crate::experiment::press::{
     NormalPoint, PressConfig, TangentialPoint, half_size_m, heights_m, normal_curve,
     normal_force_n, tangential_curve, toroid_ripple_m,
 };

@@ -30,6 +30,8 @@ use crate::dem::clumps::ClumpTemplate;
 use crate::dem::contact::{ContactLaw, mindlin_coulomb};
 use crate::scene::particle_shape::ShapeKind;
 
+pub mod outcome;
+
 /// Which way the plate presses the body.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]

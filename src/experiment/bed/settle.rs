@@ -8,7 +8,7 @@
 //! tall for its lid. vlab instead fills every damper the same way:
 //!
 //! 1. **Pour.** Random sequential insertion into a taller column of the
-//!    enclosure's diameter (see [`crate::experiment::fill`]; the column is made
+//!    enclosure's diameter (see [`crate::experiment::bed::fill`]; the column is made
 //!    taller until every sphere fits), then the spheres fall under the *soft*
 //!    settling law, frictionless for two fall times of the column so that they
 //!    slide into a dense bed, then with the settling friction until at rest.
@@ -63,8 +63,8 @@ use crate::dem::timestep::{rayleigh_time_step_s, shortest_contact_with_mass_s};
 use crate::dem::{
     ContactLaw, ContactParams, DemError, Numerics, Particles, RestitutionMode, Walls, World,
 };
+use crate::experiment::bed::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder, random_orientation};
 use crate::experiment::damper::{Progress, gravity_vector};
-use crate::experiment::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder, random_orientation};
 use crate::scene::contact_laws;
 use crate::scene::{Orientation, Scene, SceneError};
 use crate::warning::RunWarning;

@@ -34,7 +34,7 @@ use std::f64::consts::TAU;
 
 use serde::Serialize;
 
-use super::host_test::HostRun;
+use crate::experiment::host_test::HostRun;
 use crate::host::HostSpec;
 use crate::rig::ACCEL_CHANNEL;
 use crate::scene::SceneError;
@@ -423,8 +423,8 @@ impl DecayEnsemble {
 /// analyses each as [`analyse_decay`] with `skip_s` and `g`.
 pub fn run_decays(
     scene: &crate::scene::Scene,
-    source: &crate::experiment::bed_cache::BedSource,
-    test: &super::host_test::HostTest,
+    source: &crate::experiment::bed::cache::BedSource,
+    test: &crate::experiment::host_test::HostTest,
     beds: std::ops::Range<u32>,
     skip_s: f64,
     g: f64,
@@ -435,11 +435,11 @@ pub fn run_decays(
         .map(|k| {
             let mut s = scene.clone();
             s.simulation.seed = bed_seed(scene.simulation.seed, k);
-            let t = super::host_test::HostTest {
+            let t = crate::experiment::host_test::HostTest {
                 noise_seed: bed_seed(test.noise_seed, k),
                 ..test.clone()
             };
-            let run = super::host_test::run_host_test(&s, source, &t, &mut |_| {})?;
+            let run = crate::experiment::host_test::run_host_test(&s, source, &t, &mut |_| {})?;
             analyse_decay(&run, &t.host, skip_s, g)
         })
         .collect()
@@ -449,7 +449,7 @@ pub fn run_decays(
 /// with what a lab keeps of it ([`DecayOutcome::write`]); with several
 /// beds, their ensemble (the run and analysis are the first bed's).
 pub struct DecayOutcome {
-    pub test: super::host_test::HostTest,
+    pub test: crate::experiment::host_test::HostTest,
     pub run: HostRun,
     pub analysis: DecayAnalysis,
     pub ensemble: Option<DecayEnsemble>,
@@ -481,9 +481,9 @@ impl DecayOutcome {
     /// ([`run_decays`]), and their ensemble.
     pub fn measure(
         scene: &crate::scene::Scene,
-        test: super::host_test::HostTest,
+        test: crate::experiment::host_test::HostTest,
         first: HostRun,
-        source: &crate::experiment::bed_cache::BedSource,
+        source: &crate::experiment::bed::cache::BedSource,
         beds: u32,
         skip_s: f64,
     ) -> Result<DecayOutcome, DecayError> {
@@ -647,7 +647,7 @@ impl DecayOutcome {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::bed_cache::BedSource;
+    use crate::experiment::bed::cache::BedSource;
     use crate::experiment::host_test::{Damper, HostTest, run_host_test};
     use crate::host::Excitation;
     use crate::rig::{RigFile, RigSpec};
