@@ -52,17 +52,14 @@ impl WallShape {
         match *self {
             WallShape::Plane { origin, normal } => (p - origin - offset).dot(normal),
             // On the axis (ρ = 0) this is the radius, as it should be.
-            WallShape::CylinderInside { radius_m } => {
-                let q = p - offset;
-                radius_m - (q.x * q.x + q.y * q.y).sqrt()
-            }
+            WallShape::CylinderInside { radius_m } => radius_m - rho_m(p - offset),
             WallShape::Ring {
                 radius_m,
                 z_min_m,
                 z_max_m,
             } => {
                 let q = p - offset;
-                let across = radius_m - (q.x * q.x + q.y * q.y).sqrt();
+                let across = radius_m - rho_m(q);
                 let beyond = q.z - q.z.clamp(z_min_m, z_max_m);
                 if beyond == 0.0 {
                     across
@@ -79,7 +76,7 @@ impl WallShape {
     #[inline]
     pub fn normal_from(&self, p: DVec3, offset: DVec3) -> DVec3 {
         let radial = |q: DVec3| {
-            let rho = (q.x * q.x + q.y * q.y).sqrt();
+            let rho = rho_m(q);
             if rho > 0.0 {
                 DVec3::new(q.x / rho, q.y / rho, 0.0)
             } else {
@@ -104,6 +101,14 @@ impl WallShape {
             }
         }
     }
+}
+
+/// The distance of `q` from the z axis (m): what the cylinder, the ring and
+/// their normals all start from, one expression so that the distance and
+/// the normal of a contact read the same bits.
+#[inline(always)]
+fn rho_m(q: DVec3) -> f64 {
+    (q.x * q.x + q.y * q.y).sqrt()
 }
 
 /// A wall's own rigid motion on top of the common one, prescribed step by
