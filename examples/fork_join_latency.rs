@@ -73,15 +73,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             black_box(work(gap));
         })
     });
-    let spun = pool.install(|| {
-        let mut team = Team::default();
+    let spun = {
+        let mut team = Team::new(2);
         per_round_us(rounds, |_| {
-            team.for_each([units, units], |u| {
+            team.for_each([units, units].into_iter(), |u| {
                 black_box(work(u));
             });
             black_box(work(gap));
         })
-    });
+    };
     let ideal = (serial - gap_us) / 2.0 + gap_us;
     println!(
         "work {units} units a piece, gap {gap} units ({gap_us:.1} us): serial {serial:.1} us a round, ideal on 2 threads {ideal:.1} us; rayon::join {joined:.1} us (overhead {:.1} us), vlab's team {spun:.1} us (overhead {:.1} us)",

@@ -71,21 +71,67 @@ pub fn is_identity(order: &[u32]) -> bool {
     order.iter().enumerate().all(|(k, &o)| o as usize == k)
 }
 
-/// Renumbers `values`, `width` entries per particle (a particle's contacts
-/// with each wall): the `k`-th particle's entries of the result are the
-/// `order[k]`-th particle's of the input.
-pub fn permute_rows<T: Copy>(values: &mut Vec<T>, order: &[u32], width: usize) {
-    if width == 0 {
-        return;
+/// A renumbering as its cycles: found once ([`Renumbering::find`]), then
+/// applied to every array in place, so that renumbering a bed allocates
+/// nothing once the buffers have grown (each value is moved, never
+/// computed: the same bits as a copy into a new array).
+#[derive(Debug, Clone, Default)]
+pub struct Renumbering {
+    /// The first index of each cycle of two or more.
+    starts: Vec<u32>,
+    /// Marks of the search.
+    seen: Vec<bool>,
+}
+
+impl Renumbering {
+    /// The cycles of `order`, a permutation of `0..order.len()` (the `k`-th
+    /// of a renumbered array is the `order[k]`-th of the old).
+    pub fn find(&mut self, order: &[u32]) {
+        self.starts.clear();
+        self.seen.clear();
+        self.seen.resize(order.len(), false);
+        for s in 0..order.len() {
+            if self.seen[s] {
+                continue;
+            }
+            let mut k = s;
+            while !self.seen[k] {
+                self.seen[k] = true;
+                k = order[k] as usize;
+            }
+            if order[s] as usize != s {
+                self.starts.push(s as u32);
+            }
+        }
     }
-    let renumbered: Vec<T> = order
-        .iter()
-        .flat_map(|&k| {
-            let s = k as usize * width;
-            values[s..s + width].iter().copied()
-        })
-        .collect();
-    *values = renumbered;
+
+    /// Renumbers `values` by the cycles found for `order`.
+    pub fn apply<T: Copy>(&self, values: &mut [T], order: &[u32]) {
+        self.apply_rows(values, order, 1);
+    }
+
+    /// Renumbers `values`, `width` entries per particle (a particle's
+    /// contacts with each wall): the `k`-th particle's entries of the result
+    /// are the `order[k]`-th particle's of the input.
+    pub fn apply_rows<T: Copy>(&self, values: &mut [T], order: &[u32], width: usize) {
+        debug_assert_eq!(values.len(), order.len() * width);
+        for c in 0..width {
+            for &s in &self.starts {
+                let s = s as usize;
+                let first = values[s * width + c];
+                let mut k = s;
+                loop {
+                    let from = order[k] as usize;
+                    if from == s {
+                        values[k * width + c] = first;
+                        break;
+                    }
+                    values[k * width + c] = values[from * width + c];
+                    k = from;
+                }
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -163,9 +209,34 @@ mod tests {
     #[test]
     fn rows_move_with_their_particle() {
         let mut v = vec![0, 1, 10, 11, 20, 21];
-        permute_rows(&mut v, &[2, 0, 1], 2);
+        let mut r = Renumbering::default();
+        r.find(&[2, 0, 1]);
+        r.apply_rows(&mut v, &[2, 0, 1], 2);
         assert_eq!(v, vec![20, 21, 0, 1, 10, 11]);
         assert!(is_identity(&[0, 1, 2]));
         assert!(!is_identity(&[1, 0, 2]));
+    }
+
+    /// In place by cycles, a renumbering gives what a copy in the new order
+    /// gives, for permutations of one cycle, several, fixed points and none.
+    #[test]
+    fn renumbering_in_place_equals_a_copy() {
+        let mut x = 0x2545_f491_4f6c_dd1d_u64;
+        let mut r = Renumbering::default();
+        for n in [0usize, 1, 2, 7, 64, 1000] {
+            let mut order: Vec<u32> = (0..n as u32).collect();
+            for k in (1..n).rev() {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                order.swap(k, (x % (k as u64 + 1)) as usize);
+            }
+            let values: Vec<f64> = (0..n).map(|k| k as f64 * 1.5).collect();
+            let copy: Vec<f64> = order.iter().map(|&k| values[k as usize]).collect();
+            let mut in_place = values.clone();
+            r.find(&order);
+            r.apply(&mut in_place, &order);
+            assert_eq!(in_place, copy, "n = {n}");
+        }
     }
 }

@@ -23,6 +23,7 @@ use glam::{DQuat, DVec3};
 
 use super::clumps::{ClumpTemplate, Clumps, NOT_IN_CLUMP};
 use super::material::sphere_mass_kg;
+use super::ordering::Renumbering;
 
 /// All particles of a scene, structure-of-arrays.
 #[derive(Debug, Clone, Default)]
@@ -167,18 +168,25 @@ impl Particles {
     /// `order[k]`-th of the old. `order` must be a permutation of
     /// `0..len`.
     pub fn renumber(&mut self, order: &[u32]) {
+        let mut cycles = Renumbering::default();
+        cycles.find(order);
+        self.renumber_by(&cycles, order);
+    }
+
+    /// [`Self::renumber`] by the cycles already found for `order`, in place.
+    pub fn renumber_by(&mut self, cycles: &Renumbering, order: &[u32]) {
         debug_assert_eq!(order.len(), self.len());
-        permute(&mut self.position, order);
-        permute(&mut self.velocity, order);
-        permute(&mut self.angular_velocity, order);
-        permute(&mut self.force, order);
-        permute(&mut self.torque, order);
-        permute(&mut self.radius, order);
-        permute(&mut self.mass, order);
-        permute(&mut self.inv_mass, order);
-        permute(&mut self.inv_inertia, order);
-        permute(&mut self.id, order);
-        permute(&mut self.clump, order);
+        cycles.apply(&mut self.position, order);
+        cycles.apply(&mut self.velocity, order);
+        cycles.apply(&mut self.angular_velocity, order);
+        cycles.apply(&mut self.force, order);
+        cycles.apply(&mut self.torque, order);
+        cycles.apply(&mut self.radius, order);
+        cycles.apply(&mut self.mass, order);
+        cycles.apply(&mut self.inv_mass, order);
+        cycles.apply(&mut self.inv_inertia, order);
+        cycles.apply(&mut self.id, order);
+        cycles.apply(&mut self.clump, order);
         if !self.clumps.is_empty() {
             self.clumps.reindex(&self.clump, &self.id);
         }
@@ -257,13 +265,6 @@ impl Particles {
             .fold(0.0, f64::max)
             .sqrt()
     }
-}
-
-/// Renumbers `values`: the `k`-th of the result is the `order[k]`-th of the
-/// input.
-pub fn permute<T: Copy>(values: &mut Vec<T>, order: &[u32]) {
-    let renumbered: Vec<T> = order.iter().map(|&k| values[k as usize]).collect();
-    *values = renumbered;
 }
 
 #[cfg(test)]

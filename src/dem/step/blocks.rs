@@ -97,6 +97,11 @@ pub fn pair_rows<const D: bool, const F: bool>(
         states,
         slots,
     } = run;
+    // Room for every listed pair's dissipation, made as the list grows: no
+    // step allocates for the books of its contacts.
+    if limits.per_particle {
+        books.dissipation.reserve(pairs.len());
+    }
     let history = gaps.iter_mut().zip(states.iter_mut());
     let out_slots = slots.acts.iter_mut().zip(slots.force.iter_mut());
     for ((&(i, j), (gap, st)), (act, slot)) in pairs.iter().zip(history).zip(out_slots) {

@@ -24,7 +24,7 @@
 //! block by block ([`super::books`]).
 
 use super::block_size::{PARTICLE_BLOCK, spans_blocks};
-use super::blocks::{CrossShares, CrossSlots, CrossSlotsMut, PairRun, pair_rows};
+use super::blocks::{CrossForce, CrossShares, CrossSlots, CrossSlotsMut, PairRun, pair_rows};
 use super::books::{BlockBooks, Books, Kind};
 use super::checks::{Limits, Refusal, Refused};
 use super::contacts::{
@@ -33,7 +33,7 @@ use super::contacts::{
 use super::isa;
 use super::team::{Team, for_each_block};
 use crate::dem::contact::{ContactLaw, ContactState};
-use crate::dem::neighbours::{NeighbourList, StepView};
+use crate::dem::neighbours::{Adjacency, NeighbourList, StepView};
 use crate::dem::particles::Particles;
 use crate::dem::walls::Walls;
 use glam::DVec3;
@@ -168,45 +168,29 @@ impl ForceStage<'_> {
             gaps,
             states,
         } = neighbours.step_view();
-        // The blocks' shares of every per-particle and per-pair array.
-        let n_walls = geometry.shapes.len();
-        // Cut as the blocks are taken, so that a step on one thread
+        // The blocks' shares of every per-particle and per-pair array, cut
+        // as the blocks are taken (from either end), so that a step
         // allocates nothing for them.
-        let (mut force, mut torque) = (&mut p.force[..], &mut p.torque[..]);
-        let (mut w_states, mut w_gaps) = (wall_states, wall_gaps);
-        let (mut pairs, mut gaps, mut states) = (pairs, gaps, states);
+        let n_particles = p.len();
+        let n_pairs = adjacency.rows(0, n_particles).end;
         let CrossSlotsMut { acts, force: slots } = scratch.cross.parts_mut();
-        let (mut acts, mut slots) = (acts, slots);
-        let books_of_blocks = scratch.wall_books.iter_mut().zip(&mut scratch.pair_books);
-        let jobs =
-            books_of_blocks
-                .take(n_blocks)
-                .enumerate()
-                .map(move |(b, (wall_books, pair_books))| {
-                    let start = b * PARTICLE_BLOCK;
-                    let len = force.len().min(PARTICLE_BLOCK);
-                    let n_rows = adjacency.rows(start, start + len).len();
-                    let (pr, rest) = pairs.split_at(n_rows);
-                    pairs = rest;
-                    BlockJob {
-                        start,
-                        force: split_front(&mut force, len),
-                        torque: split_front(&mut torque, len),
-                        wall_states: split_front(&mut w_states, len * n_walls),
-                        wall_gaps: split_front(&mut w_gaps, len * n_walls),
-                        run: PairRun {
-                            pairs: pr,
-                            gaps: split_front(&mut gaps, n_rows),
-                            states: split_front(&mut states, n_rows),
-                            slots: CrossSlotsMut {
-                                acts: split_front(&mut acts, n_rows),
-                                force: split_front(&mut slots, n_rows),
-                            },
-                        },
-                        wall_books,
-                        pair_books,
-                    }
-                });
+        let jobs = BlockJobs {
+            adjacency,
+            n_particles,
+            n_walls: geometry.shapes.len(),
+            blocks: 0..n_blocks,
+            force: &mut p.force[..n_particles],
+            torque: &mut p.torque[..n_particles],
+            wall_states: &mut wall_states[..n_particles * geometry.shapes.len()],
+            wall_gaps: &mut wall_gaps[..n_particles * geometry.shapes.len()],
+            pairs: &pairs[..n_pairs],
+            gaps: &mut gaps[..n_pairs],
+            states: &mut states[..n_pairs],
+            acts: &mut acts[..n_pairs],
+            slots: &mut slots[..n_pairs],
+            wall_books: &mut scratch.wall_books[..n_blocks],
+            pair_books: &mut scratch.pair_books[..n_blocks],
+        };
         let (wall_kind, pair_kind) = (law_kind(&pw_law), law_kind(&pp_law));
         let block = |job: BlockJob<'_>| {
             isa::run(
@@ -264,11 +248,101 @@ impl ForceStage<'_> {
     }
 }
 
-/// The first `n` items of `rest`, which keeps the others.
-fn split_front<'a, T>(rest: &mut &'a mut [T], n: usize) -> &'a mut [T] {
-    let (front, back) = std::mem::take(rest).split_at_mut(n);
-    *rest = back;
-    front
+/// The blocks of a force phase not yet taken, and what is left of every
+/// array they cut their shares from: a block taken from the front cuts
+/// from the front of each, one taken from the back from the back, so the
+/// team's caller and first helper can take from opposite ends
+/// ([`Team::for_each`]) without a list of jobs being built.
+struct BlockJobs<'b> {
+    adjacency: &'b Adjacency,
+    n_particles: usize,
+    n_walls: usize,
+    /// The blocks not yet taken.
+    blocks: std::ops::Range<usize>,
+    force: &'b mut [DVec3],
+    torque: &'b mut [DVec3],
+    wall_states: &'b mut [ContactState],
+    wall_gaps: &'b mut [f64],
+    pairs: &'b [(u32, u32)],
+    gaps: &'b mut [f64],
+    states: &'b mut [ContactState],
+    acts: &'b mut [bool],
+    slots: &'b mut [CrossForce],
+    wall_books: &'b mut [BlockBooks],
+    pair_books: &'b mut [BlockBooks],
+}
+
+impl<'b> BlockJobs<'b> {
+    /// Block `b`'s job, cut from the front or from the back of what is left.
+    fn cut(&mut self, b: usize, from_back: bool) -> BlockJob<'b> {
+        let start = b * PARTICLE_BLOCK;
+        let len = (self.n_particles - start).min(PARTICLE_BLOCK);
+        let n_rows = self.adjacency.rows(start, start + len).len();
+        let (wall_len, back) = (len * self.n_walls, from_back);
+        let pairs = std::mem::take(&mut self.pairs);
+        let (pairs, rest) = match back {
+            false => pairs.split_at(n_rows),
+            true => {
+                let (rest, tail) = pairs.split_at(pairs.len() - n_rows);
+                (tail, rest)
+            }
+        };
+        self.pairs = rest;
+        BlockJob {
+            start,
+            force: cut(&mut self.force, len, back),
+            torque: cut(&mut self.torque, len, back),
+            wall_states: cut(&mut self.wall_states, wall_len, back),
+            wall_gaps: cut(&mut self.wall_gaps, wall_len, back),
+            run: PairRun {
+                pairs,
+                gaps: cut(&mut self.gaps, n_rows, back),
+                states: cut(&mut self.states, n_rows, back),
+                slots: CrossSlotsMut {
+                    acts: cut(&mut self.acts, n_rows, back),
+                    force: cut(&mut self.slots, n_rows, back),
+                },
+            },
+            wall_books: &mut cut(&mut self.wall_books, 1, back)[0],
+            pair_books: &mut cut(&mut self.pair_books, 1, back)[0],
+        }
+    }
+}
+
+impl<'b> Iterator for BlockJobs<'b> {
+    type Item = BlockJob<'b>;
+
+    fn next(&mut self) -> Option<BlockJob<'b>> {
+        let b = self.blocks.next()?;
+        Some(self.cut(b, false))
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        self.blocks.size_hint()
+    }
+}
+
+impl DoubleEndedIterator for BlockJobs<'_> {
+    fn next_back(&mut self) -> Option<Self::Item> {
+        let b = self.blocks.next_back()?;
+        Some(self.cut(b, true))
+    }
+}
+
+impl ExactSizeIterator for BlockJobs<'_> {}
+
+/// The first `n` of `rest` (`from_back`: the last `n`), leaving the rest.
+fn cut<'a, T>(rest: &mut &'a mut [T], n: usize, from_back: bool) -> &'a mut [T] {
+    let all = std::mem::take(rest);
+    let at = if from_back { all.len() - n } else { n };
+    let (front, back) = all.split_at_mut(at);
+    if from_back {
+        *rest = front;
+        back
+    } else {
+        *rest = back;
+        front
+    }
 }
 
 /// The wall contacts of one block: [`wall_loop`] for walls that move
@@ -314,6 +388,12 @@ fn wall_loop<const D: bool, const F: bool, const OWN: bool>(
 ) {
     books.clear();
     let n_walls = walls.shapes.len();
+    // Room for every contact the block can have (each particle on each
+    // wall), made once: no step allocates when a block first reaches a wall.
+    books.wall_forces.reserve(force.len() * n_walls);
+    if limits.per_particle {
+        books.dissipation.reserve(force.len() * n_walls);
+    }
     // Read once: copied out of `walls` for every wall of every particle,
     // the offset went through the stack in pieces that the next load
     // could not take whole (a stall of the wider loops of [`super::isa`]).

@@ -14,8 +14,8 @@
 
 use crate::dem::contact::ContactState;
 use crate::dem::neighbours::NeighbourList;
-use crate::dem::ordering::{is_identity, permute_rows, space_order};
-use crate::dem::particles::{Particles, permute};
+use crate::dem::ordering::{Renumbering, is_identity, space_order};
+use crate::dem::particles::Particles;
 
 use super::block_size::spans_blocks;
 
@@ -38,6 +38,8 @@ pub struct OrderScratch {
     order: Vec<u32>,
     /// Each particle's position, or its body's centre for a sub-sphere.
     at_body: Vec<glam::DVec3>,
+    /// The renumbering's cycles, applied to every array in place.
+    cycles: Renumbering,
 }
 
 /// Rebuilds `list` for `particles` if it may miss a contact now,
@@ -71,6 +73,7 @@ fn rebuild(
         keys,
         order,
         at_body,
+        cycles,
     } = scratch;
     let placed = if particles.clumps.is_empty() {
         &particles.position
@@ -92,14 +95,15 @@ fn rebuild(
         list.rebuild(&particles.position, &particles.radius, &particles.clump);
         return;
     }
-    particles.renumber(order);
+    cycles.find(order);
+    particles.renumber_by(cycles, order);
     // A world being built has no wall contacts yet: they are read afresh.
     if others.wall_states.len() == order.len() * others.n_walls {
-        permute_rows(others.wall_states, order, others.n_walls);
-        permute_rows(others.wall_gaps, order, others.n_walls);
+        cycles.apply_rows(others.wall_states, order, others.n_walls);
+        cycles.apply_rows(others.wall_gaps, order, others.n_walls);
     }
     if let Some(d) = others.dissipation_j {
-        permute(d, order);
+        cycles.apply(d, order);
     }
     list.rebuild_renumbered(
         &particles.position,

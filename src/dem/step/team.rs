@@ -89,14 +89,15 @@ struct Shared {
     inside: CachePadded<AtomicUsize>,
 }
 
-/// One phase: `count` blocks, each run by `run(index)` exactly once.
+/// One phase: `count` blocks, each run by one call of `run(from_back)`,
+/// which takes the next block from that end of the phase's items.
 struct Job<'a> {
     /// Blocks taken from the front (high 32 bits) and from the back (low
     /// 32 bits); they meet when their sum reaches `count`. Every thread
     /// takes from it, so it has a cache line of its own.
     ends: CachePadded<AtomicU64>,
     count: usize,
-    run: &'a (dyn Fn(usize) + Sync),
+    run: &'a (dyn Fn(bool) + Sync),
     /// What a block that panicked on a helper panicked with.
     panic: Mutex<Option<Box<dyn Any + Send>>>,
 }
@@ -108,8 +109,8 @@ impl Job<'_> {
     /// phase after phase and step after step, and finds its particles in
     /// its own core's cache.
     fn work(&self, from_back: bool) {
-        while let Some(i) = self.take(from_back) {
-            (self.run)(i);
+        while self.take(from_back).is_some() {
+            (self.run)(from_back);
         }
     }
 
@@ -171,28 +172,50 @@ impl Team {
     }
 
     /// Runs `f` on every item, on the caller and the helpers side by side,
-    /// each item once, and returns when all are done. Starts the helpers
-    /// at the first phase; where threads cannot be started the items run
-    /// on the caller. A panic in `f` is raised again here once every thread
+    /// each item once, and returns when all are done. The items are handed
+    /// out from both ends of `items`, which stays where it is (on the
+    /// caller's stack, behind a lock taken once a block): the caller takes
+    /// from the front, the first helper from the back, so a phase allocates
+    /// nothing. `items` must be as long as it says. Starts the helpers at
+    /// the first phase; where threads cannot be started the items run on
+    /// the caller. A panic in `f` is raised again here once every thread
     /// has stopped.
-    pub fn for_each<T: Send>(&mut self, items: impl IntoIterator<Item = T>, f: impl Fn(T) + Sync) {
-        let slots: Vec<Mutex<Option<T>>> = items.into_iter().map(|t| Mutex::new(Some(t))).collect();
-        let run = |i: usize| {
-            let item = slots[i]
-                .lock()
-                .unwrap_or_else(PoisonError::into_inner)
-                .take();
+    pub fn for_each<I>(&mut self, items: I, f: impl Fn(I::Item) + Sync)
+    where
+        I: DoubleEndedIterator + ExactSizeIterator + Send,
+        I::Item: Send,
+    {
+        let count = items.len();
+        let crew = match count {
+            0 | 1 => None,
+            _ => self.crew(),
+        };
+        let Some(crew) = crew else {
+            return items.for_each(f);
+        };
+        let items = Mutex::new(items);
+        let run = |from_back: bool| {
+            let item = {
+                let mut items = items.lock().unwrap_or_else(PoisonError::into_inner);
+                if from_back {
+                    items.next_back()
+                } else {
+                    items.next()
+                }
+            };
             if let Some(item) = item {
                 f(item);
             }
         };
-        if slots.len() < 2 {
-            return (0..slots.len()).for_each(run);
-        }
-        match self.crew() {
-            Some(crew) => crew.run(slots.len(), &run),
-            None => (0..slots.len()).for_each(run),
-        }
+        crew.run(count, &run);
+        debug_assert!(
+            items
+                .into_inner()
+                .unwrap_or_else(PoisonError::into_inner)
+                .next()
+                .is_none(),
+            "the items were longer than they said"
+        );
     }
 
     /// The crew of the team's helpers, started if need be; `None` for a
@@ -210,14 +233,14 @@ impl Team {
 
 /// Runs `f` on every item: on `team`'s threads, or one after the other on
 /// the caller when there is none.
-pub fn for_each_block<T: Send>(
-    team: Option<&mut Team>,
-    items: impl IntoIterator<Item = T>,
-    f: impl Fn(T) + Sync,
-) {
+pub fn for_each_block<I>(team: Option<&mut Team>, items: I, f: impl Fn(I::Item) + Sync)
+where
+    I: DoubleEndedIterator + ExactSizeIterator + Send,
+    I::Item: Send,
+{
     match team {
         Some(team) => team.for_each(items, f),
-        None => items.into_iter().for_each(f),
+        None => items.for_each(f),
     }
 }
 
@@ -241,7 +264,7 @@ impl Crew {
     }
 
     /// Runs the `count` blocks of `run` on the caller and every helper.
-    fn run(&self, count: usize, run: &(dyn Fn(usize) + Sync)) {
+    fn run(&self, count: usize, run: &(dyn Fn(bool) + Sync)) {
         let job = Job {
             ends: CachePadded::new(AtomicU64::new(0)),
             count,
@@ -517,7 +540,7 @@ mod tests {
     /// last down.
     #[test]
     fn the_two_ends_take_every_block_once() {
-        let run = |_: usize| {};
+        let run = |_: bool| {};
         let job = Job {
             ends: CachePadded::new(AtomicU64::new(0)),
             count: 7,
