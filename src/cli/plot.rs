@@ -8,7 +8,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use vlab::signals::{Series, SeriesStyle, plot_xy_svg, read_trace};
+use vlab::signals::plot::plot_channels;
+use vlab::signals::read_trace;
 use vlab::study::sweep::{SWEEP_MAGIC, SweepFile};
 use vlab::study::sweep_plot::plot_sweep;
 
@@ -46,29 +47,9 @@ pub fn run(a: PlotArgs) -> Result<()> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "plot".into());
-    for ch in &trace.channels {
-        let points: Vec<(f64, f64)> = ch
-            .samples
-            .iter()
-            .enumerate()
-            .map(|(i, &y)| (trace.time_s(i), y))
-            .collect();
-        let name = ch.name.replace(['/', ' '], "_");
-        for ext in ["svg", "png"] {
-            let path = dir.join(format!("{stem}-{name}.{ext}"));
-            plot_xy_svg(
-                &path,
-                &format!("{}: {}", a.file.display(), ch.name),
-                "time (s)",
-                &format!("{} [{}]", ch.name, ch.unit),
-                &[Series {
-                    name: String::new(),
-                    points: points.clone(),
-                    style: SeriesStyle::Line,
-                }],
-            )?;
-            println!("wrote {}", path.display());
-        }
+    let title = a.file.display().to_string();
+    for path in plot_channels(&trace, &title, &dir, &stem)? {
+        println!("wrote {}", path.display());
     }
     Ok(())
 }

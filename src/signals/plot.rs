@@ -1293,6 +1293,46 @@ where
     Ok(())
 }
 
+/// Each channel of `trace` against time, as `{stem}-{channel}.svg` and
+/// `.png` in `dir` (which must exist), titled `{title}: {channel}`: what
+/// `vlab plot` draws of a record that is not a sweep. The files drawn, in
+/// order.
+pub fn plot_channels(
+    trace: &super::Trace,
+    title: &str,
+    dir: &Path,
+    stem: &str,
+) -> Result<Vec<std::path::PathBuf>> {
+    let mut drawn = Vec::new();
+    for ch in &trace.channels {
+        let points: Vec<(f64, f64)> = ch
+            .samples
+            .iter()
+            .enumerate()
+            .map(|(i, &y)| (trace.time_s(i), y))
+            .collect();
+        let name = ch.name.replace(['/', ' '], "_");
+        let series = [Series {
+            name: String::new(),
+            points,
+            style: SeriesStyle::Line,
+        }];
+        for ext in ["svg", "png"] {
+            let path = dir.join(format!("{stem}-{name}.{ext}"));
+            let y = format!("{} [{}]", ch.name, ch.unit);
+            plot_xy_svg(
+                &path,
+                &format!("{title}: {}", ch.name),
+                "time (s)",
+                &y,
+                &series,
+            )?;
+            drawn.push(path);
+        }
+    }
+    Ok(drawn)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
