@@ -320,3 +320,62 @@ def test_drop_gives_the_commands_figures_and_files(tmp_path):
 def test_a_bad_drop_is_refused_with_its_keyword(kwargs, said):
     with pytest.raises(ValueError, match=re.escape(said)):
         vlab.drop(**kwargs)
+
+
+REFERENCE_MAP = os.path.join(
+    os.path.dirname(__file__), "..", "..", "signals", "reference", "host-map", "sweep.csv"
+)
+
+
+def test_a_host_prediction_is_the_commands_to_the_bit(tmp_path):
+    # The reference map reaches Gamma 30 at 36-44 Hz: 8 N on plate-40hz
+    # drives 39 Hz to Gamma 32.7, above it (tests/host_cli.rs says the same
+    # of the command).
+    p = vlab.host_predict(REFERENCE_MAP, [36, 39, 40], 8.0)
+    cols = p.columns
+    assert list(cols["freq_hz"]) == [36.0, 39.0, 40.0]
+    assert cols["amplitude_m"].dtype == np.float64 and cols["roots"].dtype == np.int64
+    assert np.all(cols["amplitude_m"] > 0)
+    assert np.array_equal(cols["receptance_m_per_n"], cols["amplitude_m"] / 8.0)
+    assert len(p.warnings) >= 1 and any("39" in w for w in p.warnings), p.warnings
+    assert p.summary["force_n"] == 8.0
+    p.write(tmp_path / "py")
+    cli = os.environ.get("VLAB")
+    if cli is None:
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+    out = tmp_path / "cli"
+    flags = ["--map", REFERENCE_MAP, "--freq", "36,39,40", "--force-n", "8", "--out", str(out)]
+    run = subprocess.run([cli, "host", "predict", *flags], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert (out / "predict.csv").read_bytes() == (tmp_path / "py" / "predict.csv").read_bytes()
+    table = np.genfromtxt(out / "predict.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    for name in ["freq_hz", "amplitude_m", "phase_rad", "efficiency", "damping_n_s_per_m"]:
+        assert np.array_equal(table[name], cols[name]), name
+    cli_json = json.loads((out / "predict.json").read_text())
+    py_json = json.loads((tmp_path / "py" / "predict.json").read_text())
+    for j in (cli_json, py_json):
+        j.pop("elapsed_ms")
+    assert cli_json == py_json
+
+
+@pytest.mark.parametrize(
+    "args, kwargs, said",
+    [
+        (([40], -1.0), {}, ["force_n", "-1"]),
+        (([], 1.0), {}, ["freqs_hz", "between 1 and 1000"]),
+        (([40, 39], 1.0), {}, ["freqs_hz", "ascending"]),
+        (([6000], 1.0), {}, ["freqs_hz", "5000"]),
+        (([40], 1.0), dict(host="no-such-host"), ["host", "no-such-host"]),
+        (([40], 1.0), dict(orientation="sideways"), ["sideways", "vertical"]),
+    ],
+)
+def test_a_bad_prediction_request_is_refused_with_its_name(args, kwargs, said):
+    with pytest.raises(ValueError) as e:
+        vlab.host_predict(REFERENCE_MAP, *args, **kwargs)
+    for word in said:
+        assert word in str(e.value), (word, str(e.value))
+
+
+def test_a_missing_map_is_refused_with_its_name(tmp_path):
+    with pytest.raises(ValueError, match="map = "):
+        vlab.host_predict(tmp_path / "none.csv", [40], 1.0)

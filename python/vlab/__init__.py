@@ -24,7 +24,17 @@ import numpy as np
 
 from . import _vlab
 
-__all__ = ["shake", "analyze", "cor", "drop", "Shake", "Drop", "DEFAULT_BEDS"]
+__all__ = [
+    "shake",
+    "analyze",
+    "cor",
+    "drop",
+    "host_predict",
+    "Shake",
+    "Drop",
+    "HostPrediction",
+    "DEFAULT_BEDS",
+]
 
 DEFAULT_BEDS = _vlab.DEFAULT_BEDS
 
@@ -181,3 +191,53 @@ def drop(heights_m=(0.05,), **options):
     if isinstance(heights_m, (int, float)):
         heights_m = [heights_m]
     return Drop(_vlab.drop_test([float(h) for h in heights_m], **options))
+
+
+class HostPrediction:
+    """A host's predicted response to a stepped sine: what predict.json and
+    predict.csv hold."""
+
+    def __init__(self, inner):
+        self._inner = inner
+
+    @property
+    def summary(self):
+        """What predict.json holds, as a dict: the host, the map, the force,
+        the time taken, the warnings and every response."""
+        return json.loads(self._inner.summary_json)
+
+    @property
+    def columns(self):
+        """What predict.csv holds, as a dict of numpy arrays (units in the
+        names; `extrapolated` bool, `roots` int): `pandas.DataFrame(p.columns)`
+        takes it as it is."""
+        return self._inner.columns
+
+    warnings = property(lambda self: list(self._inner.warnings))
+
+    def write(self, out):
+        """Writes predict.csv and predict.json into folder `out`."""
+        self._inner.write(out)
+
+    def __repr__(self):
+        return repr(self._inner)
+
+
+def host_predict(map, freqs_hz, force_n, **options):
+    """The host's steady response to a stepped sine of `force_n` (N) at each
+    of `freqs_hz` (Hz, ascending), predicted in milliseconds from the
+    dissipation map of the sweep `map` (its sweep.csv) by describing function
+    and harmonic balance, as `vlab host predict` does; returns a
+    HostPrediction.
+
+    Keyword arguments are the command's flags: `host` (a built-in name,
+    plate-40hz or beam-2mode, or a host file), `orientation` (the sweep's,
+    when it has both), `yang` (model the damper on Yang's measured
+    efficiency instead of the DEM's). Bad values raise `ValueError` naming
+    the keyword, before any work.
+    """
+    if isinstance(freqs_hz, (int, float)):
+        freqs_hz = [freqs_hz]
+    return HostPrediction(
+        _vlab.host_predict(str(map), [float(f) for f in freqs_hz], float(force_n), **options)
+    )

@@ -1,7 +1,7 @@
 """Type stubs of the compiled half of vlab (python/src/lib.rs)."""
 
 from os import PathLike
-from typing import Callable, Optional, Union
+from typing import Any, Callable, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -102,3 +102,22 @@ def drop_test(
     holdoff_s: Optional[float] = None,
     seed: int = 1,
 ) -> Drop: ...
+
+class HostPredict:
+    @property
+    def summary_json(self) -> str: ...
+    @property
+    def columns(self) -> dict[str, npt.NDArray[Any]]: ...
+    @property
+    def warnings(self) -> list[str]: ...
+    def write(self, out: Union[str, PathLike[str]]) -> None: ...
+
+def host_predict(
+    map: Union[str, PathLike[str]],
+    freqs_hz: list[float],
+    force_n: float,
+    *,
+    host: str = "plate-40hz",
+    orientation: Optional[str] = None,
+    yang: bool = False,
+) -> HostPredict: ...

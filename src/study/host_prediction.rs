@@ -12,6 +12,43 @@ use crate::host::{DissipationMap, HostSpec};
 use crate::scene::SceneError;
 
 use super::dissipation_map::MapSource;
+use crate::validation::{Bound, InvalidParameter, in_range, positive};
+
+/// Most frequencies a prediction takes.
+pub const MAX_FREQUENCIES: usize = 1000;
+
+/// Checks a prediction's frequencies (each in (0, 5000] Hz, ascending, 1
+/// to [`MAX_FREQUENCIES`] of them) and force (positive, N), naming
+/// `freqs_hz` or `force_n`.
+pub fn check_request(freqs_hz: &[f64], force_n: f64) -> Result<(), InvalidParameter> {
+    positive("force_n", force_n, "N")?;
+    if freqs_hz.is_empty() || freqs_hz.len() > MAX_FREQUENCIES {
+        return Err(InvalidParameter::new(
+            "freqs_hz",
+            format!("{} frequencies", freqs_hz.len()),
+            "",
+            format!("between 1 and {MAX_FREQUENCIES} frequencies"),
+        ));
+    }
+    for &f in freqs_hz {
+        in_range(
+            "freqs_hz",
+            f,
+            "Hz",
+            Bound::Open(0.0),
+            Bound::Closed(5_000.0),
+        )?;
+    }
+    if let Some(w) = freqs_hz.windows(2).find(|w| w[1] <= w[0]) {
+        return Err(InvalidParameter::new(
+            "freqs_hz",
+            format!("{} after {}", w[1], w[0]),
+            "Hz",
+            "ascending",
+        ));
+    }
+    Ok(())
+}
 
 /// A finished prediction: each frequency's response with its count of
 /// roots, and the frequencies the map had to be extrapolated for.
@@ -121,5 +158,23 @@ impl HostPrediction {
         io(dir.join("predict.csv"), Ok(self.csv()))?;
         let json = serde_json::to_string_pretty(&self.summary()).map_err(std::io::Error::other);
         io(dir.join("predict.json"), json)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each refusal names its keyword; a good request passes.
+    #[test]
+    fn a_request_is_checked_and_a_refusal_names_its_keyword() {
+        assert!(check_request(&[36.0, 39.0, 40.0], 5.0).is_ok());
+        let said = |freqs: &[f64], force: f64| check_request(freqs, force).unwrap_err().to_string();
+        assert!(said(&[40.0], -1.0).contains("force_n"));
+        assert!(said(&[], 1.0).contains("between 1 and 1000"));
+        assert!(said(&[0.0], 1.0).contains("freqs_hz"));
+        assert!(said(&[6000.0], 1.0).contains("5000"));
+        assert!(said(&[40.0, 39.0], 1.0).contains("ascending"));
+        assert!(said(&[f64::NAN], 1.0).contains("freqs_hz"));
     }
 }
