@@ -1,3 +1,7 @@
+//! The structural methods against analytical single-degree-of-freedom
+//! responses: free decays, FRFs, half-power bandwidths and power input,
+//! with and without noise, and every refusal naming its parameter.
+
 use super::*;
 
 // -----------------------------------------------------------------------
