@@ -5,8 +5,9 @@
 //! names hold (`rig` and `host` never import `dem`: they see the damper only
 //! as a force), and inside a folder the files import each other without a
 //! loop (docs/design.md, "Layers"). Imports are read as text: every
-//! `crate::a::b` path in a file (in `use` lines and in expressions), every
-//! `super::b` and, for the binary's `src/cli/`, every `vlab::a` path.
+//! `crate::a::b` path in a file (in `use` lines and in expressions) and
+//! every `super::b`. The binary's `src/cli/`, on the top rung, may import
+//! any folder; its files are checked for loops only.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
