@@ -27,7 +27,7 @@ use vlab::experiment::measurement::CalibrationSource;
 use vlab::experiment::shake_plan::{ShakeOutcome, ShakePlan, ShakeRequest};
 use vlab::host::HostSpec;
 use vlab::rig::{ACCEL_CHANNEL, DROP_RIG, DropRigSpec, FORCE_CHANNEL, RigFile};
-use vlab::scene::{Orientation, Scene, SceneError, SceneOverrides};
+use vlab::scene::{Orientation, Scene, SceneError, SceneOverrides, scene_figures};
 use vlab::signals::calibration::PhaseCalibration;
 use vlab::signals::impacts::default_force_channel;
 use vlab::signals::{AnalysisOptions, ImpactParams, Trace, analyse_trace, cor_report, read_trace};
@@ -788,6 +788,21 @@ fn host_predict(
     Ok(HostPredict { prediction })
 }
 
+/// A scene as `vlab scene` reads it (a file over the built-in thesis
+/// damper, or the damper itself): its TOML and its figures (`vlab scene
+/// --json`), as a JSON text `{"toml": ..., "figures": ...}`.
+#[pyfunction]
+#[pyo3(signature = (scene = None))]
+fn scene_json(scene: Option<PathBuf>) -> PyResult<String> {
+    let resolved = match &scene {
+        Some(path) => Scene::load_over_preset(path).map_err(value_error)?,
+        None => Scene::thesis(),
+    };
+    let figures = scene_figures(&resolved).map_err(value_error)?;
+    let out = serde_json::json!({ "toml": resolved.to_toml(), "figures": figures });
+    Ok(out.to_string())
+}
+
 #[pymodule]
 fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cor, m)?)?;
@@ -795,6 +810,7 @@ fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analyze, m)?)?;
     m.add_function(wrap_pyfunction!(drop_test, m)?)?;
     m.add_function(wrap_pyfunction!(host_predict, m)?)?;
+    m.add_function(wrap_pyfunction!(scene_json, m)?)?;
     m.add_class::<HostPredict>()?;
     m.add_class::<Shake>()?;
     m.add_class::<Drop>()?;

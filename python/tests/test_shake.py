@@ -379,3 +379,32 @@ def test_a_bad_prediction_request_is_refused_with_its_name(args, kwargs, said):
 def test_a_missing_map_is_refused_with_its_name(tmp_path):
     with pytest.raises(ValueError, match="map = "):
         vlab.host_predict(tmp_path / "none.csv", [40], 1.0)
+
+
+TOROID = os.path.join(os.path.dirname(__file__), "..", "..", "docs", "shape-study", "toroid020.toml")
+
+
+@pytest.mark.parametrize("path", [None, TOROID])
+def test_a_scene_is_what_the_command_reads(path):
+    s = vlab.scene(path)
+    assert "[particles]" in s["toml"]
+    f = s["figures"]
+    if path is None:
+        assert f["particles"]["count"] == 358 and f["particles"]["body"] is None
+        assert abs(f["fill_ratio"] - 0.466) < 5e-4
+    else:
+        assert f["particles"]["shape"] == "toroid" and f["particles"]["body"]["sub_spheres"] > 1
+    cli = os.environ.get("VLAB")
+    if cli is None:
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+    flags = ["scene", "--json"] + ([] if path is None else ["--scene", path])
+    run = subprocess.run([cli, *flags], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert json.loads(run.stdout) == f
+
+
+def test_a_bad_scene_is_refused_with_its_key(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[particles]\ncount = 0\n")
+    with pytest.raises(ValueError, match="particles.count"):
+        vlab.scene(bad)

@@ -30,6 +30,7 @@ __all__ = [
     "cor",
     "drop",
     "host_predict",
+    "scene",
     "Shake",
     "Drop",
     "HostPrediction",
@@ -241,3 +242,15 @@ def host_predict(map, freqs_hz, force_n, **options):
     return HostPrediction(
         _vlab.host_predict(str(map), [float(f) for f in freqs_hz], float(force_n), **options)
     )
+
+
+def scene(path=None):
+    """A scene as `vlab scene` reads it: the file at `path` merged over the
+    built-in thesis damper, or the damper itself. Returns a dict: "toml",
+    the resolved scene as TOML (what `vlab scene --print` writes of a file),
+    and "figures", what `vlab scene --json` prints (the particles' count,
+    shape, mass and, for a body, its sub-spheres, volume, inertia, sphericity
+    and the multi-sphere errors; the fill ratio; the time steps). A bad file
+    raises `ValueError` naming its key.
+    """
+    return json.loads(_vlab.scene_json(None if path is None else str(path)))

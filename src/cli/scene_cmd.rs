@@ -8,11 +8,11 @@ use clap::Args;
 
 use vlab::dem::restitution::realised_restitution;
 use vlab::experiment::damper::first_checkpoint;
-use vlab::scene::contact_laws;
 use vlab::scene::{
     CyclesSpec, ParticleBody, Scene, ShapeKind, THESIS_DAMPER_TOML, THESIS_SCENE_FILE,
     TimeStepRule, TimeStepSpec,
 };
+use vlab::scene::{contact_laws, scene_figures};
 use vlab::stats::MIN_SERIES_VALUES;
 
 #[derive(Debug, Clone, Args)]
@@ -44,10 +44,7 @@ pub fn run(a: SceneArgs) -> Result<()> {
         return Ok(());
     }
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&particles_json(&scene)?)?
-        );
+        println!("{}", serde_json::to_string_pretty(&scene_figures(&scene)?)?);
         return Ok(());
     }
     match &a.scene {
@@ -152,46 +149,6 @@ fn shape_words(scene: &Scene, body: &ParticleBody) -> String {
         ),
         ShapeKind::Sphere => "spheres".into(),
     }
-}
-
-/// The particles' figures as JSON (`vlab scene --json`).
-fn particles_json(scene: &Scene) -> Result<serde_json::Value> {
-    let p = &scene.particles;
-    let body = scene.particle_body()?.map(|b| {
-        let t = &b.template;
-        serde_json::json!({
-            "sub_spheres": t.len(),
-            "mass_kg": t.mass_kg,
-            "principal_moments_kgm2": t.inertia_kgm2.to_array(),
-            "union_volume_m3": b.union_volume_m3,
-            "union_surface_m2": b.union_surface_m2,
-            "exact_volume_m3": b.exact.map(|e| e.0),
-            "exact_surface_m2": b.exact.map(|e| e.1),
-            "volume_error": b.volume_error(),
-            "surface_error": b.surface_error(),
-            "sphericity": b.sphericity(),
-            "min_sub_radius_m": b.min_sub_radius_m,
-            "bounding_radius_m": b.bounding_radius_m,
-            "sub_sphere_centres_m": t.offsets_m.iter().map(|o| o.to_array()).collect::<Vec<_>>(),
-            "sub_sphere_radii_m": t.radii_m,
-        })
-    });
-    let drive = scene.drive(40.0, 20.0)?;
-    Ok(serde_json::json!({
-        "scene": scene.name,
-        "particles": {
-            "count": p.count,
-            "shape": p.shape.as_str(),
-            "aspect_ratio": p.aspect_ratio,
-            "hole_ratio": p.hole_ratio,
-            "equivalent_diameter_m": p.diameter_m,
-            "total_mass_kg": scene.particle_mass_kg(),
-            "body": body,
-        },
-        "fill_ratio": scene.fill_ratio(),
-        "dt_s_at_40hz_gamma20": scene.drive_dt_s(&drive),
-        "rayleigh_limit_s": scene.rayleigh_limit_s(),
-    }))
 }
 
 /// The two contact laws.

@@ -480,6 +480,13 @@ impl Scene {
     /// enclosure can hold the particles.
     fn validate_bed(&self) -> Result<(), SceneError> {
         let p = &self.particles;
+        require(
+            p.count >= 1,
+            "particles.count",
+            p.count,
+            "",
+            "at least 1 (a damper of no particles has nothing to dissipate)",
+        )?;
         positive("particles.diameter_m", p.diameter_m, "m")?;
         p.shape_keys().validate()?;
         let particle = p.material.resolve("particles.material")?;
@@ -924,6 +931,9 @@ mod tests {
         assert!(err.to_string().contains("colour"), "{err}");
         let err = Scene::merge_over_preset("[particles]\ncount = 700\n", "f.toml").unwrap_err();
         assert!(err.to_string().contains("random close packing"), "{err}");
+        // A damper of no particles was taken, and driven, before.
+        let err = Scene::merge_over_preset("[particles]\ncount = 0\n", "f.toml").unwrap_err();
+        assert!(err.to_string().contains("particles.count = 0"), "{err}");
         let err = Scene::merge_over_preset("[simulation]\ndt_s = 1e-4\n", "f.toml").unwrap_err();
         assert!(err.to_string().contains("stability limit"), "{err}");
         let err = Scene::merge_over_preset(

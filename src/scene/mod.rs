@@ -6,6 +6,7 @@
 pub mod contact_laws;
 pub mod drive_length;
 pub mod error;
+pub mod figures;
 pub mod format;
 pub mod packing;
 pub mod particle_shape;
@@ -14,5 +15,6 @@ pub mod validity;
 pub use contact_laws::{ContactLaws, contact_laws};
 pub use drive_length::{DriveLength, SteadyCriteria, transient_cycles};
 pub use error::{ReplayOption, SceneError};
+pub use figures::scene_figures;
 pub use format::*;
 pub use particle_shape::{ParticleBody, ShapeKind};
