@@ -399,8 +399,14 @@ impl Scene {
             path: origin.to_string(),
             message,
         };
-        let mut scene: Scene =
-            toml::from_str(text).map_err(|e| error(one_line(&e, own_text.then_some(text))))?;
+        let mut scene: Scene = toml::from_str(text).map_err(|e| {
+            error(match own_text {
+                true => one_line(&e, Some(text)),
+                // The merged text's lines are not the user's, but its keys
+                // are: name the one at fault.
+                false => with_key(&e, text),
+            })
+        })?;
         scene
             .particles
             .settle_diameter()
@@ -869,6 +875,27 @@ fn one_line(e: &toml::de::Error, text: Option<&str>) -> String {
     }
 }
 
+/// A TOML error of a merged scene as one line, led by the key at fault
+/// (`particles.count: invalid value ...`) where the error points at one.
+fn with_key(e: &toml::de::Error, text: &str) -> String {
+    let message = one_line(e, None);
+    let Some(span) = e.span() else {
+        return message;
+    };
+    let before = &text[..span.start.min(text.len())];
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let line = text[line_start..].lines().next().unwrap_or("");
+    let Some((key, _)) = line.split_once('=') else {
+        return message;
+    };
+    let table = before[..line_start]
+        .lines()
+        .rev()
+        .find_map(|l| l.trim().strip_prefix('[')?.strip_suffix(']'))
+        .map(|t| format!("{}.", t.trim_matches(['[', ']'])));
+    format!("{}{}: {message}", table.unwrap_or_default(), key.trim())
+}
+
 /// Recursively overlays `top` onto `base`: tables merge, everything else replaces.
 fn merge_tables(base: &mut toml::Table, top: toml::Table) {
     for (key, value) in top {
@@ -931,6 +958,13 @@ mod tests {
         assert!(err.to_string().contains("colour"), "{err}");
         let err = Scene::merge_over_preset("[particles]\ncount = 700\n", "f.toml").unwrap_err();
         assert!(err.to_string().contains("random close packing"), "{err}");
+        // A value of the wrong type in a file merged over the preset names
+        // its key (it gave serde's words alone).
+        let err = Scene::merge_over_preset("[particles]\ncount = -5\n", "f.toml").unwrap_err();
+        assert!(err.to_string().contains("particles.count: "), "{err}");
+        let err =
+            Scene::merge_over_preset("[particles]\nshape = \"cube\"\n", "f.toml").unwrap_err();
+        assert!(err.to_string().contains("particles.shape: "), "{err}");
         // A damper of no particles was taken, and driven, before.
         let err = Scene::merge_over_preset("[particles]\ncount = 0\n", "f.toml").unwrap_err();
         assert!(err.to_string().contains("particles.count = 0"), "{err}");
