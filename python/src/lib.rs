@@ -18,6 +18,7 @@ use pyo3::prelude::*;
 
 use vlab::atomic_write::OutputDir;
 use vlab::experiment::bed::cache::{BedCache, BedSource};
+use vlab::experiment::calibration_plan::{CalibrationPlan, CalibrationRow};
 use vlab::experiment::damper::Progress;
 use vlab::experiment::drop::DropParticle;
 use vlab::experiment::drop::series::{DropRequest, DropSeries, sampling_warning};
@@ -26,7 +27,7 @@ use vlab::experiment::ensemble_summary::EnsembleSummary;
 use vlab::experiment::measurement::CalibrationSource;
 use vlab::experiment::shake_plan::{ShakeOutcome, ShakePlan, ShakeRequest};
 use vlab::host::HostSpec;
-use vlab::rig::{ACCEL_CHANNEL, DROP_RIG, DropRigSpec, FORCE_CHANNEL, RigFile};
+use vlab::rig::{ACCEL_CHANNEL, DROP_RIG, DropRigSpec, FORCE_CHANNEL, RigFile, ShakerKind};
 use vlab::scene::{Orientation, Scene, SceneError, SceneOverrides, scene_figures};
 use vlab::signals::calibration::PhaseCalibration;
 use vlab::signals::impacts::default_force_channel;
@@ -803,6 +804,92 @@ fn scene_json(scene: Option<PathBuf>) -> PyResult<String> {
     Ok(out.to_string())
 }
 
+/// A rig's phase-error calibration ([`CalibrationPlan`]).
+#[pyclass(module = "vlab._vlab", frozen)]
+struct Calibration {
+    table: PhaseCalibration,
+    rows: Vec<CalibrationRow>,
+}
+
+#[pymethods]
+impl Calibration {
+    /// Each frequency's row, as `vlab calibrate --json` prints them (JSON).
+    #[getter]
+    fn rows_json(&self) -> String {
+        serde_json::to_string(&self.rows).unwrap_or_default()
+    }
+
+    /// The table `vlab calibrate --out` writes and `calibration=` reads (JSON).
+    #[getter]
+    fn table_json(&self) -> String {
+        serde_json::to_string(&self.table).unwrap_or_default()
+    }
+
+    /// Writes the table to the file `path`, as `vlab calibrate --out` does.
+    fn write(&self, path: PathBuf) -> PyResult<()> {
+        self.table
+            .save_json(&path)
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))
+    }
+}
+
+/// The rig's phase error measured on the empty enclosure at each of
+/// `freqs_hz`, averaged over `gammas`, as `vlab calibrate` does with the
+/// flags of the same names; returns a `Calibration`. Refusals name the
+/// keyword before any work (`ValueError`); the GIL is released while the
+/// shaker runs.
+#[pyfunction]
+#[pyo3(signature = (
+    freqs_hz,
+    *,
+    gammas = vec![2.0, 5.0, 10.0],
+    rig = vlab::rig::DEFAULT_RIG.to_string(),
+    shaker = None,
+    cycles = 8,
+    record_cycles = 5,
+    dt_s = 1e-6,
+))]
+#[allow(clippy::too_many_arguments)]
+fn calibrate(
+    py: Python<'_>,
+    freqs_hz: Vec<f64>,
+    gammas: Vec<f64>,
+    rig: String,
+    shaker: Option<&str>,
+    cycles: u32,
+    record_cycles: u32,
+    dt_s: f64,
+) -> PyResult<Calibration> {
+    let shaker = match shaker {
+        None => None,
+        Some("prescribed") => Some(ShakerKind::Prescribed),
+        Some("electrodynamic") => Some(ShakerKind::Electrodynamic),
+        Some(other) => {
+            return Err(PyValueError::new_err(format!(
+                "shaker = {other:?}: must be \"prescribed\" or \"electrodynamic\""
+            )));
+        }
+    };
+    let plan = CalibrationPlan {
+        rig,
+        shaker,
+        freqs_hz,
+        gammas,
+        cycles,
+        record_cycles,
+        dt_s,
+    };
+    let g = Scene::thesis().simulation.gravity_mps2;
+    let spec = plan.check(g).map_err(|e| match &e {
+        SceneError::Invalid(_) => value_error(e),
+        _ => PyValueError::new_err(format!("rig = {:?}: {e}", plan.rig)),
+    })?;
+    let (table, rows) = py
+        .detach(|| plan.run(&spec, g))
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    Ok(Calibration { table, rows })
+}
+
 #[pymodule]
 fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cor, m)?)?;
@@ -811,6 +898,8 @@ fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(drop_test, m)?)?;
     m.add_function(wrap_pyfunction!(host_predict, m)?)?;
     m.add_function(wrap_pyfunction!(scene_json, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate, m)?)?;
+    m.add_class::<Calibration>()?;
     m.add_class::<HostPredict>()?;
     m.add_class::<Shake>()?;
     m.add_class::<Drop>()?;

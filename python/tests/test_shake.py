@@ -408,3 +408,38 @@ def test_a_bad_scene_is_refused_with_its_key(tmp_path):
     bad.write_text("[particles]\ncount = 0\n")
     with pytest.raises(ValueError, match="particles.count"):
         vlab.scene(bad)
+
+
+def test_a_calibration_is_the_commands_to_the_bit(tmp_path):
+    c = vlab.calibrate([40, 160], gammas=[5, 10])
+    cols = c.columns
+    assert list(cols["freq_hz"]) == [40.0, 160.0]
+    assert np.all(cols["amplitudes"] == 2)
+    # The empty enclosure recovers the rig model's own phase error.
+    assert np.allclose(cols["phase_error_rad"], cols["rig_model_phase_error_rad"], atol=2e-4)
+    c.write(tmp_path / "py.json")
+    cli = os.environ.get("VLAB")
+    if cli is None:
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+    flags = ["--freq", "40,160", "--gammas", "5,10", "--out", str(tmp_path / "cli.json"), "--json"]
+    run = subprocess.run([cli, "calibrate", *flags], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert json.loads(run.stdout) == c.rows
+    assert (tmp_path / "cli.json").read_bytes() == (tmp_path / "py.json").read_bytes()
+
+
+@pytest.mark.parametrize(
+    "kwargs, said",
+    [
+        (dict(record_cycles=9), ["record_cycles", "9"]),
+        (dict(dt_s=1e-3), ["dt_s", "sample period"]),
+        (dict(rig="no-such-rig"), ["rig", "no-such-rig"]),
+        (dict(shaker="piezo"), ["shaker", "piezo"]),
+        (dict(gammas=[]), ["freqs_hz", "at least one"]),
+    ],
+)
+def test_a_bad_calibration_is_refused_with_its_name(kwargs, said):
+    with pytest.raises(ValueError) as e:
+        vlab.calibrate([40], **kwargs)
+    for word in said:
+        assert word in str(e.value), (word, str(e.value))

@@ -30,6 +30,8 @@ __all__ = [
     "cor",
     "drop",
     "host_predict",
+    "calibrate",
+    "Calibration",
     "scene",
     "Shake",
     "Drop",
@@ -254,3 +256,54 @@ def scene(path=None):
     raises `ValueError` naming its key.
     """
     return json.loads(_vlab.scene_json(None if path is None else str(path)))
+
+
+class Calibration:
+    """A rig's phase error measured on the empty enclosure: each frequency's
+    row and the table that `shake(calibration=...)` and
+    `analyze(calibration=...)` read once written."""
+
+    def __init__(self, inner):
+        self._inner = inner
+
+    @property
+    def rows(self):
+        """Each frequency's phase error (rad), its spread over the amplitudes
+        (rad), the amplitudes averaged and the rig model's own phase error
+        (rad), as `vlab calibrate --json` prints them: a list of dicts."""
+        return json.loads(self._inner.rows_json)
+
+    @property
+    def columns(self):
+        """The rows as numpy arrays, one per field, units in the names."""
+        rows = self.rows
+        return {k: np.array([r[k] for r in rows]) for k in (rows[0] if rows else {})}
+
+    @property
+    def table(self):
+        """The table as a dict (what the written file holds)."""
+        return json.loads(self._inner.table_json)
+
+    def write(self, path):
+        """Writes the table to the file `path`, as `vlab calibrate --out`."""
+        self._inner.write(str(path))
+
+    def __repr__(self):
+        return "<vlab.Calibration at {} Hz>".format(
+            ", ".join(f"{r['freq_hz']:g}" for r in self.rows)
+        )
+
+
+def calibrate(freqs_hz, **options):
+    """The rig's phase error measured on the empty enclosure (thesis Section
+    7.4.2, Fig. 7.9) at each of `freqs_hz` (Hz), as `vlab calibrate` does;
+    returns a Calibration. Keyword arguments are the command's flags:
+    `gammas` (amplitudes averaged, default 2, 5, 10), `rig`, `shaker`
+    ("prescribed" or "electrodynamic"), `cycles`, `record_cycles`, `dt_s`.
+    Bad values raise `ValueError` naming the keyword, before any work.
+    """
+    if isinstance(freqs_hz, (int, float)):
+        freqs_hz = [freqs_hz]
+    if "gammas" in options:
+        options["gammas"] = [float(g) for g in options["gammas"]]
+    return Calibration(_vlab.calibrate([float(f) for f in freqs_hz], **options))

@@ -123,3 +123,21 @@ def host_predict(
 ) -> HostPredict: ...
 
 def scene_json(scene: Union[str, PathLike[str], None] = None) -> str: ...
+
+class Calibration:
+    @property
+    def rows_json(self) -> str: ...
+    @property
+    def table_json(self) -> str: ...
+    def write(self, path: Union[str, PathLike[str]]) -> None: ...
+
+def calibrate(
+    freqs_hz: list[float],
+    *,
+    gammas: list[float] = ...,
+    rig: str = "thesis-shaker",
+    shaker: Optional[str] = None,
+    cycles: int = 8,
+    record_cycles: int = 5,
+    dt_s: float = 1e-6,
+) -> Calibration: ...

@@ -6,15 +6,12 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
-use serde::Serialize;
 
-use vlab::drive::Drive;
-use vlab::experiment::measurement::calibrate_rig;
-use vlab::experiment::shake::resolve_rig;
+use vlab::experiment::calibration_plan::{CalibrationPlan, CalibrationRow};
 use vlab::rig::{RigSpec, ShakerKind};
-use vlab::scene::Scene;
+use vlab::scene::{Scene, SceneError};
 use vlab::signals::PhaseCalibration;
 
 use super::args;
@@ -52,33 +49,27 @@ pub struct CalibrateArgs {
     json: bool,
 }
 
-#[derive(Debug, Serialize)]
-struct Row {
-    freq_hz: f64,
-    phase_error_rad: f64,
-    spread_rad: f64,
-    amplitudes: usize,
-    rig_model_phase_error_rad: f64,
-}
-
 pub fn run(a: CalibrateArgs) -> Result<()> {
-    if a.record_cycles < 2 || a.record_cycles > a.cycles {
-        bail!(
-            "--record-cycles {} is invalid: must lie in [2, --cycles = {}]",
-            a.record_cycles,
-            a.cycles
-        );
-    }
     let g = Scene::thesis().simulation.gravity_mps2;
-    let rig = resolve_for_all(&a, g)?;
-    if a.dt_s > 1.0 / rig.daq.sample_rate_hz {
-        bail!(
-            "--dt-s {} is invalid: must be at most one sample period, {} s at {} Hz",
-            a.dt_s,
-            1.0 / rig.daq.sample_rate_hz,
-            rig.daq.sample_rate_hz
-        );
-    }
+    let plan = CalibrationPlan {
+        rig: a.rig.clone(),
+        shaker: a.shaker,
+        freqs_hz: a.freqs_hz.clone(),
+        gammas: a.gammas.clone(),
+        cycles: a.cycles,
+        record_cycles: a.record_cycles,
+        dt_s: a.dt_s,
+    };
+    let rig = plan.check(g).map_err(|e| match &e {
+        SceneError::Invalid(p) => anyhow::Error::from(match p.key.as_str() {
+            "record_cycles" => p.renamed("--record-cycles"),
+            "dt_s" => p.renamed("--dt-s"),
+            "freqs_hz" | "freq_hz" => p.renamed("--freq"),
+            "gamma" => p.renamed("--gammas"),
+            _ => p.clone(),
+        }),
+        _ => anyhow::Error::from(e).context(format!("--rig {}", a.rig)),
+    })?;
     let out = a
         .out
         .clone()
@@ -87,31 +78,8 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("cannot create folder {}", parent.display()))?;
     }
-    let table = calibrate_rig(
-        &rig,
-        rig.shaker.kind,
-        &a.freqs_hz,
-        &a.gammas,
-        g,
-        a.dt_s,
-        a.cycles,
-        a.record_cycles,
-        1,
-    )
-    .context("running the empty enclosure")?
-    .table;
+    let (table, rows) = plan.run(&rig, g).context("running the empty enclosure")?;
     table.save_json(&out)?;
-    let rows: Vec<Row> = table
-        .points
-        .iter()
-        .map(|e| Row {
-            freq_hz: e.freq_hz,
-            phase_error_rad: e.phase_error_rad,
-            spread_rad: e.spread_rad,
-            amplitudes: e.n_amplitudes,
-            rig_model_phase_error_rad: rig.expected_phase_error_rad(e.freq_hz),
-        })
-        .collect();
     if a.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
@@ -120,27 +88,14 @@ pub fn run(a: CalibrateArgs) -> Result<()> {
     Ok(())
 }
 
-/// The rig of `--rig` and `--shaker`, refusing any (frequency, amplitude)
-/// it cannot do before running anything.
-fn resolve_for_all(a: &CalibrateArgs, g: f64) -> Result<RigSpec> {
-    let mut resolved = None;
-    for &f in &a.freqs_hz {
-        for &gamma in &a.gammas {
-            let drive = Drive::new(f, gamma, g)?;
-            resolved = Some(
-                resolve_rig(&a.rig, a.shaker, &drive)
-                    .with_context(|| format!("--rig {}", a.rig))?,
-            );
-        }
-    }
-    let Some(rig) = resolved else {
-        bail!("--freq and --gammas must name at least one value each");
-    };
-    Ok(rig)
-}
-
 /// The table as text, with the fitted model and where it was written.
-fn print_table(rig: &RigSpec, gammas: &[f64], rows: &[Row], table: &PhaseCalibration, out: &Path) {
+fn print_table(
+    rig: &RigSpec,
+    gammas: &[f64],
+    rows: &[CalibrationRow],
+    table: &PhaseCalibration,
+    out: &Path,
+) {
     println!(
         "rig {} ({} shaker), empty enclosure of {} kg, Gamma {:?}:",
         rig.name, rig.shaker.kind, rig.enclosure.mass_kg, gammas

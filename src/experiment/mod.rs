@@ -10,6 +10,8 @@
 //!   (`shake_plan`);
 //! - `drop/`: the drop test of one sphere, and its series of heights with
 //!   the files a lab keeps (`series`);
+//! - the rig's phase-error calibration on the empty enclosure
+//!   (`calibration_plan`);
 //! - the single collision (`impact`);
 //! - `press/`: a body pressed onto a plate, and as an experiment with its
 //!   files (`outcome`);
@@ -23,6 +25,7 @@
 //! drop test has one sphere, a plate and the drop rig.
 
 pub mod bed;
+pub mod calibration_plan;
 pub mod damper;
 pub mod drop;
 pub mod ensemble;
