@@ -205,16 +205,7 @@ fn scene_of(
     cycles: Option<u32>,
     steady_cycles: Option<u32>,
 ) -> PyResult<Scene> {
-    let orientation = match orientation {
-        None => None,
-        Some("vertical") => Some(Orientation::Vertical),
-        Some("horizontal") => Some(Orientation::Horizontal),
-        Some(other) => {
-            return Err(PyValueError::new_err(format!(
-                "orientation = {other:?}: must be \"vertical\" or \"horizontal\""
-            )));
-        }
-    };
+    let orientation = orientation.map(orientation_of).transpose()?;
     let base = Scene::load_or_thesis(scene.as_deref()).map_err(value_error)?;
     SceneOverrides {
         cycles,
@@ -225,6 +216,17 @@ fn scene_of(
     }
     .apply(base)
     .map_err(value_error)
+}
+
+/// The `orientation` keyword: "vertical" or "horizontal".
+fn orientation_of(name: &str) -> PyResult<Orientation> {
+    match name {
+        "vertical" => Ok(Orientation::Vertical),
+        "horizontal" => Ok(Orientation::Horizontal),
+        other => Err(PyValueError::new_err(format!(
+            "orientation = {other:?}: must be \"vertical\" or \"horizontal\""
+        ))),
+    }
 }
 
 /// Makes folder `out` if missing and runs `write` into it; a failed write
@@ -763,16 +765,7 @@ fn host_predict(
     yang: bool,
 ) -> PyResult<HostPredict> {
     check_request(&freqs_hz, force_n).map_err(value_error)?;
-    let orientation = match orientation {
-        None => None,
-        Some("vertical") => Some(Orientation::Vertical),
-        Some("horizontal") => Some(Orientation::Horizontal),
-        Some(other) => {
-            return Err(PyValueError::new_err(format!(
-                "orientation = {other:?}: must be \"vertical\" or \"horizontal\""
-            )));
-        }
-    };
+    let orientation = orientation.map(orientation_of).transpose()?;
     let in_map =
         |e: &dyn std::fmt::Display| PyValueError::new_err(format!("map = {}: {e}", map.display()));
     let file = SweepFile::read(&map).map_err(|e| in_map(&e))?;

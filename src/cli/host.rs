@@ -15,6 +15,7 @@ use vlab::experiment::host_test::{Damper, HostRun, HostTest, run_host_test};
 use vlab::host::{DEFAULT_HOST, Excitation, HostSpec};
 use vlab::rig::{RigFile, RigSpec};
 use vlab::scene::Scene;
+use vlab::study::host_prediction::{MAX_FREQUENCIES, check_frequencies};
 
 use super::args;
 use super::cache_cmd::NoCacheArg;
@@ -230,23 +231,17 @@ pub fn parse_freqs(s: &str) -> Result<FreqList, String> {
             return Err(format!("'{s}': STEP must be positive and TO at least FROM"));
         }
         let n = ((to - from) / step + 1e-9).floor() as usize;
-        if n >= 1000 {
-            return Err(format!("'{s}' gives {} frequencies: at most 1000", n + 1));
+        if n >= MAX_FREQUENCIES {
+            // Refused before the list is made: a tiny STEP would fill memory.
+            return Err(format!(
+                "'{s}' gives {} frequencies: at most {MAX_FREQUENCIES}",
+                n + 1
+            ));
         }
         (0..=n).map(|k| from + step * k as f64).collect()
     } else {
         s.split(',').map(number).collect::<Result<_, _>>()?
     };
-    if freqs.is_empty() || freqs.len() > 1000 {
-        return Err(format!("'{s}': between 1 and 1000 frequencies"));
-    }
-    for f in &freqs {
-        if !(*f > 0.0 && *f <= 5_000.0) {
-            return Err(format!("{f} Hz: each frequency must be in (0, 5000] Hz"));
-        }
-    }
-    if freqs.windows(2).any(|w| w[1] <= w[0]) {
-        return Err(format!("'{s}': frequencies must ascend"));
-    }
+    check_frequencies(&freqs).map_err(|e| e.renamed("--freq").to_string())?;
     Ok(FreqList(freqs))
 }

@@ -17,11 +17,17 @@ use crate::validation::{Bound, InvalidParameter, in_range, positive};
 /// Most frequencies a prediction takes.
 pub const MAX_FREQUENCIES: usize = 1000;
 
-/// Checks a prediction's frequencies (each in (0, 5000] Hz, ascending, 1
-/// to [`MAX_FREQUENCIES`] of them) and force (positive, N), naming
-/// `freqs_hz` or `force_n`.
+/// Checks a prediction's force (positive, N) and frequencies
+/// ([`check_frequencies`]), naming `force_n` or `freqs_hz`.
 pub fn check_request(freqs_hz: &[f64], force_n: f64) -> Result<(), InvalidParameter> {
     positive("force_n", force_n, "N")?;
+    check_frequencies(freqs_hz)
+}
+
+/// Checks the frequencies of a stepped sine, predicted or measured: each in
+/// (0, 5000] Hz, ascending, 1 to [`MAX_FREQUENCIES`] of them, naming
+/// `freqs_hz`.
+pub fn check_frequencies(freqs_hz: &[f64]) -> Result<(), InvalidParameter> {
     if freqs_hz.is_empty() || freqs_hz.len() > MAX_FREQUENCIES {
         return Err(InvalidParameter::new(
             "freqs_hz",
