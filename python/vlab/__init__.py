@@ -13,9 +13,16 @@ measured by Yang's method). Its keyword arguments are the command's flags:
 `beds`, `seed`, `scene` (a scene file), `orientation`, `cycles`,
 `steady_cycles`, `rig`, `noise_seed`, `calibration` (a table from
 `vlab calibrate`), and `threads`, `cache` (the command line's bed cache) and
-`progress` (a callable given phase, fraction and cycle as the run goes).
-Bad values raise `ValueError` naming the value, its unit and its range,
-before any work is done.
+`progress`. Bad values raise `ValueError` naming the value, its unit and its
+range, before any work is done.
+
+The other experiments and studies are functions alike: `sweep` (and
+`read_sweep`), `analyze`, `cor`, `drop`, `calibrate`, `host_predict`,
+`scene`.
+
+Long runs (`shake`, `sweep`) release the GIL and report progress: to
+`progress=` when it is a callable, on tqdm bars when it is left out and tqdm
+is installed, nowhere with `progress=False`.
 """
 
 import json
@@ -26,6 +33,9 @@ from . import _vlab
 
 __all__ = [
     "shake",
+    "sweep",
+    "read_sweep",
+    "Sweep",
     "analyze",
     "cor",
     "drop",
@@ -40,6 +50,63 @@ __all__ = [
 ]
 
 DEFAULT_BEDS = _vlab.DEFAULT_BEDS
+
+
+class _Bars:
+    """tqdm bars for a run's progress, one per stage, closed when the run
+    ends. A drive run until steady has no known end, so its bar counts
+    cycles; every other stage shows how much of it is done."""
+
+    def __init__(self, tqdm):
+        self._tqdm = tqdm
+        self._stage = None
+        self._bar = None
+
+    def _open(self, stage, total, unit):
+        if stage != self._stage:
+            self.close()
+            self._stage = stage
+            self._bar = self._tqdm(total=total, desc=stage, unit=unit, leave=False)
+
+    def shake(self, phase, fraction, cycle):
+        """A shake's call: its phase, the fraction of it done, the cycle."""
+        if phase == "driving":
+            self._open(phase, None, "cycle")
+            self._bar.update(cycle - self._bar.n)
+        else:
+            self._open(phase, 100, "%")
+            self._bar.update(round(100 * fraction) - self._bar.n)
+
+    def sweep(self, what, done, total):
+        """A sweep's call: "bed" or "condition", how many are done of how many."""
+        self._open({"bed": "settling beds", "condition": "conditions"}[what], total, what)
+        self._bar.update(done - self._bar.n)
+
+    def close(self):
+        if self._bar is not None:
+            self._bar.close()
+        self._bar = None
+        self._stage = None
+
+
+def _run_with_progress(run, options, kind):
+    """Runs `run(**options)` with its `progress` option resolved: a callable
+    is called, `False` is nothing, and none given is tqdm bars when tqdm is
+    installed."""
+    progress = options.pop("progress", None)
+    if progress is False:
+        return run(**options)
+    if progress is not None:
+        return run(progress=progress, **options)
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        return run(**options)
+    bars = _Bars(tqdm)
+    try:
+        return run(progress=getattr(bars, kind), **options)
+    finally:
+        bars.close()
 
 
 class Shake:
@@ -104,8 +171,13 @@ class Shake:
 def shake(freq_hz=40.0, gamma=20.0, **options):
     """Drives the damper at `freq_hz` (Hz) and `gamma` (peak acceleration / g)
     and measures it, as `vlab shake --freq F --gamma G` does; returns a Shake.
+
+    `progress`: a callable given `(phase, fraction, cycle)` as the run goes
+    (`fraction` of the phase; of the 400-cycle cap while driving until
+    steady), `False` for none; left out, tqdm bars when tqdm is installed.
     """
-    return Shake(_vlab.shake(freq_hz, gamma, **options))
+    run = lambda **o: _vlab.shake(freq_hz, gamma, **o)
+    return Shake(_run_with_progress(run, options, "shake"))
 
 
 def analyze(record=None, **options):
@@ -142,6 +214,86 @@ def cor(record=None, **options):
     if options.get("force") is not None:
         options["force"] = np.ascontiguousarray(options["force"], dtype=np.float64)
     return json.loads(_vlab.cor(record, **options))
+
+
+class Sweep:
+    """A sweep's rows, run by `sweep` or read back by `read_sweep`: what
+    sweep.csv holds, as columns and as the report `vlab sweep --json` prints.
+    """
+
+    def __init__(self, inner):
+        self._inner = inner
+
+    @property
+    def report(self):
+        """What `vlab sweep --json` prints, as a dict: "rows" (every row),
+        "by_condition" (each condition's efficiency over its seeds with its
+        +- and where that comes from), "peaks" (where each series' DEM
+        efficiency peaks against Gamma), "sweep_id", "shard"."""
+        return json.loads(self._inner.report_json)
+
+    @property
+    def columns(self):
+        """sweep.csv's columns by name, cell for cell as the file holds
+        them: float64 arrays (units in the names, NaN where a row has none),
+        int64 arrays for seed, beds, cycles, steady_cycles and steps, lists
+        of str for orientation, status, se_from, steady, phase and note.
+        `pandas.DataFrame(s.columns, copy=False)` takes the arrays as they
+        are, without copying."""
+        return self._inner.columns
+
+    @property
+    def header(self):
+        """The scene, rig, shaker, drive and identity the file's header
+        names, as a dict."""
+        return self._inner.header
+
+    def write(self, out):
+        """Writes sweep.csv and the sweep's plots (efficiency and map, PNG
+        and SVG) into folder `out`; returns the paths written."""
+        return [str(p) for p in self._inner.write(str(out))]
+
+    def __len__(self):
+        return len(self._inner)
+
+    def __repr__(self):
+        return repr(self._inner)
+
+
+def sweep(freqs_hz, gammas, **options):
+    """A sweep as `vlab sweep` runs it: every condition (each of `freqs_hz`
+    (Hz) x `gammas` (peak acceleration / g) x `seeds` x `fill_ratios` x
+    `orientations`) of the damper driven through the rig and measured;
+    returns a Sweep.
+
+    Keyword arguments are the command's flags: `seeds` (default [1]),
+    `fill_ratios` and `orientations` (default: the scene's), `scene`,
+    `cycles`, `steady_cycles` (default: each condition until steady),
+    `dt_s`, `rig`, `shaker`, `beds` (an ensemble per condition), `out` (the
+    folder sweep.csv and the plots go to, kept up to date as conditions
+    finish; none: a temporary folder, removed), `resume` (go on with the
+    sweep in `out`), `cache`, `threads`, and `progress`: a callable given
+    `("bed", settled, beds)` and `("condition", done, conditions)`, `False`
+    for none; left out, tqdm bars when tqdm is installed. Bad values raise
+    `ValueError` naming the keyword, its unit and its range, before any work.
+    """
+    listed = lambda v: [v] if isinstance(v, (int, float)) else list(v)
+    for key in ("seeds", "fill_ratios", "orientations"):
+        if key in options:
+            options[key] = listed(options[key])
+    for key in ("scene", "out"):
+        if options.get(key) is not None:
+            options[key] = str(options[key])
+    freqs = [float(f) for f in listed(freqs_hz)]
+    amplitudes = [float(g) for g in listed(gammas)]
+    run = lambda **o: _vlab.sweep(freqs, amplitudes, **o)
+    return Sweep(_run_with_progress(run, options, "sweep"))
+
+
+def read_sweep(path):
+    """A sweep.csv read back (the file, or the folder holding it); returns a
+    Sweep."""
+    return Sweep(_vlab.read_sweep(str(path)))
 
 
 class Drop:

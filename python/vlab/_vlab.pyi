@@ -1,4 +1,4 @@
-"""Type stubs of the compiled half of vlab (python/src/lib.rs)."""
+"""Type stubs of the compiled half of vlab (python/src/)."""
 
 from os import PathLike
 from typing import Any, Callable, Optional, Union
@@ -141,3 +141,36 @@ def calibrate(
     record_cycles: int = 5,
     dt_s: float = 1e-6,
 ) -> Calibration: ...
+
+class Sweep:
+    @property
+    def report_json(self) -> str: ...
+    @property
+    def columns(self) -> dict[str, Union[npt.NDArray[np.float64], npt.NDArray[np.int64], list[str]]]: ...
+    @property
+    def header(self) -> dict[str, Union[str, int]]: ...
+    def write(self, out: Union[str, PathLike[str]]) -> list[str]: ...
+    def __len__(self) -> int: ...
+
+def sweep(
+    freqs_hz: list[float],
+    gammas: list[float],
+    *,
+    seeds: list[int] = ...,
+    fill_ratios: list[float] = ...,
+    orientations: list[str] = ...,
+    scene: Union[str, PathLike[str], None] = None,
+    cycles: Optional[int] = None,
+    steady_cycles: Optional[int] = None,
+    dt_s: Optional[float] = None,
+    rig: str = "thesis-shaker",
+    shaker: Optional[str] = None,
+    beds: int = 1,
+    out: Union[str, PathLike[str], None] = None,
+    resume: bool = False,
+    cache: bool = True,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[str, int, int], object]] = None,
+) -> Sweep: ...
+
+def read_sweep(path: Union[str, PathLike[str]]) -> Sweep: ...

@@ -318,20 +318,11 @@ fn eta(s: f64) -> String {
 }
 
 fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result<()> {
-    let summary = summarise(file);
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&serde_json::json!({
-                "sweep_id": file.header.sweep_id,
-                "shard": file.header.shard.to_string(),
-                "rows": file.rows,
-                "by_condition": summary,
-                "peaks": series_peaks(file),
-            }))?
-        );
+        println!("{}", file.report().json()?);
         return Ok(());
     }
+    let summary = summarise(file);
     let h = &file.header;
     println!(
         "{} damper, rig {}, {}, seeds {:?}{}:",

@@ -1,6 +1,7 @@
 //! Studies: many experiments and what they say together. Sweeps of frequency,
 //! Gamma, fill and orientation with their maps (`sweep`, `sweep_plot`) and
-//! where each series peaks (`sweep_peak`), the optimum Γ of several sweeps
+//! where each series peaks (`sweep_peak`), a sweep's report and columns
+//! (`sweep_report`), the optimum Γ of several sweeps
 //! against what tells them apart (`sweep_optimum`), the
 //! motional phases read from DEM truth (`phases`), accuracy against run time
 //! (`accuracy`) and the bouncing-bed onset predicted from the scene alone
@@ -20,3 +21,4 @@ pub mod sweep_optimum;
 pub mod sweep_peak;
 #[cfg(feature = "plot")]
 pub mod sweep_plot;
+pub mod sweep_report;

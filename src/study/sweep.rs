@@ -1001,7 +1001,7 @@ pub const COLUMNS: [&str; 38] = [
     "note",
 ];
 
-fn row_record(r: &SweepRow) -> Vec<String> {
+pub(super) fn row_record(r: &SweepRow) -> Vec<String> {
     let c = &r.condition;
     let f = |x: f64| x.to_string();
     let i = r.indicators;
