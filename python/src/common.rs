@@ -4,13 +4,15 @@
 
 use std::sync::Mutex;
 
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use numpy::PyArray1;
+use pyo3::exceptions::{PyKeyError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 use vlab::atomic_write::OutputDir;
 use vlab::experiment::bed::cache::{BedCache, BedSource};
 use vlab::rig::ShakerKind;
 use vlab::scene::SceneError;
+use vlab::signals::Trace;
 
 /// A figure and its one-sigma error (`None` where it is not known).
 pub(crate) type Figure = (f64, Option<f64>);
@@ -111,4 +113,20 @@ impl Callback {
             None => Ok(()),
         }
     }
+}
+
+/// The samples of channel `name` of `trace` as a numpy array; a name it
+/// lacks is a `KeyError` that lists the names it has.
+pub(crate) fn channel_array<'py>(
+    py: Python<'py>,
+    trace: &Trace,
+    name: &str,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let c = trace.channel(name).map_err(|_| {
+        PyKeyError::new_err(format!(
+            "no channel {name:?} in the record; it has {}",
+            trace.channel_names().join(", ")
+        ))
+    })?;
+    Ok(PyArray1::from_slice(py, &c.samples))
 }

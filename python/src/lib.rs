@@ -35,6 +35,8 @@ fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep::sweep, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::read_sweep, m)?)?;
     m.add_class::<sweep::Sweep>()?;
+    m.add_function(wrap_pyfunction!(records::read_record, m)?)?;
+    m.add_class::<records::Record>()?;
     m.add_class::<calibrate::Calibration>()?;
     m.add_class::<host::HostPredict>()?;
     m.add_class::<shake::Shake>()?;

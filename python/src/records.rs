@@ -1,18 +1,72 @@
-//! `vlab.analyze` and `vlab.cor`: the lab's post-processing of a record
-//! (Yang's method, eq. 7.8-7.12; the drop test's estimator, eq. 7.3-7.5)
-//! on a file or on arrays, as `vlab analyze --json` and `vlab cor --json`.
+//! Records from Python: `vlab.read_record` (a record file's channels as
+//! numpy arrays, its metadata as a dict), and the lab's post-processing of
+//! a record, `vlab.analyze` and `vlab.cor` (Yang's method, eq. 7.8-7.12;
+//! the drop test's estimator, eq. 7.3-7.5) on a file or on arrays, as
+//! `vlab analyze --json` and `vlab cor --json`.
 
 use std::path::PathBuf;
 
-use numpy::PyReadonlyArray1;
+use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
-use crate::common::value_error;
+use crate::common::{channel_array, value_error};
 use vlab::rig::{ACCEL_CHANNEL, FORCE_CHANNEL};
 use vlab::signals::calibration::PhaseCalibration;
 use vlab::signals::impacts::default_force_channel;
 use vlab::signals::{AnalysisOptions, ImpactParams, Trace, analyse_trace, cor_report, read_trace};
+
+/// A record read from its file (CSV, WAV with its sidecar, TDMS).
+#[pyclass(module = "vlab._vlab", frozen)]
+pub(crate) struct Record {
+    trace: Trace,
+}
+
+#[pymethods]
+impl Record {
+    /// Samples per second (Hz).
+    #[getter]
+    fn sample_rate_hz(&self) -> f64 {
+        self.trace.sample_rate_hz
+    }
+
+    /// The channels' names and units, in the record's order.
+    #[getter]
+    fn channels(&self) -> Vec<(String, String)> {
+        let t = &self.trace;
+        t.channels
+            .iter()
+            .map(|c| (c.name.clone(), c.unit.clone()))
+            .collect()
+    }
+
+    /// The samples of channel `name` in its unit, as a numpy array.
+    fn channel<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        channel_array(py, &self.trace, name)
+    }
+
+    /// Each sample's time (s) on the record's clock.
+    fn time_s<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let t: Vec<f64> = (0..self.trace.len())
+            .map(|i| self.trace.time_s(i))
+            .collect();
+        PyArray1::from_vec(py, t)
+    }
+
+    /// The record's metadata (source, rig, drive, sensitivities, the
+    /// rest), as JSON text.
+    #[getter]
+    fn metadata_json(&self) -> String {
+        serde_json::to_string(&self.trace.metadata).unwrap_or_default()
+    }
+}
+
+/// Reads the record at `path` as `vlab analyze` reads it.
+#[pyfunction]
+pub(crate) fn read_record(path: PathBuf) -> PyResult<Record> {
+    let trace = read_trace(&path).map_err(|e| value_error(format!("{}: {e}", path.display())))?;
+    Ok(Record { trace })
+}
 
 /// Yang's method on a record, as `vlab analyze --json` does it: a record
 /// file (CSV, WAV with its sidecar, TDMS) or the two channels as arrays

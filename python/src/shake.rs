@@ -5,10 +5,12 @@
 use std::path::PathBuf;
 
 use numpy::PyArray1;
-use pyo3::exceptions::{PyKeyError, PyRuntimeError};
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
-use crate::common::{Callback, Figure, bed_source, thread_pool, value_error, write_into};
+use crate::common::{
+    Callback, Figure, bed_source, channel_array, thread_pool, value_error, write_into,
+};
 use crate::scene::scene_of;
 use vlab::experiment::damper::Progress;
 use vlab::experiment::ensemble::{DEFAULT_BEDS, EnsembleFigure};
@@ -121,15 +123,7 @@ impl Shake {
 
     /// The samples of channel `name` in its unit, as a numpy array.
     fn channel<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let trace = &self.outcome.run.experiment.trace;
-        let c = trace.channel(name).map_err(|_| {
-            let names: Vec<&str> = trace.channels.iter().map(|c| c.name.as_str()).collect();
-            PyKeyError::new_err(format!(
-                "no channel {name:?} in the record; it has {}",
-                names.join(", ")
-            ))
-        })?;
-        Ok(PyArray1::from_slice(py, &c.samples))
+        channel_array(py, &self.outcome.run.experiment.trace, name)
     }
 
     /// The time of each sample from the drive's start (s), as a numpy array:

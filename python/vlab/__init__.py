@@ -36,6 +36,8 @@ __all__ = [
     "sweep",
     "read_sweep",
     "Sweep",
+    "read_record",
+    "Record",
     "analyze",
     "cor",
     "drop",
@@ -178,6 +180,45 @@ def shake(freq_hz=40.0, gamma=20.0, **options):
     """
     run = lambda **o: _vlab.shake(freq_hz, gamma, **o)
     return Shake(_run_with_progress(run, options, "shake"))
+
+
+class Record:
+    """A record read from its file: its channels as numpy arrays on one
+    clock, its metadata as a dict."""
+
+    def __init__(self, inner):
+        self._inner = inner
+
+    sample_rate_hz = property(lambda self: self._inner.sample_rate_hz)
+
+    @property
+    def channels(self):
+        """The record's channels, `{name: unit}`."""
+        return dict(self._inner.channels)
+
+    def channel(self, name):
+        """The samples of channel `name` in its unit (numpy array)."""
+        return self._inner.channel(name)
+
+    def time_s(self):
+        """Each sample's time on the record's clock, s (numpy array)."""
+        return self._inner.time_s()
+
+    @property
+    def metadata(self):
+        """Who made the record, the rig, the drive (drive_freq_hz, gamma),
+        the transducers' sensitivities and the rest ("extra"), as a dict."""
+        return json.loads(self._inner.metadata_json)
+
+    def __repr__(self):
+        names = ", ".join(f"{n} [{u}]" for n, u in self._inner.channels)
+        return f"<vlab.Record of {names} at {self.sample_rate_hz:g} Hz>"
+
+
+def read_record(path):
+    """Reads a record file as `vlab analyze` reads it (CSV, WAV with its
+    .json sidecar, TDMS); returns a Record."""
+    return Record(_vlab.read_record(str(path)))
 
 
 def analyze(record=None, **options):
