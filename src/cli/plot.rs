@@ -1,5 +1,7 @@
 //! `vlab plot FILE`: redraws a plot from the CSV it was drawn from. A
-//! `sweep.csv` gives its efficiency curves and map; any other vlab CSV record
+//! `sweep.csv` gives its efficiency curves and map; an `accuracy.csv` (with
+//! its `summary.json`) the accuracy study's three plots; a stepped sine's
+//! `frf.csv` (with its `frf.json`) its receptance; any other vlab CSV record
 //! (a trace, kinematics, drop-test results) is drawn column against the first
 //! column.
 
@@ -8,14 +10,17 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
+use vlab::experiment::host_test::frf_figure::{is_stepped_sine_csv, redraw_magnitude};
 use vlab::signals::plot::plot_channels;
 use vlab::signals::read_trace;
+use vlab::study::accuracy::read_back::{is_accuracy_csv, redraw_plots};
 use vlab::study::sweep::{SWEEP_MAGIC, SweepFile};
 use vlab::study::sweep_plot::plot_sweep;
 
 #[derive(Debug, Clone, Args)]
 pub struct PlotArgs {
-    /// The CSV file: a sweep.csv, or a trace/record CSV.
+    /// The CSV file: a sweep.csv, an accuracy.csv, a stepped sine's frf.csv,
+    /// or a trace/record CSV.
     #[arg(value_name = "FILE")]
     file: PathBuf,
     /// Output folder [default: the file's folder].
@@ -39,6 +44,16 @@ pub fn run(a: PlotArgs) -> Result<()> {
         for p in plot_sweep(&file, &dir)? {
             println!("wrote {}", p.display());
         }
+        return Ok(());
+    }
+    if is_accuracy_csv(&head) {
+        for p in redraw_plots(&a.file, &dir)? {
+            println!("wrote {}", p.display());
+        }
+        return Ok(());
+    }
+    if is_stepped_sine_csv(&head) {
+        println!("wrote {}", redraw_magnitude(&a.file, &dir)?.display());
         return Ok(());
     }
     let trace = read_trace(&a.file).with_context(|| format!("reading {}", a.file.display()))?;

@@ -18,8 +18,11 @@
 //! - the shear box (`shear_box`);
 //! - the replay of another code's record (`replay`);
 //! - `host_test/`: the damper on a host structure, its free decay (`decay`),
-//!   its frequency response (`frf`, written by `frf_outcome`) and the
-//!   bed-to-bed part of its error (`bed_spread`).
+//!   its frequency response (`frf`, written by `frf_outcome`, its figure
+//!   drawn again from the files by `frf_figure`) and the bed-to-bed part of
+//!   its error (`bed_spread`);
+//! - the error of reading a run's saved files back to redraw its figures
+//!   (`saved_file`).
 //!
 //! Each builds only what it needs: a single collision has no enclosure; a
 //! drop test has one sphere, a plate and the drop rig.
@@ -36,6 +39,7 @@ pub mod measurement;
 pub mod press;
 pub mod record;
 pub mod replay;
+pub mod saved_file;
 pub mod shake;
 pub mod shake_plan;
 pub mod shear_box;

@@ -12,6 +12,7 @@ use crate::experiment::bed::cache::BedSource;
 use crate::experiment::host_test::frf::{
     SteppedSine, SteppedSineResult, random_frf, run_stepped_sine,
 };
+use crate::experiment::host_test::frf_figure::{FrfMagnitudes, STEPPED_SINE_CSV_HEADER};
 use crate::experiment::host_test::{Damper, HostRun, HostTest};
 use crate::host::map_model::{DissipationMap, SteadyResponse, stepped_sine};
 use crate::host::{Excitation, PeriodicRandom};
@@ -129,9 +130,7 @@ impl SteppedSineOutcome {
     /// `frf.csv`: a row per frequency, the measurement, the truth and the
     /// comparisons.
     pub fn csv(&self) -> String {
-        let mut csv = String::from(
-            "freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,gamma,true_amplitude_m,power_input_w,host_storage_w,damper_power_w,damper_power_stderr_w,damper_power_record_stderr_w,true_input_w,true_host_w,true_damper_work_w,true_damper_w,host_energy_drift_w,steady,empty_receptance_m_per_n,solid_receptance_m_per_n,predicted_receptance_m_per_n,yang_map_w\n",
-        );
+        let mut csv = format!("{STEPPED_SINE_CSV_HEADER}\n");
         for (k, p) in self.measured.points.iter().enumerate() {
             csv.push_str(&format!(
                 "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
@@ -188,17 +187,35 @@ impl SteppedSineOutcome {
         Ok(())
     }
 
-    /// `frf-magnitude.svg` (dB re 1 m/N) and `frf-phase.svg`.
-    #[cfg(feature = "plot")]
-    fn plot(&self, dir: &Path) -> Result<(), SceneError> {
-        use crate::signals::{Series, SeriesStyle, plot_xy_svg};
-        let db = |h: f64| 20.0 * h.log10();
+    /// The curves of the receptance figure (magnitudes, m/N).
+    pub fn magnitudes(&self) -> FrfMagnitudes {
         let mag = |r: &SteppedSineResult| -> Vec<(f64, f64)> {
             r.points
                 .iter()
-                .map(|p| (p.freq_hz, db(p.receptance().norm())))
+                .map(|p| (p.freq_hz, p.receptance().norm()))
                 .collect()
         };
+        FrfMagnitudes {
+            host: self.test.host.name.clone(),
+            force_n: self.plan.force_n,
+            damper: self.test.damper.label(),
+            empty: mag(&self.empty),
+            solid: mag(&self.solid),
+            measured: mag(&self.measured),
+            predicted: self.predicted.as_ref().map(|p| {
+                p.iter()
+                    .map(|(r, _)| (r.freq_hz, r.amplitude_m / self.plan.force_n))
+                    .collect()
+            }),
+        }
+    }
+
+    /// `frf-magnitude.svg` (dB re 1 m/N, [`FrfMagnitudes::draw`]) and
+    /// `frf-phase.svg`.
+    #[cfg(feature = "plot")]
+    fn plot(&self, dir: &Path) -> Result<(), SceneError> {
+        use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+        self.magnitudes().draw(&dir.join("frf-magnitude.svg"))?;
         let phase = |r: &SteppedSineResult| -> Vec<(f64, f64)> {
             r.points
                 .iter()
@@ -210,27 +227,16 @@ impl SteppedSineOutcome {
             points,
             style: SeriesStyle::Line,
         };
-        let coupled = format!("{} (coupled DEM)", self.test.damper.label());
-        let curves = |of: &dyn Fn(&SteppedSineResult) -> Vec<(f64, f64)>| {
-            vec![
-                line("empty host", of(&self.empty)),
-                line("particles' mass as a solid", of(&self.solid)),
-                Series {
-                    name: coupled.clone(),
-                    points: of(&self.measured),
-                    style: SeriesStyle::Points,
-                },
-            ]
-        };
-        let (mut series, mut phases) = (curves(&mag), curves(&phase));
+        let mut phases = vec![
+            line("empty host", phase(&self.empty)),
+            line("particles' mass as a solid", phase(&self.solid)),
+            Series {
+                name: format!("{} (coupled DEM)", self.test.damper.label()),
+                points: phase(&self.measured),
+                style: SeriesStyle::Points,
+            },
+        ];
         if let Some(p) = &self.predicted {
-            let force_n = self.plan.force_n;
-            series.push(line(
-                "map-based model",
-                p.iter()
-                    .map(|(r, _)| (r.freq_hz, db(r.amplitude_m / force_n)))
-                    .collect(),
-            ));
             phases.push(line(
                 "map-based model",
                 p.iter()
@@ -238,20 +244,9 @@ impl SteppedSineOutcome {
                     .collect(),
             ));
         }
-        let host = &self.test.host.name;
-        plot_xy_svg(
-            &dir.join("frf-magnitude.svg"),
-            &format!(
-                "Receptance at the damper, {} N at the drive, {host}",
-                self.plan.force_n
-            ),
-            "frequency (Hz)",
-            "|X / F| (dB re 1 m/N)",
-            &series,
-        )?;
         plot_xy_svg(
             &dir.join("frf-phase.svg"),
-            &format!("Phase of the receptance, {host}"),
+            &format!("Phase of the receptance, {}", self.test.host.name),
             "frequency (Hz)",
             "phase of X / F (degrees)",
             &phases,

@@ -39,6 +39,7 @@ use crate::validation::{Bound, InvalidParameter, in_range};
 pub mod bed_spread;
 pub mod decay;
 pub mod frf;
+pub mod frf_figure;
 pub mod frf_outcome;
 
 /// What the enclosure holds.

@@ -85,6 +85,7 @@ mod dem;
 mod impact;
 #[cfg(feature = "plot")]
 mod plots;
+pub mod read_back;
 mod yang;
 
 use dem::dem_study;
@@ -248,13 +249,13 @@ impl AccuracyPlan {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AccuracyRow {
     /// `dem`, `impact` or `yang`.
-    pub study: &'static str,
+    pub study: String,
     /// What varies: `dt_over_rayleigh`, `seed`, `steady_cycles`,
     /// `steps_per_contact`, `record_periods`, `noise_factor`, `adc_bits`,
     /// `residual_phase_mrad`.
-    pub parameter: &'static str,
+    pub parameter: String,
     pub value: f64,
-    pub quantity: &'static str,
+    pub quantity: String,
     pub estimate: f64,
     /// What the estimate is held against (NaN: none).
     pub reference: f64,
@@ -282,10 +283,10 @@ impl AccuracyRow {
         wall_s: f64,
     ) -> Self {
         AccuracyRow {
-            study,
-            parameter,
+            study: study.into(),
+            parameter: parameter.into(),
             value,
-            quantity,
+            quantity: quantity.into(),
             estimate,
             reference,
             error_rel: estimate / reference - 1.0,
@@ -315,10 +316,10 @@ pub fn rows_to_csv(rows: &[AccuracyRow]) -> String {
     let _ = w.write_record(CSV_HEADER.split(','));
     for r in rows {
         let _ = w.write_record([
-            r.study.to_string(),
-            r.parameter.to_string(),
+            r.study.clone(),
+            r.parameter.clone(),
             num(r.value),
-            r.quantity.to_string(),
+            r.quantity.clone(),
             num(r.estimate),
             num(r.reference),
             num(r.error_rel),
@@ -855,7 +856,11 @@ impl AccuracyReport {
         #[cfg_attr(not(feature = "plot"), allow(unused_mut))]
         let mut files = vec!["summary.json".to_string(), "accuracy.csv".to_string()];
         #[cfg(feature = "plot")]
-        files.extend(plots::write_plots(dir, &self.rows, &self.summary)?);
+        files.extend(plots::write_plots(
+            dir,
+            &self.rows,
+            &read_back::PlotLabels::from(&self.summary),
+        )?);
         self.summary.files = files;
         write("summary.json", &self.summary_json())
     }

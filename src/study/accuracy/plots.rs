@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use super::{AccuracyRow, AccuracySummary};
+use super::AccuracyRow;
+use super::read_back::PlotLabels;
 use crate::scene::SceneError;
 use crate::signals::{Series, SeriesStyle, plot_xy_svg};
 
@@ -34,11 +35,11 @@ fn series(name: &str, style: SeriesStyle, points: Vec<(f64, f64)>) -> Option<Ser
 pub fn write_plots(
     dir: &Path,
     rows: &[AccuracyRow],
-    summary: &AccuracySummary,
+    labels: &PlotLabels,
 ) -> Result<Vec<String>, SceneError> {
-    let mut files = vec![accuracy_plot(dir, rows, summary)?];
-    files.extend(impact_plot(dir, rows, summary)?);
-    files.extend(yang_plot(dir, rows, summary)?);
+    let mut files = vec![accuracy_plot(dir, rows, labels)?];
+    files.extend(impact_plot(dir, rows, labels)?);
+    files.extend(yang_plot(dir, rows, labels)?);
     Ok(files
         .into_iter()
         .flat_map(|svg| {
@@ -76,7 +77,7 @@ fn svg_and_png(
 fn accuracy_plot(
     dir: &Path,
     rows: &[AccuracyRow],
-    summary: &AccuracySummary,
+    labels: &PlotLabels,
 ) -> Result<String, SceneError> {
     let dem_q = "energy_per_cycle_j";
     let wall_err = |r: &AccuracyRow| (r.wall_s, r.error_rel.abs());
@@ -91,7 +92,7 @@ fn accuracy_plot(
     let (w0, w1) = all_wall
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), &w| (a.min(w), b.max(w)));
-    let spread = summary.dem.seed_spread_rel;
+    let spread = labels.seed_spread_rel;
     let mut main = vec![
         series(
             "DEM time step: |error| vs finest step",
@@ -159,7 +160,7 @@ fn accuracy_plot(
     let main: Vec<Series> = main.into_iter().flatten().collect();
     let title = format!(
         "{} damper, {} Hz, Gamma {}: error against run time",
-        summary.scene, summary.plan.freq_hz, summary.plan.gamma
+        labels.scene, labels.freq_hz, labels.gamma
     );
     svg_and_png(
         dir,
@@ -177,7 +178,7 @@ fn accuracy_plot(
 fn impact_plot(
     dir: &Path,
     rows: &[AccuracyRow],
-    summary: &AccuracySummary,
+    labels: &PlotLabels,
 ) -> Result<Option<String>, SceneError> {
     let imp = |q: &str, name: &str| {
         series(
@@ -207,7 +208,7 @@ fn impact_plot(
             "impact",
             &format!(
                 "one collision at {:.2} m/s against Hertz theory",
-                summary.impact.speed_mps
+                labels.impact_speed_mps
             ),
             "log10 steps per contact",
             "log10 |relative error|",
@@ -223,7 +224,7 @@ fn impact_plot(
 fn yang_plot(
     dir: &Path,
     rows: &[AccuracyRow],
-    summary: &AccuracySummary,
+    labels: &PlotLabels,
 ) -> Result<Option<String>, SceneError> {
     let dem_q = "energy_per_cycle_j";
     let yang: Vec<Series> = [
@@ -258,7 +259,7 @@ fn yang_plot(
             "yang",
             &format!(
                 "Yang's estimate vs DEM truth, {} periods, chain settings",
-                summary.yang.baseline_record_periods
+                labels.baseline_record_periods
             ),
             "log10 setting (as in the legend)",
             "log10 |relative error|",
