@@ -1,7 +1,9 @@
 //! The documentation cannot rot: the `vlab` commands of `docs/tutorial.md` and
 //! of `README.md` run, every relative link of `README.md` and `docs/*.md`
-//! points to a file (and heading) that exists, and CI runs the test command
-//! the README gives. Command lines marked `# takes minutes` are skipped.
+//! points to a file (and heading) that exists, CI runs the test command
+//! the README gives, and the figures the pages show are what their commands
+//! draw, byte for byte (the rest of them: `tests/figures.rs`). Command lines
+//! marked `# takes minutes` are skipped.
 
 #![cfg(all(feature = "cli", feature = "plot"))]
 
@@ -144,6 +146,16 @@ fn tutorial_commands_run() {
         .expect("error");
     assert!(good.abs() < 0.01, "calibrated run off by {good}");
     assert!(wrong.abs() > 0.02, "mis-calibrated run only off by {wrong}");
+    // The snapshots docs/maps.md and this tutorial show are step 8's.
+    for name in ["snapshots.png", "snapshots.svg"] {
+        same_figure(
+            &dir.path(&format!("bb/{name}")),
+            &format!("docs/figures/{name}"),
+            &format!(
+                "vlab shake --freq 40 --gamma 20 --beds 1 --snapshots --out bb; cp bb/{name} docs/figures/"
+            ),
+        );
+    }
     tutorial_numbers_are_the_runs(&dir);
 }
 
@@ -651,6 +663,29 @@ fn host_chapter_commands_run() {
         commands.len()
     );
     let dir = run_in_order("host-chapter", "docs/host.md", &commands);
+    for (drawn, shown, command) in [
+        (
+            "host/dashpot/loss-factor.svg",
+            "host-dashpot-loss-factor.svg",
+            "vlab host decay --damper dashpot:15 --duration-s 0.5 --out host/dashpot",
+        ),
+        (
+            "host/frf-dashpot/frf-magnitude.svg",
+            "host-dashpot-frf.svg",
+            "vlab host frf --damper dashpot:10 --freq 36:44:0.25 --force-n 2 --settle-cycles 0 --out host/frf-dashpot",
+        ),
+        (
+            "host/plate/loss-factor.svg",
+            "host-loss-factor.svg",
+            "vlab host decay --duration-s 0.8 --map signals/reference/host-map/sweep.csv --out host/plate",
+        ),
+    ] {
+        same_figure(
+            &dir.path(drawn),
+            &format!("docs/figures/{shown}"),
+            &format!("{command}; cp {drawn} docs/figures/{shown}"),
+        );
+    }
     let page = page_words("docs/host.md");
     let mut wrong = Vec::new();
     let mut quote = |sentence: String| {
@@ -942,6 +977,17 @@ fn copy_dir(from: &Path, to: &Path) {
             std::fs::copy(&path, &target).expect("copy");
         }
     }
+}
+
+/// Fails unless the file `drawn` equals the repository's `shown` byte for
+/// byte, naming the command that redraws it.
+fn same_figure(drawn: &Path, shown: &str, redraw: &str) {
+    let drawn = std::fs::read(drawn).unwrap_or_else(|e| panic!("{}: {e}", drawn.display()));
+    let kept = std::fs::read(root().join(shown)).unwrap_or_else(|e| panic!("{shown}: {e}"));
+    assert!(
+        drawn == kept,
+        "{shown} is not what its command draws now: redraw it with `{redraw}`"
+    );
 }
 
 /// The figures docs/maps.md shows are what its command draws today, byte
