@@ -30,6 +30,10 @@ fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(records::analyze, m)?)?;
     m.add_function(wrap_pyfunction!(drop::drop_test, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_predict, m)?)?;
+    m.add_function(wrap_pyfunction!(host::host_run, m)?)?;
+    m.add_function(wrap_pyfunction!(host::host_decay, m)?)?;
+    m.add_class::<host::HostRunResult>()?;
+    m.add_class::<host::HostDecay>()?;
     m.add_function(wrap_pyfunction!(scene::scene_json, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep, m)?)?;

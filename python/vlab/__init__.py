@@ -42,6 +42,10 @@ __all__ = [
     "cor",
     "drop",
     "host_predict",
+    "host_run",
+    "host_decay",
+    "HostRun",
+    "HostDecay",
     "calibrate",
     "Calibration",
     "scene",
@@ -437,6 +441,142 @@ def host_predict(map, freqs_hz, force_n, **options):
     return HostPrediction(
         _vlab.host_predict(str(map), [float(f) for f in freqs_hz], float(force_n), **options)
     )
+
+
+class HostRun:
+    """A finished test of the damper on a host: the lab's record (the
+    acceleration at the damper, the force at the drive point), what the
+    simulator knows at each sample, and where the energy went."""
+
+    def __init__(self, inner):
+        self._inner = inner
+
+    sample_rate_hz = property(lambda self: self._inner.sample_rate_hz)
+    warnings = property(lambda self: list(self._inner.warnings))
+
+    @property
+    def channels(self):
+        """The lab's channels, `{name: unit}`."""
+        return dict(self._inner.channels)
+
+    def channel(self, name):
+        """The samples of the lab's channel `name` in its unit (numpy array)."""
+        return self._inner.channel(name)
+
+    @property
+    def truth(self):
+        """What record.csv holds, as numpy arrays named with their units:
+        time_s, damper_displacement_m, damper_velocity_mps,
+        damper_acceleration_mps2, drive_force_n, drive_velocity_mps,
+        damper_force_n, host_energy_j and the running energies
+        damper_dissipated_j, damper_work_in_j, host_dissipated_j,
+        dashpot_dissipated_j, excitation_work_j."""
+        return self._inner.truth
+
+    @property
+    def energy(self):
+        """Where the host's energy went over the test (J): "host" (the
+        excitation's work, the host's own damping, a dashpot's, the work on
+        the damper, the host's energy at the end), "damper_dissipated_j"
+        and, with particles, the bed's ledger ("bed")."""
+        return json.loads(self._inner.energy_json)
+
+    @property
+    def steps(self):
+        """(steps, step length s, wall time s) of the run."""
+        return self._inner.steps
+
+    def write(self, out):
+        """Writes trace.csv, trace.wav, record.csv and record.svg into
+        folder `out`, as `vlab host run --out` does."""
+        self._inner.write(str(out))
+
+
+def host_run(excitation, **options):
+    """Drives the host with `excitation` and records it, as `vlab host run
+    --excitation KEY` does; returns a HostRun. `excitation` is the command's
+    key: "sine:F_HZ:FORCE_N", "sweep:F0_HZ:F1_HZ:DURATION_S:FORCE_N",
+    "multisine:F1_HZ:N1,F2_HZ:N2,...", "random:LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED",
+    "hammer:IMPULSE_N_S" or "release:X0_M".
+
+    Keyword arguments are the command's flags: `duration_s`, `host` (a
+    built-in name, plate-40hz or beam-2mode, or a host file), `damper`
+    ("particles", "empty", "solid" or "dashpot:N_S_PER_M"), `scene`,
+    `seed`, `orientation`, `rig`, `noise_seed`, `cache`, `threads` and
+    `progress` (as `shake`'s). Bad values raise `ValueError` naming the
+    keyword, before any work.
+    """
+    for key in ("scene",):
+        if options.get(key) is not None:
+            options[key] = str(options[key])
+    run = lambda **o: _vlab.host_run(excitation, **o)
+    return HostRun(_run_with_progress(run, options, "shake"))
+
+
+class HostDecay:
+    """A finished free decay: the loss factor against amplitude by the
+    logarithmic decrement and by the Hilbert envelope, each beside the
+    DEM's own energies (what decay.csv and decay.json hold)."""
+
+    def __init__(self, inner):
+        self._inner = inner
+
+    @property
+    def summary(self):
+        """What decay.json holds, as a dict."""
+        return json.loads(self._inner.summary_json)
+
+    @property
+    def columns(self):
+        """What decay.csv holds: "method" a list of str, every other column
+        a float64 numpy array named with its unit."""
+        return _csv_columns(self._inner.csv)
+
+    @property
+    def beds_columns(self):
+        """What decay-beds.csv holds with several beds (as `columns`), else None."""
+        text = self._inner.beds_csv
+        return None if text is None else _csv_columns(text)
+
+    @property
+    def run(self):
+        """The first bed's run (a HostRun)."""
+        return HostRun(self._inner.run)
+
+    def write(self, out):
+        """Writes what `vlab host decay --out` writes into folder `out`."""
+        self._inner.write(str(out))
+
+
+def _csv_columns(text):
+    """A CSV text's columns: numbers as float64 arrays, words as lists."""
+    lines = text.splitlines()
+    names = lines[0].split(",")
+    cells = [line.split(",") for line in lines[1:]]
+    columns = {}
+    for k, name in enumerate(names):
+        values = [row[k] for row in cells]
+        try:
+            columns[name] = np.array([float(v) for v in values])
+        except ValueError:
+            columns[name] = values
+    return columns
+
+
+def host_decay(**options):
+    """The host released (`x0_m`, m at the damper, default 0.003) or struck
+    by a hammer (`hammer_n_s`, N s) and left to ring down for `duration_s`,
+    measured as `vlab host decay` measures it: the loss factor against
+    amplitude by the logarithmic decrement and by the Hilbert envelope, each
+    against the DEM's energies; returns a HostDecay. `map` (a sweep.csv)
+    adds Yang's structure-independent energy at each point; `beds` > 1
+    decays several beds and gives their mean with the error of their
+    spread. The other keywords are `host_run`'s.
+    """
+    for key in ("scene", "map"):
+        if options.get(key) is not None:
+            options[key] = str(options[key])
+    return HostDecay(_run_with_progress(_vlab.host_decay, options, "shake"))
 
 
 def scene(path=None):

@@ -186,3 +186,65 @@ def sweep(
 ) -> Sweep: ...
 
 def read_sweep(path: Union[str, PathLike[str]]) -> Sweep: ...
+
+class HostRun:
+    @property
+    def sample_rate_hz(self) -> float: ...
+    @property
+    def channels(self) -> list[tuple[str, str]]: ...
+    def channel(self, name: str) -> npt.NDArray[np.float64]: ...
+    @property
+    def truth(self) -> dict[str, npt.NDArray[np.float64]]: ...
+    @property
+    def energy_json(self) -> str: ...
+    @property
+    def steps(self) -> tuple[int, float, float]: ...
+    @property
+    def warnings(self) -> list[str]: ...
+    def write(self, out: Union[str, PathLike[str]]) -> None: ...
+
+def host_run(
+    excitation: str,
+    *,
+    duration_s: float = 1.0,
+    host: str = "plate-40hz",
+    damper: str = "particles",
+    scene: Union[str, PathLike[str], None] = None,
+    seed: Optional[int] = None,
+    orientation: Optional[str] = None,
+    rig: str = "thesis-shaker",
+    noise_seed: Optional[int] = None,
+    cache: bool = True,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[str, float, int], object]] = None,
+) -> HostRun: ...
+
+class HostDecay:
+    @property
+    def summary_json(self) -> str: ...
+    @property
+    def csv(self) -> str: ...
+    @property
+    def beds_csv(self) -> Optional[str]: ...
+    @property
+    def run(self) -> HostRun: ...
+    def write(self, out: Union[str, PathLike[str]]) -> None: ...
+
+def host_decay(
+    *,
+    x0_m: float = 0.003,
+    hammer_n_s: Optional[float] = None,
+    duration_s: float = 1.0,
+    beds: int = 1,
+    map: Union[str, PathLike[str], None] = None,
+    host: str = "plate-40hz",
+    damper: str = "particles",
+    scene: Union[str, PathLike[str], None] = None,
+    seed: Optional[int] = None,
+    orientation: Optional[str] = None,
+    rig: str = "thesis-shaker",
+    noise_seed: Optional[int] = None,
+    cache: bool = True,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[str, float, int], object]] = None,
+) -> HostDecay: ...

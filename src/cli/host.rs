@@ -88,18 +88,16 @@ impl HostTestArgs {
             .with_context(|| format!("--host {}", self.host))?;
         let rig =
             RigSpec::from_name_or_path(&self.rig).with_context(|| format!("--rig {}", self.rig))?;
-        Ok((
-            scene.clone(),
-            HostTest {
-                host,
-                damper: self.damper,
-                excitation,
-                duration_s,
-                start_steady: false,
-                rig,
-                noise_seed: self.noise_seed.unwrap_or(scene.simulation.seed),
-            },
-        ))
+        let test = HostTest::new(
+            &scene,
+            host,
+            self.damper,
+            excitation,
+            duration_s,
+            rig,
+            self.noise_seed,
+        );
+        Ok((scene, test))
     }
 }
 

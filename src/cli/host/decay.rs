@@ -5,7 +5,6 @@
 //! and, with `--map`, against Yang's structure-independent figure at the same
 //! frequency and Γ.
 
-use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
@@ -15,7 +14,7 @@ use vlab::atomic_write::OutputDir;
 use vlab::experiment::ensemble::check_beds;
 use vlab::experiment::host_test::Damper;
 use vlab::experiment::host_test::decay::{
-    DecayEnsemble, DecayError, DecayEstimate, DecayOutcome, MapEnergy,
+    DecayEnsemble, DecayError, DecayEstimate, DecayOutcome, MapEnergy, yang_map_energy_j,
 };
 use vlab::host::Excitation;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
@@ -94,13 +93,7 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
     })())?;
     let g = scene.simulation.gravity_mps2;
     // Yang's structure-independent energy per cycle at a point's f and Γ.
-    let yang_energy = |e: &DecayEstimate| {
-        map.as_ref().map(|m| {
-            let d = m.damper_at(e.freq_hz, e.amplitude_m);
-            let v = d.gamma * g / (TAU * e.freq_hz);
-            d.efficiency * 4.0 * v * v * m.particle_mass_kg
-        })
-    };
+    let yang_energy = |e: &DecayEstimate| map.as_ref().map(|m| yang_map_energy_j(m, g, e));
     print_decay(&outcome, &yang_energy, map.is_some());
     if let Some(e) = &outcome.ensemble {
         print_ensemble(e);

@@ -140,6 +140,31 @@ pub struct HostTest {
     pub noise_seed: u64,
 }
 
+impl HostTest {
+    /// A test of `damper` on `host` under `excitation` for `duration_s`,
+    /// recorded by `rig`, from rest; the channels' noise seeded by
+    /// `noise_seed`, or the bed's seed of `scene` when none is given.
+    pub fn new(
+        scene: &Scene,
+        host: HostSpec,
+        damper: Damper,
+        excitation: Excitation,
+        duration_s: f64,
+        rig: RigSpec,
+        noise_seed: Option<u64>,
+    ) -> HostTest {
+        HostTest {
+            host,
+            damper,
+            excitation,
+            duration_s,
+            start_steady: false,
+            rig,
+            noise_seed: noise_seed.unwrap_or(scene.simulation.seed),
+        }
+    }
+}
+
 /// What a sine starts from with particles: half their mass and a dashpot
 /// that dissipates as a damper of efficiency 0.5 does (`c = 4 η M ω / π`,
 /// thesis eq. 6.10 with [`crate::host::map_model`]'s describing function).

@@ -1,0 +1,107 @@
+"""vlab.host_run and vlab.host_decay against `vlab host run` / `decay` and
+the single-degree-of-freedom answer."""
+
+import json
+import math
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import vlab
+
+# The built-in plate (one mode at 40 Hz, 0.5 kg, 0.3 % damping) with a
+# linear dashpot of 15 N s/m in the enclosure, released from 3 mm: no DEM,
+# so a run takes a fraction of a second.
+DASHPOT = dict(damper="dashpot:15", duration_s=0.3, rig="ideal", cache=False)
+
+
+@pytest.fixture(scope="module")
+def released():
+    return vlab.host_run("release:0.003", **DASHPOT)
+
+
+@pytest.fixture(scope="module")
+def decay():
+    return vlab.host_decay(x0_m=0.003, **DASHPOT)
+
+
+def test_the_run_writes_the_commands_files(released, cli, tmp_path):
+    released.write(tmp_path / "py")
+    subprocess.run([cli, "--quiet", "host", "run", "--excitation", "release:0.003",
+                    "--damper", "dashpot:15", "--duration-s", "0.3", "--rig", "ideal",
+                    "--no-cache", "--out", str(tmp_path / "cli")],
+                   check=True, capture_output=True)
+    for name in ["trace.csv", "record.csv", "trace.wav", "record.svg"]:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+
+
+def test_the_release_rings_down_as_one_damped_mode(released):
+    truth = released.truth
+    t, x = truth["time_s"], truth["damper_displacement_m"]
+    # One mode, 0.5 kg at 40 Hz; its own 0.3 % plus the dashpot's c / (2 m wn).
+    m, wn = 0.5, 2 * math.pi * 40.0
+    zeta = 0.003 + 15.0 / (2 * m * wn)
+    wd = wn * math.sqrt(1 - zeta**2)
+    expect = 0.003 * np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta / math.sqrt(1 - zeta**2) * np.sin(wd * t))
+    # The host's linear step is exact for a mode and a dashpot: to a part
+    # in a million of the release.
+    assert np.max(np.abs(x - expect)) < 1e-6 * 0.003, np.max(np.abs(x - expect))
+
+
+def test_the_energy_books_close(released):
+    e = released.energy["host"]
+    energy0 = 0.5 * 0.5 * (2 * math.pi * 40.0) ** 2 * 0.003**2
+    # Each term integrated on its own: what the host held at the start went
+    # into its damping and the dashpot, or is still there.
+    spent = e["host_dissipated_j"] + e["dashpot_dissipated_j"] + released.truth["host_energy_j"][-1]
+    assert spent == pytest.approx(energy0 + e["excitation_work_j"], rel=1e-3)
+    assert released.truth["dashpot_dissipated_j"][-1] > 0.9 * energy0 * (1 - math.exp(-2))
+
+
+def test_the_decay_is_the_commands(decay, cli, tmp_path):
+    decay.write(tmp_path / "py")
+    said = subprocess.run([cli, "--quiet", "host", "decay", "--x0-m", "0.003",
+                           "--damper", "dashpot:15", "--duration-s", "0.3", "--rig", "ideal",
+                           "--no-cache", "--out", str(tmp_path / "cli")],
+                          check=True, capture_output=True, text=True)
+    assert said.returncode == 0
+    for name in ["decay.csv", "trace.csv", "record.csv", "loss-factor.svg"]:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    ours = json.loads((tmp_path / "py" / "decay.json").read_text())
+    theirs = json.loads((tmp_path / "cli" / "decay.json").read_text())
+    for d in (ours, theirs):
+        d.pop("wall_time_s")
+    assert ours == theirs
+
+
+def test_the_log_decrement_reads_the_modes_damping(decay):
+    c = decay.columns
+    log = [i for i, m in enumerate(c["method"]) if m == "log-decrement"]
+    assert len(log) >= 5
+    # Loss factor 2 zeta of the mode with its dashpot, to 1 %.
+    m, wn = 0.5, 2 * math.pi * 40.0
+    eta = 2 * (0.003 + 15.0 / (2 * m * wn))
+    assert np.allclose(c["loss_factor"][log], eta, rtol=1e-2), c["loss_factor"][log]
+    assert decay.beds_columns is None
+
+
+@pytest.mark.parametrize(
+    "call, said",
+    [
+        (lambda: vlab.host_run("banana:3", **DASHPOT), ["excitation", "banana"]),
+        (lambda: vlab.host_run("release:0.003", **dict(DASHPOT, damper="foam")), ["damper", "foam"]),
+        (lambda: vlab.host_run("release:0.003", **dict(DASHPOT, host="no-such-host")), ["host", "no-such-host"]),
+        (lambda: vlab.host_run("release:0.003", **dict(DASHPOT, rig="no-such-rig")), ["rig", "no-such-rig"]),
+        (lambda: vlab.host_decay(x0_m=float("nan"), **DASHPOT), ["x0_m"]),
+        (lambda: vlab.host_decay(hammer_n_s=-1, **DASHPOT), ["hammer_n_s"]),
+        (lambda: vlab.host_decay(beds=0, **DASHPOT), ["beds", "1 to 64"]),
+        (lambda: vlab.host_decay(map="no-such.csv", **DASHPOT), ["map", "no-such.csv"]),
+    ],
+)
+def test_a_bad_value_is_refused_with_its_keyword(call, said):
+    with pytest.raises(ValueError) as refused:
+        call()
+    for part in said:
+        assert part in str(refused.value), str(refused.value)
