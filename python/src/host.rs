@@ -12,9 +12,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use vlab::experiment::damper::Progress;
 use vlab::experiment::ensemble::check_beds;
-use vlab::experiment::host_test::decay::{
-    DecayError, DecayEstimate, DecayOutcome, yang_map_energy_j,
-};
+use vlab::experiment::host_test::decay::{DecayError, DecayEstimate, DecayOutcome};
 use vlab::experiment::host_test::{Damper, HostRun, HostTest, run_host_test};
 use vlab::host::{DissipationMap, Excitation};
 use vlab::rig::RigSpec;
@@ -355,7 +353,7 @@ impl HostDecay {
     fn map_energy(&self, e: &DecayEstimate) -> Option<f64> {
         self.map
             .as_ref()
-            .map(|m| yang_map_energy_j(m, self.g_mps2, e))
+            .map(|m| m.energy_per_cycle_j(e.freq_hz, e.amplitude_m, self.g_mps2))
     }
 }
 

@@ -203,6 +203,15 @@ impl DissipationMap {
         })
     }
 
+    /// The energy per cycle the damper takes at `freq_hz` and displacement
+    /// amplitude `amplitude_m` by this map: its efficiency there times
+    /// `E_max = 4 (Γ g / ω)² M` (thesis eq. 6.10), `g` = `g_mps2`.
+    pub fn energy_per_cycle_j(&self, freq_hz: f64, amplitude_m: f64, g_mps2: f64) -> f64 {
+        let d = self.damper_at(freq_hz, amplitude_m);
+        let v = d.gamma * g_mps2 / (TAU * freq_hz);
+        d.efficiency * 4.0 * v * v * self.particle_mass_kg
+    }
+
     /// The equivalent damper at `freq_hz` and displacement amplitude
     /// `amplitude_m` at the damper.
     pub fn damper_at(&self, freq_hz: f64, amplitude_m: f64) -> EquivalentDamper {

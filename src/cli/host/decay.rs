@@ -14,7 +14,7 @@ use vlab::atomic_write::OutputDir;
 use vlab::experiment::ensemble::check_beds;
 use vlab::experiment::host_test::Damper;
 use vlab::experiment::host_test::decay::{
-    DecayEnsemble, DecayError, DecayEstimate, DecayOutcome, MapEnergy, yang_map_energy_j,
+    DecayEnsemble, DecayError, DecayEstimate, DecayOutcome, MapEnergy,
 };
 use vlab::host::Excitation;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
@@ -93,7 +93,10 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
     })())?;
     let g = scene.simulation.gravity_mps2;
     // Yang's structure-independent energy per cycle at a point's f and Γ.
-    let yang_energy = |e: &DecayEstimate| map.as_ref().map(|m| yang_map_energy_j(m, g, e));
+    let yang_energy = |e: &DecayEstimate| {
+        map.as_ref()
+            .map(|m| m.energy_per_cycle_j(e.freq_hz, e.amplitude_m, g))
+    };
     print_decay(&outcome, &yang_energy, map.is_some());
     if let Some(e) = &outcome.ensemble {
         print_ensemble(e);

@@ -473,16 +473,6 @@ pub enum DecayError {
 /// frequency and amplitude (from a map of the damper), or `None`.
 pub type MapEnergy<'a> = &'a dyn Fn(&DecayEstimate) -> Option<f64>;
 
-/// Yang's structure-independent energy per cycle at an estimate's
-/// frequency and amplitude, from `map` (a sweep's, of Yang's efficiency):
-/// the map's efficiency there times `E_max = 4 (Γ g / ω)² M` (thesis eq.
-/// 6.10), `g_mps2` the scene's gravity.
-pub fn yang_map_energy_j(map: &crate::host::DissipationMap, g_mps2: f64, e: &DecayEstimate) -> f64 {
-    let d = map.damper_at(e.freq_hz, e.amplitude_m);
-    let v = d.gamma * g_mps2 / (TAU * e.freq_hz);
-    d.efficiency * 4.0 * v * v * map.particle_mass_kg
-}
-
 impl DecayOutcome {
     /// The free decay `test` of `scene` measured from `first`, the first
     /// bed's run (the caller runs it, with its progress): both methods'

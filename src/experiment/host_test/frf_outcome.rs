@@ -92,10 +92,8 @@ impl SteppedSineOutcome {
             .iter()
             .map(|p| {
                 maps.map_or(f64::NAN, |m| {
-                    let d = m.yang.damper_at(p.freq_hz, p.amplitude_m);
-                    let v = d.gamma * scene.simulation.gravity_mps2
-                        / (std::f64::consts::TAU * p.freq_hz);
-                    d.efficiency * 4.0 * v * v * m.yang.particle_mass_kg * p.freq_hz
+                    let g = scene.simulation.gravity_mps2;
+                    m.yang.energy_per_cycle_j(p.freq_hz, p.amplitude_m, g) * p.freq_hz
                 })
             })
             .collect();
