@@ -114,9 +114,13 @@ fn print_dem_study(d: &DemAccuracy) {
         d.default_dt_s, d.default_dt_over_rayleigh, d.rayleigh_step_s, d.reference_dt_over_rayleigh
     );
     println!(
-        "      default dt vs reference {:+.2} % +- {:.2} %; integrator energy error {:.1e} (order {})",
+        "      default dt vs reference {:+.2} % +- {}; integrator energy error {:.1e} (order {})",
         pct(d.default_dt_error_rel),
-        pct(d.default_dt_error_stderr_rel),
+        if d.default_dt_error_stderr_rel.is_nan() {
+            "not known (fewer than 16 cycles)".to_string()
+        } else {
+            format!("{:.2} %", pct(d.default_dt_error_stderr_rel))
+        },
         d.default_dt_integrator_rel,
         d.integrator_order.map_or("-".into(), |o| format!("{o:.2}"))
     );

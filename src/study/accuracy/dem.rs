@@ -413,6 +413,17 @@ pub(super) fn dominant_error(
     seed_spread_rel: f64,
 ) -> String {
     let (default_err, default_se) = (step.default_err, step.default_se);
+    if default_se.is_nan() {
+        // Too few cycles for an error (crate::stats needs 16): no verdict
+        // can be drawn from the difference alone.
+        return format!(
+            "not known: at the default time step the energy per cycle is {:+.2} % off {} x Rayleigh over {} cycles, too few for a standard error of the difference (at least 16), so whether that is discretisation or chance is not known; the seeds' means spread by {:.2} %",
+            100.0 * default_err,
+            step.ref_x,
+            plan.dt_steady_cycles,
+            100.0 * seed_spread_rel
+        );
+    }
     let resolved = default_err.abs() > 2.0 * default_se;
     if !resolved {
         format!(
@@ -440,5 +451,35 @@ pub(super) fn dominant_error(
             100.0 * default_se,
             100.0 * seed_spread_rel
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn findings(default_err: f64, default_se: f64) -> TimeStepFindings {
+        TimeStepFindings {
+            ref_x: 0.025,
+            default_err,
+            default_se,
+            default_integrator: 1e-4,
+            integrator_order: Some(2.0),
+            failed: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_verdict_needs_the_differences_error() {
+        let plan = AccuracyPlan::quick(40.0, 20.0);
+        // Without its error, a 1 % difference is neither resolved nor not:
+        // the verdict says so (it said "not resolved, +1.06 % +- NaN %").
+        let unknown = dominant_error(&plan, &findings(0.0106, f64::NAN), 0.1, 0.005, 0.01);
+        assert!(unknown.starts_with("not known"), "{unknown}");
+        assert!(!unknown.contains("NaN"), "{unknown}");
+        let noise = dominant_error(&plan, &findings(0.0106, 0.01), 0.1, 0.005, 0.02);
+        assert!(noise.starts_with("statistics"), "{noise}");
+        let step = dominant_error(&plan, &findings(0.05, 0.005), 0.1, 0.005, 0.02);
+        assert!(step.starts_with("discretisation"), "{step}");
     }
 }
