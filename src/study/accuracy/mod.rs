@@ -92,6 +92,32 @@ use dem::dem_study;
 use impact::impact_study;
 use yang::yang_study;
 
+/// What the plots take from `summary.json` besides the rows: their titles'
+/// scene, drive, collision speed and record length, and the seeds' spread
+/// (NaN: not measured; no line is drawn).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlotLabels {
+    pub scene: String,
+    pub freq_hz: f64,
+    pub gamma: f64,
+    pub seed_spread_rel: f64,
+    pub impact_speed_mps: f64,
+    pub baseline_record_periods: u32,
+}
+
+impl From<&AccuracySummary> for PlotLabels {
+    fn from(s: &AccuracySummary) -> Self {
+        PlotLabels {
+            scene: s.scene.clone(),
+            freq_hz: s.plan.freq_hz,
+            gamma: s.plan.gamma,
+            seed_spread_rel: s.dem.seed_spread_rel,
+            impact_speed_mps: s.impact.speed_mps,
+            baseline_record_periods: s.yang.baseline_record_periods,
+        }
+    }
+}
+
 /// The exact Hertz duration constant: `t_c = 2 I δ_max / v` with
 /// `I = (2/5) B(2/5, 1/2)`.
 pub const HERTZ_DURATION_INTEGRAL: f64 = 1.471_637_59;
@@ -862,7 +888,7 @@ impl AccuracyReport {
         files.extend(plots::write_plots(
             dir,
             &self.rows,
-            &read_back::PlotLabels::from(&self.summary),
+            &PlotLabels::from(&self.summary),
         )?);
         self.summary.files = files;
         write("summary.json", &self.summary_json())

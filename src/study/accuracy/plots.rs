@@ -3,35 +3,9 @@
 
 use std::path::Path;
 
-use super::{AccuracyRow, AccuracySummary};
+use super::{AccuracyRow, PlotLabels};
 use crate::scene::SceneError;
 use crate::signals::{Series, SeriesStyle, plot_xy_svg};
-
-/// What the plots take from `summary.json` besides the rows: their titles'
-/// scene, drive, collision speed and record length, and the seeds' spread
-/// (NaN: not measured; no line is drawn).
-#[derive(Debug, Clone, PartialEq)]
-pub struct PlotLabels {
-    pub scene: String,
-    pub freq_hz: f64,
-    pub gamma: f64,
-    pub seed_spread_rel: f64,
-    pub impact_speed_mps: f64,
-    pub baseline_record_periods: u32,
-}
-
-impl From<&AccuracySummary> for PlotLabels {
-    fn from(s: &AccuracySummary) -> Self {
-        PlotLabels {
-            scene: s.scene.clone(),
-            freq_hz: s.plan.freq_hz,
-            gamma: s.plan.gamma,
-            seed_spread_rel: s.dem.seed_spread_rel,
-            impact_speed_mps: s.impact.speed_mps,
-            baseline_record_periods: s.yang.baseline_record_periods,
-        }
-    }
-}
 
 fn select<'a>(
     rows: &'a [AccuracyRow],

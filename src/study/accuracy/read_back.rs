@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-pub use super::plots::PlotLabels;
+pub use super::PlotLabels;
 use super::{AccuracyRow, CSV_HEADER};
 use crate::experiment::saved_file::SavedFileError;
 
