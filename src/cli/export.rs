@@ -9,7 +9,7 @@ use clap::{Args, Subcommand};
 
 use vlab::atomic_write::OutputDir;
 use vlab::export::lammps_deck::{
-    ContactTranslation, DATA_FILE, DeckSummary, INPUT_FILE, LammpsExport, RECORD_FILE, lammps_deck,
+    ContactTranslation, DeckSummary, INPUT_FILE, LammpsExport, RECORD_FILE, lammps_deck,
 };
 
 use super::args;
@@ -24,7 +24,8 @@ pub struct ExportArgs {
 
 #[derive(Debug, Clone, Subcommand)]
 enum ExportTarget {
-    /// A LAMMPS input deck (pair_style granular, moving region walls) and vlab's
+    /// A LAMMPS input deck (pair_style granular, moving region walls; bodies
+    /// as fix rigid/small molecules with vlab's mass and inertia) and vlab's
     /// settled packing; the deck writes record.txt for `vlab replay`. It runs
     /// --cycles (the last --steady-cycles the window) at vlab's time step for
     /// this drive; a scene run until steady runs drive.min_cycles, its last
@@ -91,11 +92,18 @@ fn run_lammps(a: LammpsArgs, quiet: bool) -> Result<()> {
 /// run it.
 fn print_deck(s: &DeckSummary, out: &Path) {
     println!(
-        "LAMMPS deck for the {} damper at {} Hz, Gamma {}: {} spheres ({:.4} kg), {} cycles (the last {} the window) = {} steps of {:e} s",
+        "LAMMPS deck for the {} damper at {} Hz, Gamma {}: {} ({:.4} kg), {} cycles (the last {} the window) = {} steps of {:e} s",
         s.scene,
         s.freq_hz,
         s.gamma,
-        s.n_particles,
+        if s.n_bodies > 0 {
+            format!(
+                "{} rigid bodies of {} sub-spheres (fix rigid/small, vlab's mass and inertia)",
+                s.n_bodies, s.n_particles
+            )
+        } else {
+            format!("{} spheres", s.n_particles)
+        },
         s.particle_mass_kg,
         s.cycles,
         s.steady_cycles,
@@ -120,8 +128,9 @@ fn print_deck(s: &DeckSummary, out: &Path) {
         s.side_wall_factor
     );
     println!(
-        "  wrote {}/{{{INPUT_FILE}, {DATA_FILE}, export.json}}; run: cd {} && lmp -in {INPUT_FILE} (or mpirun -np N lmp -in {INPUT_FILE}); then vlab replay {}/{RECORD_FILE}",
+        "  wrote {}/{{{}}}; run: cd {} && lmp -in {INPUT_FILE} (or mpirun -np N lmp -in {INPUT_FILE}); then vlab replay {}/{RECORD_FILE}",
         out.display(),
+        s.files.join(", "),
         out.display(),
         out.display()
     );

@@ -10,6 +10,12 @@
 //!   vlab's settled packing ([`settle_bed`](crate::experiment::bed::settle::settle_bed)),
 //!   positions, velocities, spins, diameters and densities; enclosure axis z,
 //!   floor at z = 0, lid at the scene's inner length;
+//! - for a scene of bodies (prolates, oblates, toroids, clumps: thesis
+//!   Chapter 4 and Section 8.2) the atoms are the bodies' sub-spheres, each
+//!   body one molecule, integrated as a rigid body by `fix rigid/small` with
+//!   vlab's union mass, centre and inertia (eq. 4.1, 4.2, 4.5) from
+//!   `bodies.txt`, gravity on that mass, and no contacts within a body
+//!   ([`crate::export::lammps_bodies`]);
 //! - `pair_style granular`, `hertz/material` (thesis eq. 5.7 with E* of eq.
 //!   5.6), `tangential mindlin` (k_t = 8 G* √(R* δ), eq. 5.24, vector history,
 //!   Coulomb cap μ F_n, eq. 5.16) and `damping tsuji` with `limit_damping` (a
@@ -55,7 +61,11 @@
 //!   radius `-2 R_c` (R* = 2.67 mm for a 2.5 mm sphere in the 40 mm
 //!   cylinder) where vlab takes every wall flat (R* = R, thesis); the side
 //!   wall's E and k_t coefficient are scaled by `√(1 - R / (2 R_c))` so that
-//!   its force against overlap is vlab's.
+//!   its force against overlap is vlab's. One wall fix has one factor: for
+//!   bodies R is the largest sub-sphere's, and a smaller sub-sphere's side
+//!   wall contact is softer than vlab's by the ratio of the two factors
+//!   (1.5 % for the end spheres of a prolate of 1.5, 7.6 mm, in the thesis
+//!   cylinder; none for a toroid, whose sub-spheres are all alike).
 //! - **What differs.** The slip rule: when `|F_t| > μ F_n` LAMMPS resets the
 //!   spring so that spring plus damping carry `μ F_n`, vlab shortens the
 //!   spring to carry `μ F_n` alone; and the order of the history update.
@@ -79,6 +89,7 @@ use crate::dem::{ContactLaw, Particles, RestitutionMode};
 use crate::drive::Drive;
 use crate::experiment::bed::settle::SettledBed;
 use crate::experiment::shake::{TRUTH_SAMPLE_RATE_HZ, shake_drive};
+use crate::export::lammps_bodies::RigidBodies;
 use crate::scene::contact_laws;
 use crate::scene::{DriveLength, transient_cycles};
 use crate::scene::{Orientation, Scene, SceneError};
@@ -92,6 +103,9 @@ pub const DATA_FILE: &str = "packing.data";
 pub const RECORD_FILE: &str = "record.txt";
 /// File name of vlab's account of the export.
 pub const SUMMARY_FILE: &str = "export.json";
+/// File name of the rigid bodies' mass, centre, inertia and motion, read by
+/// `fix rigid/small ... infile` (bodies only).
+pub const BODY_FILE: &str = "bodies.txt";
 
 /// Tsuji et al.'s damping coefficient α(e) as LAMMPS computes it for
 /// `damping tsuji` (a polynomial fit; LAMMPS' `pair_style granular` docs).
@@ -235,14 +249,18 @@ pub struct DeckSummary {
     pub steps: u64,
     /// Steps averaged per record row (one 40 kHz sample).
     pub record_every_steps: u64,
+    /// Atoms in the deck: spheres, or the bodies' sub-spheres.
     pub n_particles: usize,
+    /// Rigid bodies (molecules of `fix rigid/small`); 0 for spheres.
+    pub n_bodies: usize,
     pub particle_mass_kg: f64,
     pub orientation: &'static str,
     pub gravity_mps2: f64,
     pub particle_particle: ContactTranslation,
     pub particle_wall: ContactTranslation,
     /// Factor on the side wall's E and k_t coefficient for LAMMPS' concave
-    /// cylinder contact, `√(1 - R / (2 R_c))`.
+    /// cylinder contact, `√(1 - R / (2 R_c))`; for bodies R is the largest
+    /// sub-sphere's.
     pub side_wall_factor: f64,
     /// Every scene key and what the deck did with it.
     pub scene_keys: Vec<SceneKeyUse>,
@@ -269,6 +287,8 @@ impl Serialize for SceneKeyUse {
 pub struct LammpsDeck {
     pub input: String,
     pub data: String,
+    /// `bodies.txt` for a scene of bodies, else `None`.
+    pub bodies: Option<String>,
     pub summary: DeckSummary,
 }
 
@@ -353,15 +373,27 @@ fn scene_key_uses(
     })?;
     let mut leaves = Vec::new();
     flatten("", &value, &mut leaves);
+    let shaped = !scene.particles.shape.is_sphere();
     let mut out = Vec::new();
     for (key, value) in leaves {
         let use_ = match key.as_str() {
             "version" => "scene file version: the deck is written from the resolved scene".into(),
             "name" => "named in the deck's header and in record.txt".into(),
+            "particles.count" if shaped => format!(
+                "{} bodies: molecules of atoms in {DATA_FILE}, each a rigid body of fix rigid/small",
+                scene.particles.count
+            ),
             "particles.count" => format!("{} atoms in {DATA_FILE}", scene.particles.count),
+            "particles.diameter_m" if shaped => format!(
+                "the body's equivalent sphere: its sub-spheres' diameters and places in {DATA_FILE}, its mass in {BODY_FILE}"
+            ),
             "particles.diameter_m" => format!("atom diameter in {DATA_FILE}"),
+            "particles.shape" | "particles.aspect_ratio" | "particles.hole_ratio"
+            | "particles.sub_spheres" | "particles.clump_file" => format!(
+                "the body's sub-spheres: atoms of one molecule per body in {DATA_FILE}, integrated by fix rigid/small with vlab's union mass, centre and inertia ({BODY_FILE}); contacts within a body excluded (neigh_modify exclude molecule/intra)"
+            ),
             k if k.starts_with("particles.material") => {
-                "sphere E and nu in pair_coeff (E* of eq. 5.6) and the wall fixes; density in packing.data".into()
+                "sphere E and nu in pair_coeff (E* of eq. 5.6) and the wall fixes; density in packing.data (and a body's mass in bodies.txt)".into()
             }
             "enclosure.inner_diameter_m" => "radius of region side (cylinder)".into(),
             "enclosure.inner_length_m" => "height of region lid (plane)".into(),
@@ -449,11 +481,14 @@ pub fn lammps_deck(
     export.check(["cycles", "steady_cycles"])?;
     let particles = &*bed.world.particles.by_id();
     let plan = DeckPlan::new(scene, bed, export, &drive)?;
-    let data = packing_data(&plan, particles);
+    let mut data = packing_data(&plan, particles);
+    if let Some(b) = &plan.bodies {
+        data.push_str(&b.molecules_section());
+    }
     let input = [
         header_lines(&plan),
         contact_comment_lines(&plan),
-        setup_lines(),
+        setup_lines(&plan),
         pair_lines(&plan),
         drive_lines(&plan),
         enclosure_lines(&plan),
@@ -463,9 +498,14 @@ pub fn lammps_deck(
         run_lines(&plan),
     ]
     .concat();
+    let bodies = plan
+        .bodies
+        .as_ref()
+        .map(|b| b.infile(&scene.name, plan.version));
     Ok(LammpsDeck {
         input,
         data,
+        bodies,
         summary: plan.into_summary(particles.len()),
     })
 }
@@ -485,7 +525,7 @@ struct DeckPlan<'a> {
     every: u64,
     /// Steps run.
     steps: u64,
-    /// Particle radius, m.
+    /// Particle radius, m: a sphere's, or a body's largest sub-sphere's.
     radius: f64,
     /// Enclosure radius, m.
     cyl_r: f64,
@@ -503,6 +543,8 @@ struct DeckPlan<'a> {
     mass: f64,
     /// Direction of gravity.
     gravity_dir: (i32, i32, i32),
+    /// The rigid bodies of a bed of bodies (`None`: spheres).
+    bodies: Option<RigidBodies>,
 }
 
 impl<'a> DeckPlan<'a> {
@@ -522,7 +564,10 @@ impl<'a> DeckPlan<'a> {
         // step need not divide the period (it is vlab's, from the scene's rule),
         // and a record short of the boundary would lose the last period.
         let rows = (f64::from(export.cycles) * period / (every as f64 * dt) - 1e-9).ceil() as u64;
-        let radius = scene.radius_m();
+        let bodies = RigidBodies::of(particles);
+        let radius = bodies
+            .as_ref()
+            .map_or_else(|| scene.radius_m(), |b| b.max_sub_radius_m);
         let cyl_r = 0.5 * scene.enclosure.inner_diameter_m;
         let mode = scene.contact.restitution_mode;
         let laws = contact_laws(scene);
@@ -572,6 +617,7 @@ impl<'a> DeckPlan<'a> {
             keys: scene_key_uses(scene, export, dt)?,
             mass: particles.total_mass_kg(),
             gravity_dir,
+            bodies,
         })
     }
 
@@ -590,6 +636,7 @@ impl<'a> DeckPlan<'a> {
             steps: self.steps,
             record_every_steps: self.every,
             n_particles,
+            n_bodies: self.bodies.as_ref().map_or(0, |b| b.rows.len()),
             particle_mass_kg: self.mass,
             orientation: scene.enclosure.orientation.as_str(),
             gravity_mps2: self.g,
@@ -597,7 +644,11 @@ impl<'a> DeckPlan<'a> {
             particle_wall: self.pw,
             side_wall_factor: self.side_factor,
             scene_keys: self.keys,
-            files: vec![INPUT_FILE.into(), DATA_FILE.into(), SUMMARY_FILE.into()],
+            files: [INPUT_FILE, DATA_FILE, SUMMARY_FILE]
+                .into_iter()
+                .chain(self.bodies.is_some().then_some(BODY_FILE))
+                .map(String::from)
+                .collect(),
         }
     }
 }
@@ -795,15 +846,39 @@ fn contact_comment_lines(plan: &DeckPlan) -> String {
     s
 }
 
-/// Units, atoms and the packing.
-fn setup_lines() -> String {
+/// Units, atoms and the packing; for bodies each atom's molecule too, and
+/// the atom map `fix rigid/small` needs.
+fn setup_lines(plan: &DeckPlan) -> String {
     let mut s = String::new();
     line(&mut s, "units           si");
     line(&mut s, "atom_style      sphere");
+    if plan.bodies.is_some() {
+        line(&mut s, "atom_modify     map array");
+    }
     line(&mut s, "dimension       3");
     line(&mut s, "boundary        f f f");
-    line(&mut s, "comm_modify     vel yes");
-    let _ = writeln!(s, "read_data       {DATA_FILE}");
+    match &plan.bodies {
+        // Ghost atoms out to a whole body, so that a rank sees every atom of
+        // the bodies it owns (fix rigid/small under mpirun).
+        Some(b) => {
+            let _ = writeln!(
+                s,
+                "comm_modify     vel yes cutoff {:.6e}",
+                2.0 * b.reach_m + 0.2 * plan.radius
+            );
+            line(
+                &mut s,
+                "fix             mol_ids all property/atom mol ghost yes",
+            );
+            let _ = writeln!(s, "read_data       {DATA_FILE} fix mol_ids NULL Molecules");
+            line(&mut s, "group           bodies molecule > 0");
+            line(&mut s, "group           spheres subtract all bodies");
+        }
+        None => {
+            line(&mut s, "comm_modify     vel yes");
+            let _ = writeln!(s, "read_data       {DATA_FILE}");
+        }
+    }
     line(&mut s, "");
     s
 }
@@ -824,7 +899,18 @@ fn pair_lines(plan: &DeckPlan) -> String {
         )
     );
     let _ = writeln!(s, "neighbor        {:.6e} bin", 0.2 * plan.radius);
-    line(&mut s, "neigh_modify    delay 0 every 1 check yes");
+    if plan.bodies.is_some() {
+        line(
+            &mut s,
+            "# No contacts between sub-spheres of one body (vlab never pairs them).",
+        );
+        line(
+            &mut s,
+            "neigh_modify    delay 0 every 1 check yes exclude molecule/intra bodies",
+        );
+    } else {
+        line(&mut s, "neigh_modify    delay 0 every 1 check yes");
+    }
     let dt = plan.dt;
     let _ = writeln!(s, "timestep        {dt:e}");
     line(&mut s, "");
@@ -900,18 +986,51 @@ fn enclosure_lines(plan: &DeckPlan) -> String {
     s
 }
 
-/// Time integration and gravity.
+/// Time integration and gravity: spheres by `nve/sphere`; bodies by `fix
+/// rigid/small` with vlab's mass, centre and inertia (`bodies.txt`) and
+/// gravity on that mass at that centre ([`crate::export::lammps_bodies`]).
 fn motion_lines(plan: &DeckPlan) -> String {
     let g = plan.g;
     let (gx, gy, gz) = plan.gravity_dir;
     let mut s = String::new();
-    line(&mut s, "fix             integrate all nve/sphere");
-    if g > 0.0 {
-        let _ = writeln!(
-            s,
-            "fix             gravity all gravity {g} vector {gx} {gy} {gz}"
+    let Some(bodies) = &plan.bodies else {
+        line(&mut s, "fix             integrate all nve/sphere");
+        if g > 0.0 {
+            let _ = writeln!(
+                s,
+                "fix             gravity all gravity {g} vector {gx} {gy} {gz}"
+            );
+        }
+        line(&mut s, "");
+        return s;
+    };
+    line(
+        &mut s,
+        "# Each body a rigid body: vlab's union mass (eq. 4.1), centre (eq. 4.2) and inertia (eq. 4.5)",
+    );
+    line(
+        &mut s,
+        "# from bodies.txt, not LAMMPS' sum over overlapping atoms; gravity on that mass at that centre.",
+    );
+    if bodies.n_free > 0 {
+        line(
+            &mut s,
+            "fix             integrate_spheres spheres nve/sphere",
         );
     }
+    let gravity = if g > 0.0 {
+        let _ = writeln!(
+            s,
+            "fix             gravity spheres gravity {g} vector {gx} {gy} {gz}"
+        );
+        " gravity gravity"
+    } else {
+        ""
+    };
+    let _ = writeln!(
+        s,
+        "fix             integrate bodies rigid/small molecule infile {BODY_FILE}{gravity}"
+    );
     line(&mut s, "");
     s
 }
@@ -978,13 +1097,15 @@ fn record_lines(plan: &DeckPlan) -> String {
     s
 }
 
-/// Thermo output and the run.
+/// Thermo output and the run (no kinetic energy for bodies: LAMMPS' comes
+/// from a temperature whose degrees of freedom the rigid bodies take away).
 fn run_lines(plan: &DeckPlan) -> String {
     let steps = plan.steps;
     let mut s = String::new();
-    line(
-        &mut s,
-        "thermo_style    custom step time atoms ke v_enclosure_displacement v_particle_force_axial",
+    let ke = if plan.bodies.is_some() { "" } else { " ke" };
+    let _ = writeln!(
+        s,
+        "thermo_style    custom step time atoms{ke} v_enclosure_displacement v_particle_force_axial"
     );
     line(&mut s, "thermo_modify   lost error norm no");
     let _ = writeln!(s, "thermo          {}", (steps / 20).max(1));
@@ -993,17 +1114,19 @@ fn run_lines(plan: &DeckPlan) -> String {
 }
 
 impl LammpsDeck {
-    /// Writes `in.damper`, `packing.data` and `export.json` into `dir` (which
-    /// must exist), each atomically.
+    /// Writes `in.damper`, `packing.data`, `bodies.txt` (bodies only) and
+    /// `export.json` into `dir` (which must exist), each atomically.
     pub fn write(&self, dir: &Path) -> Result<(), SceneError> {
         let summary = serde_json::to_string_pretty(&self.summary)
             .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
             + "\n";
-        for (name, text) in [
-            (DATA_FILE, &self.data),
-            (INPUT_FILE, &self.input),
-            (SUMMARY_FILE, &summary),
-        ] {
+        let files = [
+            (DATA_FILE, Some(&self.data)),
+            (BODY_FILE, self.bodies.as_ref()),
+            (INPUT_FILE, Some(&self.input)),
+            (SUMMARY_FILE, Some(&summary)),
+        ];
+        for (name, text) in files.into_iter().filter_map(|(n, t)| Some((n, t?))) {
             let path = dir.join(name);
             write_bytes_atomic(&path, text.as_bytes())
                 .map_err(|source| SceneError::Write { path, source })?;
