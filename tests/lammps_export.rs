@@ -992,7 +992,8 @@ fn body_round_trip(name: &str, scene_text: &str, freq: f64, gamma: f64) -> (f64,
 /// runs spreads by √2 σ; the test allows three of those, 5.9 % and 15.6 %.
 /// The replay measures the LAMMPS record within 1 %.
 ///
-/// Ignored unless asked for (needs `lmp`); about NN s on the 2-core VM.
+/// Ignored unless asked for (needs `lmp`); 86 s on the 2-core VM (vlab
+/// settles and drives each bed, LAMMPS runs 219 k steps of 990 atoms).
 #[test]
 #[ignore = "needs lmp (Debian package lammps) on the PATH"]
 fn bodies_round_trip_through_lammps_agree_with_vlab() {
