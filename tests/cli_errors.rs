@@ -262,7 +262,7 @@ fn one_message_shape_for_a_scene_file_a_rig_file_and_a_flag() {
         ),
         (&rig, "force.sensitivity_v_per_n = -"),
         (&flag, "--freq = -40 Hz: must be positive and finite"),
-        (&cycles, "--cycles = 0: must be at least 1"),
+        (&cycles, "--cycles = 0: must be an integer in 1..=100000"),
     ] {
         assert!(line.contains(shape), "'{line}' lacks '{shape}'");
     }

@@ -144,10 +144,17 @@ pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
 /// The shake's plan from the flags ([`ShakePlan::new`] checks it whole); a
 /// refusal names the flag it is about.
 fn plan(a: &ShakeArgs) -> Result<ShakePlan> {
-    let flags = a.scene.flags().set(true, "freq_hz", "--freq");
+    let flags = a
+        .scene
+        .flags()
+        .set(true, "freq_hz", "--freq")
+        .set(a.duration_s.is_some(), "duration_s", "--duration-s")
+        .set(true, "beds", "--beds");
     let mut scene = a.scene.resolve()?;
     if let Some(d) = a.duration_s {
-        scene.set_record_length(d, a.freq_hz);
+        scene
+            .set_record_length(d, a.freq_hz)
+            .map_err(|e| flags.name_flags(e.into()))?;
     }
     let request = ShakeRequest {
         scene,
@@ -160,7 +167,7 @@ fn plan(a: &ShakeArgs) -> Result<ShakePlan> {
         beds: a.beds,
     };
     ShakePlan::new(request).map_err(|e| match e.field {
-        RequestField::Beds => anyhow::Error::new(e.error).context("--beds"),
+        RequestField::Beds => flags.name_flags(e.error.into()),
         RequestField::Rig => anyhow::Error::new(e.error).context(format!("--rig {}", a.rig)),
         RequestField::Calibration => anyhow::Error::new(e.error).context("--calibration"),
         RequestField::Drive | RequestField::Record => flags.name_flags(e.error.into()),

@@ -214,6 +214,9 @@ impl ParticlesSpec {
     /// contradiction.
     fn settle_diameter(&mut self) -> Result<(), InvalidParameter> {
         if let Some(d) = self.equivalent_diameter_m.take() {
+            // Checked under the name the file gave it, not the one it is
+            // read into.
+            positive("particles.equivalent_diameter_m", d, "m")?;
             if !self.diameter_m.is_nan() {
                 return Err(InvalidParameter::new(
                     "particles.equivalent_diameter_m",
@@ -354,6 +357,10 @@ impl TryFrom<NumberOrWord<u32>> for CyclesSpec {
     }
 }
 
+/// Most cycles a drive may run, fixed or until steady: at 40 Hz about 40
+/// minutes of simulated time, far past any steady state vlab has seen.
+pub const MAX_DRIVE_CYCLES: u32 = 100_000;
+
 fn default_min_cycles() -> u32 {
     8
 }
@@ -450,6 +457,10 @@ impl Scene {
         {
             b.remove("diameter_m");
         }
+        written_alone(&base, &overlay).map_err(|e| SceneError::File {
+            path: origin.to_string(),
+            source: Box::new(e.into()),
+        })?;
         merge_tables(&mut base, overlay);
         let merged = toml::to_string(&base).map_err(|e| SceneError::Parse {
             path: origin.to_string(),
@@ -568,7 +579,10 @@ impl Scene {
             Bound::Unbounded,
         )?;
         non_negative("simulation.settle_s", s.settle_s, "s")?;
-        non_negative("simulation.gravity_mps2", s.gravity_mps2, "m/s^2")?;
+        // A bed is poured and comes to rest under gravity, and a drive's
+        // Gamma is its acceleration over gravity: neither exists without it.
+        positive("simulation.gravity_mps2", s.gravity_mps2, "m/s^2")
+            .map_err(|e| e.because("the bed settles under it, and Gamma is measured in it"))?;
         Ok(())
     }
 
@@ -577,7 +591,7 @@ impl Scene {
         let d = &self.drive;
         match &d.cycles {
             CyclesSpec::Count(cycles) => {
-                count_in("drive.cycles", *cycles, "", 1, None)?;
+                count_in("drive.cycles", *cycles, "", 1, Some(MAX_DRIVE_CYCLES))?;
                 require(
                     (1..=*cycles).contains(&d.steady_cycles),
                     "drive.steady_cycles",
@@ -593,7 +607,7 @@ impl Scene {
                     d.max_cycles,
                     "",
                     d.min_cycles,
-                    Some(100_000),
+                    Some(MAX_DRIVE_CYCLES),
                 )?;
                 for (key, x) in [
                     ("drive.balance_rel", d.balance_rel),
@@ -794,6 +808,57 @@ impl Scene {
     }
 }
 
+/// A value the file wrote that the preset's other half of a pair refuses:
+/// the refusal names the key the file wrote (`drive.cycles = 2`), not the
+/// preset's (`drive.steady_cycles = 5`) that the user never saw.
+fn written_alone(base: &toml::Table, overlay: &toml::Table) -> Result<(), InvalidParameter> {
+    let int = |t: &toml::Table, table: &str, key: &str| -> Option<i64> {
+        t.get(table)?.as_table()?.get(key)?.as_integer()
+    };
+    let wrote = |key: &str| {
+        overlay
+            .get("drive")
+            .and_then(toml::Value::as_table)
+            .is_some_and(|t| t.contains_key(key))
+    };
+    if let (Some(cycles), Some(window), false) = (
+        int(overlay, "drive", "cycles"),
+        int(base, "drive", "steady_cycles"),
+        wrote("steady_cycles"),
+    ) {
+        window_fits(cycles, window)?;
+    }
+    if let (Some(min), Some(max), false) = (
+        int(overlay, "drive", "min_cycles"),
+        int(base, "drive", "max_cycles"),
+        wrote("max_cycles"),
+    ) && min > max
+    {
+        return Err(InvalidParameter::new(
+            "drive.min_cycles",
+            min,
+            "",
+            format!("at most drive.max_cycles = {max} (the built-in scene's; or set it too)"),
+        ));
+    }
+    Ok(())
+}
+
+/// `drive.cycles`, set without a window, must hold the window it keeps
+/// (`steady_cycles`, set elsewhere). A count of 0 is left to
+/// [`Scene::validate`].
+fn window_fits(cycles: i64, steady_cycles: i64) -> Result<(), InvalidParameter> {
+    require(
+        cycles < 1 || cycles >= steady_cycles,
+        "drive.cycles",
+        cycles,
+        "",
+        format!(
+            "at least the steady window it keeps, drive.steady_cycles = {steady_cycles} (or set the window too)"
+        ),
+    )
+}
+
 /// Changes to a scene that a caller (the command line, a sweep) makes over a
 /// scene file; [`SceneOverrides::apply`] validates the result, and a refusal
 /// names the scene key (`drive.cycles`), which the caller may map to its own
@@ -816,6 +881,9 @@ impl SceneOverrides {
     /// `scene` with the overrides applied, validated.
     pub fn apply(&self, mut scene: Scene) -> Result<Scene, SceneError> {
         if let Some(c) = self.cycles {
+            if self.steady_cycles.is_none() {
+                window_fits(c.into(), scene.drive.steady_cycles.into())?;
+            }
             scene.drive.cycles = CyclesSpec::Count(c);
         }
         if let Some(s) = self.steady_cycles {
@@ -852,11 +920,28 @@ impl Scene {
 
     /// Sets the steady (recorded) part of the drive to `duration_s` at
     /// `freq_hz` (at least 2 whole cycles), keeping the transient cycles.
-    pub fn set_record_length(&mut self, duration_s: f64, freq_hz: f64) {
-        let steady = (duration_s * freq_hz).ceil().max(2.0) as u32;
+    /// A record longer than [`MAX_DRIVE_CYCLES`] in all is refused as
+    /// `duration_s`.
+    pub fn set_record_length(&mut self, duration_s: f64, freq_hz: f64) -> Result<(), SceneError> {
         let transient = self.drive_length().min_transient_cycles();
+        let most = MAX_DRIVE_CYCLES.saturating_sub(transient);
+        let steady = (duration_s * freq_hz).ceil().max(2.0);
+        if steady.is_nan() || steady > f64::from(most) {
+            return Err(InvalidParameter::new(
+                "duration_s",
+                duration_s,
+                "s",
+                format!(
+                    "positive and at most {} s: {most} cycles at {freq_hz} Hz after the {transient} transient ones (drive.cycles at most {MAX_DRIVE_CYCLES})",
+                    (f64::from(most) / freq_hz * 1e3).floor() / 1e3
+                ),
+            )
+            .into());
+        }
+        let steady = steady as u32;
         self.drive.cycles = CyclesSpec::Count(transient + steady);
         self.drive.steady_cycles = steady;
+        Ok(())
     }
 }
 
