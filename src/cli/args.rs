@@ -68,6 +68,11 @@ pub fn speed_mps(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "m/s")
 }
 
+/// An impulse in N s, positive and finite.
+pub fn newton_seconds(s: &str) -> Result<f64, InvalidParameter> {
+    positive(s, "N s")
+}
+
 /// A pressure or modulus in Pa, positive and finite.
 pub fn pascals(s: &str) -> Result<f64, InvalidParameter> {
     positive(s, "Pa")

@@ -97,6 +97,11 @@ impl HostTestArgs {
             rig,
             self.noise_seed,
         );
+        test.check().map_err(|e| {
+            args::FlagKeys::new()
+                .set(true, "duration_s", "--duration-s")
+                .name_flags(e.into())
+        })?;
         Ok((scene, test))
     }
 }

@@ -12,7 +12,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 
 use vlab::atomic_write::OutputDir;
-use vlab::rig::ShakerKind;
+use vlab::rig::{RigFile, RigSpec, ShakerKind};
 use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::study::sweep::{
     ConditionSummary, RowStatus, Shard, Steady, SweepEvent, SweepFile, SweepPlan, SweepRow,
@@ -190,6 +190,8 @@ fn sweep_plan(a: &SweepArgs) -> Result<SweepPlan> {
     .set(true, "seeds", "--seeds")
     .set(true, "fill_ratio", "--fill-ratio")
     .set(true, "beds", "--beds");
+    // The rig first, so that only its own refusals carry its name.
+    RigSpec::from_name_or_path(&a.rig).with_context(|| format!("--rig {}", a.rig))?;
     let scene = Scene::load_or_thesis(a.scene.as_deref())?;
     let scene = SceneOverrides {
         cycles: a.cycles,
@@ -212,9 +214,7 @@ fn sweep_plan(a: &SweepArgs) -> Result<SweepPlan> {
         beds: a.cache.source(&mut |n| eprintln!("{n}")),
         ensemble_beds: a.beds,
     };
-    plan.validate()
-        .map_err(|e| flags.name_flags(e.into()))
-        .with_context(|| format!("--rig {}", a.rig))?;
+    plan.validate().map_err(|e| flags.name_flags(e.into()))?;
     Ok(plan)
 }
 

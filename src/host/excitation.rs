@@ -33,6 +33,10 @@ pub struct Line {
     pub phase_rad: f64,
 }
 
+/// The largest force an excitation may ask of the shaker at the drive point
+/// (N): a stepped sine's `force_n` is held to the same.
+pub const MAX_FORCE_N: f64 = 1e4;
+
 /// A force at the host's drive point.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "kebab-case")]
@@ -278,6 +282,13 @@ impl Excitation {
                     Bound::Closed(0.0),
                     Bound::Closed(u32::MAX.into()),
                 )?;
+                in_range(
+                    "rms_n",
+                    v[2],
+                    "N",
+                    Bound::Open(0.0),
+                    Bound::Closed(MAX_FORCE_N),
+                )?;
                 let force = PeriodicRandom {
                     low_hz: v[0],
                     high_hz: v[1],
@@ -308,14 +319,16 @@ impl Excitation {
     }
 
     /// Checks every value (frequencies positive and at most 5 kHz, forces
-    /// positive, a release within 50 mm).
+    /// positive and at most [`MAX_FORCE_N`], a release within 50 mm).
     pub fn validate(&self) -> Result<(), InvalidParameter> {
         let freq =
             |key: &str, f: f64| in_range(key, f, "Hz", Bound::Open(0.0), Bound::Closed(5_000.0));
+        let force =
+            |key: &str, f: f64| in_range(key, f, "N", Bound::Open(0.0), Bound::Closed(MAX_FORCE_N));
         match self {
             Excitation::Sine { freq_hz, force_n } => {
                 freq("freq_hz", *freq_hz)?;
-                positive("force_n", *force_n, "N")?;
+                force("force_n", *force_n)?;
             }
             Excitation::Sweep {
                 start_hz,
@@ -326,15 +339,20 @@ impl Excitation {
                 freq("start_hz", *start_hz)?;
                 freq("end_hz", *end_hz)?;
                 positive("duration_s", *duration_s, "s")?;
-                positive("force_n", *force_n, "N")?;
+                force("force_n", *force_n)?;
             }
-            Excitation::Lines { lines, .. } => {
+            Excitation::Lines { lines, random } => {
                 if lines.is_empty() {
                     return Err(InvalidParameter::new("lines", "none", "", "at least one"));
                 }
                 for l in lines {
                     freq("freq_hz", l.freq_hz)?;
-                    positive("force_n", l.force_n, "N")?;
+                    // A random force is bounded by its RMS (checked as it
+                    // is parsed), not line by line.
+                    match random {
+                        true => positive("force_n", l.force_n, "N").map(|_| ())?,
+                        false => force("force_n", l.force_n).map(|_| ())?,
+                    }
                 }
             }
             Excitation::Hammer { impulse_n_s } => {

@@ -59,7 +59,9 @@ pub const SWEEP_MAGIC: &str = "# vlab sweep";
 pub enum SweepError {
     #[error(transparent)]
     Scene(#[from] SceneError),
-    #[error(transparent)]
+    /// Not transparent: the refusal stays in the error's chain, where the
+    /// command line finds its key to name the flag that set it.
+    #[error("{0}")]
     Invalid(#[from] InvalidParameter),
     #[error("cannot write {path}: {source}")]
     Write {

@@ -32,7 +32,7 @@ pub struct DecayArgs {
     #[arg(long = "x0-m", value_name = "M", default_value = "0.003", conflicts_with = "hammer_n_s", value_parser = args::finite)]
     x0_m: f64,
     /// Strike the drive point with a hammer of this impulse (N s) instead.
-    #[arg(long = "hammer-n-s", value_name = "N_S", value_parser = args::newtons)]
+    #[arg(long = "hammer-n-s", value_name = "N_S", value_parser = args::newton_seconds)]
     hammer_n_s: Option<f64>,
     /// Length of the record (s).
     #[arg(long = "duration-s", value_name = "S", default_value = "1", value_parser = args::seconds)]
@@ -55,7 +55,11 @@ pub struct DecayArgs {
 
 pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
     let excitation = excitation(&a)?;
-    check_beds(a.beds).map_err(|e| anyhow::Error::from(e).context("--beds"))?;
+    check_beds(a.beds).map_err(|e| {
+        args::FlagKeys::new()
+            .set(true, "beds", "--beds")
+            .name_flags(e.into())
+    })?;
     let (scene, test) = a.common.test(excitation, a.duration_s)?;
     let beds = match test.damper {
         Damper::Particles => a.beds,

@@ -319,8 +319,11 @@ fn random(
     out: &Path,
     quiet: bool,
 ) -> Result<()> {
-    let force =
-        PeriodicRandom::parse(key).map_err(|e| anyhow::Error::from(e.renamed("--random")))?;
+    // A refused field keeps its name after the flag: `--random rms_n = ...`.
+    let force = PeriodicRandom::parse(key).map_err(|e| match e.key.as_str() {
+        "excitation" => anyhow::Error::from(e.renamed("--random")),
+        field => anyhow::Error::from(e.renamed(&format!("--random {field}"))),
+    })?;
     RandomFrfOutcome::check_duration(a.duration_s, &force)
         .map_err(|e| anyhow::Error::from(e.renamed("--duration-s")))?;
     let outcome = RandomFrfOutcome::run(test, force, |t| {

@@ -124,7 +124,7 @@ impl SteppedSine {
             self.force_n,
             "N",
             Bound::Open(0.0),
-            Bound::Closed(1e4),
+            Bound::Closed(crate::host::excitation::MAX_FORCE_N),
         )?;
         count_in(
             "settle_cycles",

@@ -165,6 +165,21 @@ impl HostTest {
     }
 }
 
+impl HostTest {
+    /// Checks the test's own values (its length, its excitation) before
+    /// any bed is poured; [`run_host_test`] checks them first too.
+    pub fn check(&self) -> Result<(), InvalidParameter> {
+        in_range(
+            "duration_s",
+            self.duration_s,
+            "s",
+            Bound::Open(0.0),
+            Bound::Closed(MAX_HOST_TEST_S),
+        )?;
+        self.excitation.validate()
+    }
+}
+
 /// What a sine starts from with particles: half their mass and a dashpot
 /// that dissipates as a damper of efficiency 0.5 does (`c = 4 η M ω / π`,
 /// thesis eq. 6.10 with [`crate::host::map_model`]'s describing function).
@@ -412,14 +427,7 @@ pub fn run_host_test(
     test: &HostTest,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<HostRun, SceneError> {
-    in_range(
-        "duration_s",
-        test.duration_s,
-        "s",
-        Bound::Open(0.0),
-        Bound::Closed(MAX_HOST_TEST_S),
-    )?;
-    test.excitation.validate()?;
+    test.check()?;
     let started = Stopwatch::start();
     let particle_mass_kg = scene.particle_mass_kg();
     let g = scene.simulation.gravity_mps2;
