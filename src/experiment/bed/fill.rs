@@ -75,14 +75,26 @@ pub fn insert_in_cylinder(
             particle_m: 2.0 * radius_m,
         });
     }
-    // Hash grid with cells one diameter wide: overlap checks look at 27 cells.
+    // Hash grid with cells at least one diameter wide: overlap checks look
+    // at 27 cells. Coarser when particles are tiny against the enclosure,
+    // so that the grid stays a few megabytes (a nanometre sphere in the
+    // thesis cylinder asked for 10^20 cells and overflowed; a 100 m
+    // enclosure asked for 10^14 and aborted). The cells' size changes
+    // which cells are searched, never which positions are taken.
     let min_dist = 2.0 * radius_m + clearance_m;
-    let cell = min_dist;
-    let dims = [
-        (2.0 * cylinder_radius_m / cell).ceil() as usize + 1,
-        (2.0 * cylinder_radius_m / cell).ceil() as usize + 1,
-        (height_m / cell).ceil() as usize + 1,
-    ];
+    let max_cells = (64.0 * count as f64).max(1048576.0);
+    let mut cell = min_dist;
+    let cells_of = |cell: f64| {
+        [
+            (2.0 * cylinder_radius_m / cell).ceil() + 1.0,
+            (2.0 * cylinder_radius_m / cell).ceil() + 1.0,
+            (height_m / cell).ceil() + 1.0,
+        ]
+    };
+    while cells_of(cell).iter().product::<f64>() > max_cells {
+        cell *= 1.25;
+    }
+    let dims = cells_of(cell).map(|n| n as usize);
     let index = |p: DVec3| -> [usize; 3] {
         [
             ((p.x + cylinder_radius_m) / cell) as usize,
@@ -147,6 +159,15 @@ mod tests {
             for j in 0..i {
                 assert!((p[i] - p[j]).length() >= 0.005, "overlap {i} {j}");
             }
+        }
+    }
+
+    #[test]
+    fn particles_tiny_against_the_enclosure_need_no_huge_grid() {
+        for (radius, cylinder, height) in [(5e-10, 0.02, 0.04), (0.0025, 50.0, 100.0)] {
+            let mut rng = SceneRng::new(1);
+            let p = insert_in_cylinder(20, radius, cylinder, height, 0.0, &mut rng).expect("fits");
+            assert_eq!(p.len(), 20);
         }
     }
 
