@@ -26,6 +26,10 @@ fn root() -> &'static Path {
 /// Every image under `docs/` and the test that redraws it.
 const REDRAWN: &[(&str, &str)] = &[
     (
+        "docs/figures/browser-lab.png",
+        "browser_lab.rs: the_browser_lab_runs_a_shake_and_agrees_with_the_cli",
+    ),
+    (
         "docs/figures/efficiency.png",
         "docs.rs: the_maps_figures_are_what_their_command_draws",
     ),
@@ -110,12 +114,6 @@ const NOT_YET_REDRAWN: &[(&str, &str)] = &[
     (
         "docs/figures/shear-box-toroids.png",
         "as the prolates' shear-box figure",
-    ),
-    (
-        "docs/figures/browser-lab.png",
-        "a screenshot of headless Chromium (web/screenshot.mjs): its wall times and \
-         fonts are the machine's, so it needs a pixel comparison with a tolerance, \
-         not yet written",
     ),
 ];
 
@@ -269,17 +267,10 @@ fn every_image_under_docs_is_redrawn_by_a_test() {
         .collect();
     assert!(gone.is_empty(), "listed but not under docs/: {gone:?}");
     // Each test named for a figure is one that exists.
-    let sources = [
-        std::fs::read_to_string(root().join("tests/docs.rs")).expect("docs.rs"),
-        std::fs::read_to_string(root().join("tests/figures.rs")).expect("figures.rs"),
-    ];
     for (figure, test) in REDRAWN {
         let (file, name) = test.split_once(": ").expect("file: test");
-        let text = if file == "docs.rs" {
-            &sources[0]
-        } else {
-            &sources[1]
-        };
+        let text = std::fs::read_to_string(root().join("tests").join(file))
+            .unwrap_or_else(|e| panic!("{figure}: tests/{file}: {e}"));
         assert!(
             text.contains(&format!("fn {name}()")),
             "{figure}: no test {name} in tests/{file}"
