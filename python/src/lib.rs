@@ -32,6 +32,8 @@ fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(host::host_predict, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_run, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_decay, m)?)?;
+    m.add_function(wrap_pyfunction!(host::host_frf, m)?)?;
+    m.add_class::<host::HostFrf>()?;
     m.add_class::<host::HostRunResult>()?;
     m.add_class::<host::HostDecay>()?;
     m.add_function(wrap_pyfunction!(scene::scene_json, m)?)?;

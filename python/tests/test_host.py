@@ -105,3 +105,80 @@ def test_a_bad_value_is_refused_with_its_keyword(call, said):
         call()
     for part in said:
         assert part in str(refused.value), str(refused.value)
+
+
+# A stepped sine of the dashpot host: three frequencies around the plate's
+# 40 Hz, 10 cycles to settle and 8 recorded at each.
+STEPPED = dict(damper="dashpot:15", rig="ideal", cache=False, settle_cycles=10, record_cycles=8)
+
+
+@pytest.fixture(scope="module")
+def stepped():
+    told = []
+    frf = vlab.host_frf([38, 40, 42], force_n=2.0, progress=lambda *p: told.append(p), **STEPPED)
+    return frf, told
+
+
+def test_the_stepped_sine_is_the_commands(stepped, cli, tmp_path):
+    frf, told = stepped
+    assert frf.kind == "stepped sine"
+    assert told == [("frequency", 1, 3), ("frequency", 2, 3), ("frequency", 3, 3)]
+    frf.write(tmp_path / "py")
+    subprocess.run([cli, "--quiet", "host", "frf", "--freq", "38,40,42", "--force-n", "2",
+                    "--damper", "dashpot:15", "--rig", "ideal", "--settle-cycles", "10",
+                    "--record-cycles", "8", "--no-cache", "--out", str(tmp_path / "cli")],
+                   check=True, capture_output=True)
+    names = sorted(p.name for p in (tmp_path / "cli").iterdir())
+    assert sorted(p.name for p in (tmp_path / "py").iterdir()) == names
+    for name in names:
+        if name.endswith(".json"):
+            continue
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+
+
+def test_the_stepped_sine_reads_the_modes_receptance(stepped):
+    frf, _ = stepped
+    c = frf.columns
+    # One mode with its dashpot: |X/F| = 1 / |k - m w^2 + j c w|, to 1 %
+    # (10 settling cycles leave the transient at e^(-2 pi zeta 10) ~ 2e-2
+    # of the start, which starts steady).
+    m, wn = 0.5, 2 * math.pi * 40.0
+    c_total = 2 * 0.003 * m * wn + 15.0
+    w = 2 * math.pi * c["freq_hz"]
+    exact = 1 / np.abs(m * wn**2 - m * w**2 + 1j * c_total * w)
+    measured = np.hypot(c["receptance_re_m_per_n"], c["receptance_im_m_per_n"])
+    assert np.allclose(measured, exact, rtol=1e-2), (measured, exact)
+
+
+def test_a_periodic_random_force_gives_h1_and_h2():
+    frf = vlab.host_frf(random="30:50:2:0.5:1", duration_s=1.5, damper="dashpot:15", rig="ideal",
+                        cache=False)
+    assert frf.kind == "periodic random" and frf.summary is None
+    c = frf.columns
+    assert np.all(c["coherence"] > 0.99)
+    h1 = np.hypot(c["h1_re_m_per_n"], c["h1_im_m_per_n"])
+    m, wn = 0.5, 2 * math.pi * 40.0
+    w = 2 * math.pi * c["freq_hz"]
+    exact = 1 / np.abs(m * wn**2 - m * w**2 + 1j * (2 * 0.003 * m * wn + 15.0) * w)
+    assert np.allclose(h1, exact, rtol=1e-2)
+
+
+@pytest.mark.parametrize(
+    "args, said",
+    [
+        (dict(freqs_hz=[40, 39]), ["freqs_hz", "ascending"]),
+        (dict(freqs_hz=None), ["freqs_hz", "random"]),
+        (dict(freqs_hz=[40], force_n=-1), ["force_n"]),
+        (dict(freqs_hz=[40], record_cycles=1), ["record_cycles"]),
+        (dict(random="30:50:2"), ["random"]),
+        (dict(random="30:50:2:0.5:1", duration_s=1.0), ["duration_s", "three periods"]),
+        (dict(freqs_hz=[40], duration_s=-1), ["duration_s"]),
+    ],
+)
+def test_a_bad_frf_value_is_refused_with_its_keyword(args, said):
+    call = dict(damper="dashpot:15", rig="ideal", cache=False)
+    call.update(args)
+    with pytest.raises(ValueError) as refused:
+        vlab.host_frf(**call)
+    for part in said:
+        assert part in str(refused.value), str(refused.value)

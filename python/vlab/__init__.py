@@ -44,8 +44,10 @@ __all__ = [
     "host_predict",
     "host_run",
     "host_decay",
+    "host_frf",
     "HostRun",
     "HostDecay",
+    "HostFrf",
     "calibrate",
     "Calibration",
     "scene",
@@ -84,8 +86,10 @@ class _Bars:
             self._bar.update(round(100 * fraction) - self._bar.n)
 
     def sweep(self, what, done, total):
-        """A sweep's call: "bed" or "condition", how many are done of how many."""
-        self._open({"bed": "settling beds", "condition": "conditions"}[what], total, what)
+        """A count's call (a sweep's, a stepped sine's): "bed", "condition"
+        or "frequency", how many are done of how many."""
+        names = {"bed": "settling beds", "condition": "conditions", "frequency": "frequencies"}
+        self._open(names.get(what, what), total, what)
         self._bar.update(done - self._bar.n)
 
     def close(self):
@@ -577,6 +581,56 @@ def host_decay(**options):
         if options.get(key) is not None:
             options[key] = str(options[key])
     return HostDecay(_run_with_progress(_vlab.host_decay, options, "shake"))
+
+
+class HostFrf:
+    """A finished frequency response of the host with the damper: a stepped
+    sine's (the receptance at each frequency beside the host without
+    particles, with their mass as a solid and, with a map, the model's) or a
+    periodic random force's (H1, H2, coherence)."""
+
+    def __init__(self, inner):
+        self._inner = inner
+
+    kind = property(lambda self: self._inner.kind, doc='"stepped sine" or "periodic random".')
+
+    @property
+    def columns(self):
+        """What frf.csv holds: float64 numpy arrays named with their units."""
+        return _csv_columns(self._inner.csv)
+
+    @property
+    def summary(self):
+        """What frf.json holds, as a dict (a stepped sine's; None for a
+        periodic random force)."""
+        text = self._inner.summary_json
+        return None if text is None else json.loads(text)
+
+    def write(self, out):
+        """Writes what `vlab host frf --out` writes into folder `out`."""
+        self._inner.write(str(out))
+
+
+def host_frf(freqs_hz=None, **options):
+    """The host's frequency response with the damper, as `vlab host frf`
+    measures it: a stepped sine at each of `freqs_hz` (Hz, ascending) of
+    `force_n` (N, default 5), `settle_cycles` (30) and `record_cycles` (20)
+    at each, `beds` at each; `map` (a sweep.csv) adds the map-based model's
+    prediction. Or, with `random` ("LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED"), a
+    periodic random force over `duration_s` (default 8): H1, H2, coherence.
+    Returns a HostFrf. The other keywords are `host_run`'s; `progress` is
+    called with ("frequency", done, frequencies) for a stepped sine.
+    """
+    if isinstance(freqs_hz, (int, float)):
+        freqs_hz = [freqs_hz]
+    if freqs_hz is not None:
+        freqs_hz = [float(f) for f in freqs_hz]
+    for key in ("scene", "map"):
+        if options.get(key) is not None:
+            options[key] = str(options[key])
+    kind = "sweep" if options.get("random") is None else "shake"
+    run = lambda **o: _vlab.host_frf(freqs_hz, **o)
+    return HostFrf(_run_with_progress(run, options, kind))
 
 
 def scene(path=None):

@@ -248,3 +248,34 @@ def host_decay(
     threads: Optional[int] = None,
     progress: Optional[Callable[[str, float, int], object]] = None,
 ) -> HostDecay: ...
+
+class HostFrf:
+    @property
+    def kind(self) -> str: ...
+    @property
+    def csv(self) -> str: ...
+    @property
+    def summary_json(self) -> Optional[str]: ...
+    def write(self, out: Union[str, PathLike[str]]) -> None: ...
+
+def host_frf(
+    freqs_hz: Optional[list[float]] = None,
+    *,
+    force_n: float = 5.0,
+    settle_cycles: int = 30,
+    record_cycles: int = 20,
+    beds: int = 1,
+    random: Optional[str] = None,
+    duration_s: float = 8.0,
+    map: Union[str, PathLike[str], None] = None,
+    host: str = "plate-40hz",
+    damper: str = "particles",
+    scene: Union[str, PathLike[str], None] = None,
+    seed: Optional[int] = None,
+    orientation: Optional[str] = None,
+    rig: str = "thesis-shaker",
+    noise_seed: Optional[int] = None,
+    cache: bool = True,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[..., object]] = None,
+) -> HostFrf: ...
