@@ -36,6 +36,8 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
+#[path = "support/ci_counts.rs"]
+mod ci_counts;
 mod common;
 #[path = "support/devtools.rs"]
 mod devtools;
@@ -345,10 +347,14 @@ fn the_page_looks_as_the_docs_show_it(browser: &mut Chromium, tmp: &Scratch) {
     );
     let differ = png_difference(&shot, &shown, PIXEL_THRESHOLD)
         .unwrap_or_else(|e| panic!("{SCREENSHOT} is not this page: {e}; {redraw}"));
-    eprintln!(
-        "screenshot: {:.3} % of its pixels differ from {SCREENSHOT} by more than {PIXEL_THRESHOLD}",
+    let said = format!(
+        "{:.3} % of its pixels differ from {SCREENSHOT} by more than {PIXEL_THRESHOLD}",
         100.0 * differ
     );
+    eprintln!("screenshot: {said}");
+    ci_counts::tell_ci(&format!(
+        "browser lab: the page's shake agreed with vlab shake; its screenshot: {said}"
+    ));
     assert!(
         differ <= MOST_PIXELS_DIFFERING,
         "{:.2} % of the page's pixels differ from {SCREENSHOT} (at most {:.2} % may): {redraw}",

@@ -9,11 +9,14 @@
 //! `CI` variable set; .ci/run installs them) and elsewhere says what is
 //! missing and passes.
 
+#[path = "../../tests/support/ci_counts.rs"]
+mod ci_counts;
 mod common;
 
 use std::path::Path;
 use std::process::Command;
 
+use ci_counts::tell_ci;
 use common::{python, python_has, stage_package, vlab_command};
 
 /// The notebooks the class uses; a notebook in the folder but not here
@@ -73,8 +76,12 @@ for name in sys.argv[1:]:
         String::from_utf8_lossy(&out.stderr)
     );
     eprint!("{said}");
-    assert_eq!(
-        said.lines().filter(|l| l.contains(" ran in ")).count(),
-        NOTEBOOKS.len()
-    );
+    let ran: Vec<&str> = said.lines().filter(|l| l.contains(" ran in ")).collect();
+    assert_eq!(ran.len(), NOTEBOOKS.len());
+    tell_ci(&format!(
+        "notebooks: {} of {} ran: {}",
+        ran.len(),
+        NOTEBOOKS.len(),
+        ran.join("; ")
+    ));
 }

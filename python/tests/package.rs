@@ -7,11 +7,14 @@
 //! fails on CI (the `CI` variable set; .ci/run installs them) and elsewhere
 //! says what is missing and passes.
 
+#[path = "../../tests/support/ci_counts.rs"]
+mod ci_counts;
 mod common;
 
 use std::path::Path;
 use std::process::Command;
 
+use ci_counts::tell_ci;
 use common::{python, python_has, stage_package, vlab_command};
 use vlab::experiment::bed::cache::BedSource;
 use vlab::experiment::shake_plan::{ShakePlan, ShakeRequest};
@@ -81,5 +84,7 @@ fn the_python_package_passes_its_tests() {
             "not built: cargo test --workspace builds it"
         }
     );
-    eprintln!("{}", said.lines().last().unwrap_or_default());
+    let summary = said.lines().last().unwrap_or_default();
+    eprintln!("{summary}");
+    tell_ci(&format!("python package (pytest): {summary}"));
 }
