@@ -258,3 +258,81 @@ fn press_writes_the_curves_of_a_flat_toroid_and_its_ripple() {
         &["--max-deformation", "0.5"],
     );
 }
+
+/// Every shape weighs the same wherever vlab reads its mass: the scene's
+/// figure (`vlab scene --json`, the host's solid mass and guesses, an
+/// ensemble's E_max) is the mass of the world the DEM pours and drives, and
+/// both are the count times the equivalent sphere's mass, `ρ π d³ / 6`, as
+/// far as the union of a body's sub-spheres falls short of the smooth
+/// shape's volume (the report's `volume_error`, -2.5e-4 for a prolate of
+/// 1.5 of 51 sub-spheres); a clump weighs its file's spheres, their exact
+/// union (a lens less for two). Before 6167560 a body scene
+/// reported count x the least mass a contact meets (48 % for prolates of
+/// 1.5); the world was right.
+#[test]
+fn every_shape_weighs_what_its_world_weighs() {
+    use vlab::experiment::bed::settle::settle_bed;
+    use vlab::scene::Scene;
+    let dir = Scratch::new("shape-mass");
+    dir.write(
+        "pair.csv",
+        "x_m,y_m,z_m,radius_m\n-0.0012,0,0,0.0025\n0.0012,0,0,0.002\n",
+    );
+    let shapes = [
+        ("sphere", ""),
+        ("prolate", "shape = \"prolate\"\naspect_ratio = 1.5\n"),
+        ("oblate", "shape = \"oblate\"\naspect_ratio = 0.6\n"),
+        ("toroid", "shape = \"toroid\"\nhole_ratio = 0.2\n"),
+    ];
+    let pair = dir.path("pair.csv").display().to_string();
+    let clump = format!("shape = \"clump\"\nclump_file = \"{pair}\"\n");
+    let shapes = shapes.iter().copied().chain([("clump", clump.as_str())]);
+    for (name, keys) in shapes {
+        let file = scene_file(
+            &dir,
+            &format!("{name}.toml"),
+            &format!("[particles]\ncount = 60\nequivalent_diameter_m = 0.006\n{keys}"),
+        );
+        let scene =
+            Scene::load_over_preset(&dir.path(&file)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let out = vlab(&dir.0, &["scene", "--scene", &file, "--json"]);
+        assert!(out.status.success(), "{name}: {}", common::stderr(&out));
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        let reported = report["particles"]["total_mass_kg"]
+            .as_f64()
+            .expect("total_mass_kg");
+        let world = settle_bed(&scene, &mut |_| {})
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+            .world;
+        let poured = world.particles.total_mass_kg();
+        let density = scene.particle_material().density_kgm3;
+        let sphere = 60.0 * density * std::f64::consts::PI / 6.0 * 0.006_f64.powi(3);
+        assert!(
+            (reported / poured - 1.0).abs() < 1e-12,
+            "{name}: the scene reports {reported} kg, the world weighs {poured} kg"
+        );
+        // A generated body is the union of its sub-spheres, whose volume the
+        // report gives against the smooth shape's (the equivalent sphere's);
+        // a clump is its file's spheres as written: two overlapping spheres,
+        // whose union is the two less the lens they share.
+        let expected = if name == "clump" {
+            let (r1, r2, d) = (0.0025_f64, 0.002_f64, 0.0024_f64);
+            let ball = |r: f64| 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+            let lens = std::f64::consts::PI
+                * (r1 + r2 - d).powi(2)
+                * (d * d + 2.0 * d * r2 - 3.0 * r2 * r2 + 2.0 * d * r1 + 6.0 * r1 * r2
+                    - 3.0 * r1 * r1)
+                / (12.0 * d);
+            60.0 * density * (ball(r1) + ball(r2) - lens)
+        } else {
+            let volume_error = report["particles"]["body"]["volume_error"]
+                .as_f64()
+                .unwrap_or(0.0);
+            sphere * (1.0 + volume_error)
+        };
+        assert!(
+            (poured / expected - 1.0).abs() < 1e-9,
+            "{name}: the world weighs {poured} kg, {expected} kg expected (60 equivalent spheres: {sphere} kg)"
+        );
+    }
+}
