@@ -198,6 +198,27 @@ impl Particles {
         self.clump[k] != NOT_IN_CLUMP
     }
 
+    /// Scales every free sphere's and body's velocity across `down` (a unit
+    /// vector: what is left is along it) and its spin by `factor`: a brake
+    /// on rolling and sliding that leaves falling and bouncing alone.
+    pub fn brake_across(&mut self, down: DVec3, factor: f64) {
+        let across = |v: DVec3| {
+            let along = down * v.dot(down);
+            along + (v - along) * factor
+        };
+        for k in 0..self.len() {
+            if !self.in_clump(k) {
+                self.velocity[k] = across(self.velocity[k]);
+                self.angular_velocity[k] *= factor;
+            }
+        }
+        let c = &mut self.clumps;
+        for b in 0..c.len() {
+            c.velocity[b] = across(c.velocity[b]);
+            c.angular_momentum[b] *= factor;
+        }
+    }
+
     /// Every free sphere and every body once, as `(mass, centre, velocity)`:
     /// what a sum over the bed's masses (its centre of mass, momentum,
     /// granular temperature) runs over.

@@ -82,11 +82,15 @@ pub enum SceneError {
     },
     /// The settling bed did not come to rest.
     #[error(
-        "the bed did not come to rest while {phase}: after {time_s} s of settling the particles still move at {rms_speed_mps:.4} m/s RMS (at rest: below {rest_mps:.4} m/s)"
+        "the bed did not come to rest while {phase}: after {time_s} s of settling{brake} the particles still move at {rms_speed_mps:.4} m/s RMS (at rest: below {rest_mps:.4} m/s)",
+        brake = if *.braked { " (the second half with a brake on rolling and sliding)" } else { "" }
     )]
     NotAtRest {
         phase: &'static str,
         time_s: f64,
+        /// Whether the second half of the time braked rolling and sliding
+        /// (not without gravity, where nothing rolls on a floor).
+        braked: bool,
         rms_speed_mps: f64,
         rest_mps: f64,
     },
