@@ -307,3 +307,21 @@ fn press_and_shear_box_name_the_equivalent_diameter_as_written() {
         );
     }
 }
+
+#[test]
+fn shake_refuses_a_step_or_a_step_count_that_never_ends() {
+    // Both were accepted, and the run never ended: 1e-15 s steps make a
+    // second of drive 10^15 steps; 1e12 steps a contact as many.
+    refused_before_work(
+        &with(SHAKE, &["--scene", "scene.toml"]),
+        Some("[simulation]\ndt_s = 1e-15\n"),
+        "scene file scene.toml is not valid: simulation.dt_s = 0.000000000000001 s: must be at most the stability limit",
+        &["at least a thousandth of it"],
+    );
+    refused_before_work(
+        &with(SHAKE, &["--scene", "scene.toml"]),
+        Some("[simulation]\nsteps_per_contact = 1e12\n"),
+        "scene file scene.toml is not valid: simulation.steps_per_contact = 1000000000000: must be in [5, 1000]",
+        &[],
+    );
+}
