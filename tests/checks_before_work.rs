@@ -325,3 +325,18 @@ fn shake_refuses_a_step_or_a_step_count_that_never_ends() {
         &[],
     );
 }
+
+#[test]
+fn shake_refuses_a_dump_of_a_file_every_step() {
+    // Was accepted: a frame of the whole bed every 1e-12 s is a file every
+    // step, and the run never ended.
+    refused_before_work(
+        &with(
+            SHAKE,
+            &["--dump", "frames", "--dump-every-s", "1e-12", "--out", "o"],
+        ),
+        None,
+        "--dump-every-s = 0.000000000001 s: must be finite and at least a thousandth of the drive's period, 2.500e-5 s",
+        &["1000 frames a cycle"],
+    );
+}

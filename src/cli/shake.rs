@@ -89,6 +89,9 @@ pub struct ShakeArgs {
 pub fn run(a: ShakeArgs, quiet: bool) -> Result<()> {
     let plan = plan(&a)?;
     let (scene, drive) = (&plan.scene, &plan.setup.drive);
+    if a.dump.is_some() {
+        dump_every_s(&a, drive)?;
+    }
     let out_dir = a
         .out
         .clone()
@@ -174,16 +177,26 @@ fn plan(a: &ShakeArgs) -> Result<ShakePlan> {
     })
 }
 
+/// The dump's interval (s): `--dump-every-s`, or an eighth of a cycle;
+/// checked before any folder is made or bed poured.
+fn dump_every_s(a: &ShakeArgs, drive: &Drive) -> Result<f64> {
+    let every_s = a.dump_every_s.unwrap_or(drive.period_s() / 8.0);
+    VtkDump::check_every(every_s, drive.period_s())
+        .map_err(|e| anyhow::Error::new(e.renamed("--dump-every-s")))?;
+    Ok(every_s)
+}
+
 /// The ParaView dump `--dump` asks for (its folder made), if any.
 fn vtk_dump(a: &ShakeArgs, scene: &Scene, drive: &Drive) -> Result<Option<VtkDump>> {
     let Some(dir) = &a.dump else {
         return Ok(None);
     };
+    let every_s = dump_every_s(a, drive)?;
     std::fs::create_dir_all(dir)
         .with_context(|| format!("cannot create --dump folder {}", dir.display()))?;
     Ok(Some(VtkDump::new(
         dir,
-        a.dump_every_s.unwrap_or(drive.period_s() / 8.0),
+        every_s,
         a.dump_from_s.unwrap_or(0.0),
         0.5 * scene.enclosure.inner_diameter_m,
         scene.enclosure.inner_length_m,

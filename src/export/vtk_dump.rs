@@ -56,6 +56,7 @@ use crate::atomic_write::write_atomic;
 use crate::dem::clumps::NOT_IN_CLUMP;
 use crate::dem::{Particles, World};
 use crate::experiment::damper::{Kinematics, StepObserver};
+use crate::validation::InvalidParameter;
 
 /// Segments of the drawn cylinder.
 const SEGMENTS: usize = 32;
@@ -83,7 +84,29 @@ pub struct VtkDump {
     error: Option<DumpError>,
 }
 
+/// Frames a drive cycle may be dumped in at most: a frame is a file of the
+/// whole bed, and 1000 a cycle is far finer than a contact a viewer can see.
+pub const MOST_FRAMES_A_CYCLE: f64 = 1000.0;
+
 impl VtkDump {
+    /// Checks a dump interval `every_s` against the drive's `period_s`:
+    /// positive, and at most [`MOST_FRAMES_A_CYCLE`] frames a cycle (an
+    /// interval of 1e-12 s wrote a file every step and a run never ended).
+    pub fn check_every(every_s: f64, period_s: f64) -> Result<(), InvalidParameter> {
+        let least_s = period_s / MOST_FRAMES_A_CYCLE;
+        if every_s >= least_s && every_s.is_finite() {
+            return Ok(());
+        }
+        Err(InvalidParameter::new(
+            "every_s",
+            every_s,
+            "s",
+            format!(
+                "finite and at least a thousandth of the drive's period, {least_s:.3e} s (at most {MOST_FRAMES_A_CYCLE} frames a cycle, each a file of the whole bed)"
+            ),
+        ))
+    }
+
     /// Dumps into `dir` (which must exist) every `every_s` of drive time from
     /// `from_s` (drive time) on; the enclosure is a cylinder of `radius_m` and
     /// `length_m`.
