@@ -148,7 +148,7 @@ fn tutorial_commands_run() {
     assert!(wrong.abs() > 0.02, "mis-calibrated run only off by {wrong}");
     // The snapshots docs/maps.md and this tutorial show are step 8's.
     for name in ["snapshots.png", "snapshots.svg"] {
-        same_figure(
+        common::same_figure(
             &dir.path(&format!("bb/{name}")),
             &format!("docs/figures/{name}"),
             &format!(
@@ -680,7 +680,7 @@ fn host_chapter_commands_run() {
             "vlab host decay --duration-s 0.8 --map signals/reference/host-map/sweep.csv --out host/plate",
         ),
     ] {
-        same_figure(
+        common::same_figure(
             &dir.path(drawn),
             &format!("docs/figures/{shown}"),
             &format!("{command}; cp {drawn} docs/figures/{shown}"),
@@ -977,17 +977,6 @@ fn copy_dir(from: &Path, to: &Path) {
             std::fs::copy(&path, &target).expect("copy");
         }
     }
-}
-
-/// Fails unless the file `drawn` equals the repository's `shown` byte for
-/// byte, naming the command that redraws it.
-fn same_figure(drawn: &Path, shown: &str, redraw: &str) {
-    let drawn = std::fs::read(drawn).unwrap_or_else(|e| panic!("{}: {e}", drawn.display()));
-    let kept = std::fs::read(root().join(shown)).unwrap_or_else(|e| panic!("{shown}: {e}"));
-    assert!(
-        drawn == kept,
-        "{shown} is not what its command draws now: redraw it with `{redraw}`"
-    );
 }
 
 /// The figures docs/maps.md shows are what its command draws today, byte

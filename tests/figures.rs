@@ -129,17 +129,6 @@ fn vlab_in(cwd: &Path, args: &[&str]) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
-/// Fails unless the file `drawn` equals the repository's `shown` byte for
-/// byte, naming the command that redraws it.
-fn same_figure(drawn: &Path, shown: &str, redraw: &str) {
-    let drawn = std::fs::read(drawn).unwrap_or_else(|e| panic!("{}: {e}", drawn.display()));
-    let kept = std::fs::read(root().join(shown)).unwrap_or_else(|e| panic!("{shown}: {e}"));
-    assert!(
-        drawn == kept,
-        "{shown} is not what its command draws now: redraw it with `{redraw}`"
-    );
-}
-
 #[test]
 fn the_accuracy_figures_are_redrawn_from_their_kept_run() {
     let dir = Scratch::new("figures-accuracy");
@@ -153,7 +142,7 @@ fn the_accuracy_figures_are_redrawn_from_their_kept_run() {
         "yang.svg",
         "yang.png",
     ] {
-        same_figure(
+        common::same_figure(
             &dir.path(&format!("drawn/{name}")),
             &format!("docs/figures/accuracy/{name}"),
             "vlab plot signals/reference/accuracy-40Hz-G20/accuracy.csv --out docs/figures/accuracy",
@@ -166,7 +155,7 @@ fn the_host_receptance_is_redrawn_from_its_kept_run() {
     let dir = Scratch::new("figures-host-frf");
     let csv = root().join("signals/reference/host-frf/frf.csv");
     vlab_in(&dir.0, &["plot", &csv.to_string_lossy(), "--out", "drawn"]);
-    same_figure(
+    common::same_figure(
         &dir.path("drawn/frf-magnitude.svg"),
         "docs/figures/host-frf-magnitude.svg",
         "vlab plot signals/reference/host-frf/frf.csv --out host/frf-figure; cp host/frf-figure/frf-magnitude.svg docs/figures/host-frf-magnitude.svg",
@@ -195,7 +184,7 @@ fn the_shape_optimum_is_redrawn_from_the_study_sweeps() {
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     vlab_in(&study, &args);
     for ext in ["png", "svg"] {
-        same_figure(
+        common::same_figure(
             &dir.path(&format!("optimum/optimum.{ext}")),
             &format!("docs/figures/shape-optimum.{ext}"),
             "the command of docs/shape-study/README.md in that folder, then cp optimum/optimum.png optimum/optimum.svg as docs/figures/shape-optimum.png and .svg",

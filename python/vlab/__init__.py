@@ -119,7 +119,22 @@ def _run_with_progress(run, options, kind):
         bars.close()
 
 
-class Shake:
+class _Channels:
+    """A record's channels on one clock, for the classes that hold one."""
+
+    sample_rate_hz = property(lambda self: self._inner.sample_rate_hz)
+
+    @property
+    def channels(self):
+        """The record's channels, `{name: unit}`."""
+        return dict(self._inner.channels)
+
+    def channel(self, name):
+        """The samples of channel `name` in its unit (numpy array)."""
+        return self._inner.channel(name)
+
+
+class Shake(_Channels):
     """A finished shake: its figures, the rig's record and the DEM's truth.
 
     `efficiency`, `measured_efficiency`, `energy_per_cycle_j` and
@@ -150,16 +165,6 @@ class Shake:
         not in the errors above. `None` for one bed.""",
     )
     warnings = property(lambda self: self._inner.warnings)
-    sample_rate_hz = property(lambda self: self._inner.sample_rate_hz)
-
-    @property
-    def channels(self):
-        """The record's channels, `{name: unit}`."""
-        return dict(self._inner.channels)
-
-    def channel(self, name):
-        """The samples of channel `name` in its unit (numpy array)."""
-        return self._inner.channel(name)
 
     def time_s(self):
         """Each sample's time from the drive's start, s (numpy array): the
@@ -190,23 +195,13 @@ def shake(freq_hz=40.0, gamma=20.0, **options):
     return Shake(_run_with_progress(run, options, "shake"))
 
 
-class Record:
+class Record(_Channels):
     """A record read from its file: its channels as numpy arrays on one
     clock, its metadata as a dict."""
 
     def __init__(self, inner):
         self._inner = inner
 
-    sample_rate_hz = property(lambda self: self._inner.sample_rate_hz)
-
-    @property
-    def channels(self):
-        """The record's channels, `{name: unit}`."""
-        return dict(self._inner.channels)
-
-    def channel(self, name):
-        """The samples of channel `name` in its unit (numpy array)."""
-        return self._inner.channel(name)
 
     def time_s(self):
         """Each sample's time on the record's clock, s (numpy array)."""
@@ -447,7 +442,7 @@ def host_predict(map, freqs_hz, force_n, **options):
     )
 
 
-class HostRun:
+class HostRun(_Channels):
     """A finished test of the damper on a host: the lab's record (the
     acceleration at the damper, the force at the drive point), what the
     simulator knows at each sample, and where the energy went."""
@@ -455,17 +450,7 @@ class HostRun:
     def __init__(self, inner):
         self._inner = inner
 
-    sample_rate_hz = property(lambda self: self._inner.sample_rate_hz)
     warnings = property(lambda self: list(self._inner.warnings))
-
-    @property
-    def channels(self):
-        """The lab's channels, `{name: unit}`."""
-        return dict(self._inner.channels)
-
-    def channel(self, name):
-        """The samples of the lab's channel `name` in its unit (numpy array)."""
-        return self._inner.channel(name)
 
     @property
     def truth(self):

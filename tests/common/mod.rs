@@ -150,3 +150,15 @@ pub fn without_keys(mut summary: serde_json::Value, keys: &[&str]) -> serde_json
     }
     summary
 }
+
+/// Fails unless the file `drawn` equals the repository's `shown` (a path
+/// from its root) byte for byte, naming the command that redraws it.
+pub fn same_figure(drawn: &Path, shown: &str, redraw: &str) {
+    let drawn = std::fs::read(drawn).unwrap_or_else(|e| panic!("{}: {e}", drawn.display()));
+    let kept = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join(shown))
+        .unwrap_or_else(|e| panic!("{shown}: {e}"));
+    assert!(
+        drawn == kept,
+        "{shown} is not what its command draws now: redraw it with `{redraw}`"
+    );
+}
