@@ -130,7 +130,8 @@ fn quick_normal_test(dir: &Scratch, more: &[&str]) -> std::process::Output {
     vlab(dir.path("").as_path(), &args)
 }
 
-/// The command writes a curve per test, the summary and the plots.
+/// The command writes a curve per test, the summary and the plots, and
+/// `vlab plot` redraws the plots from the summary.
 #[test]
 fn the_command_writes_its_curves_summary_and_plots() {
     let dir = Scratch::new("shear-box-cli");
@@ -162,4 +163,25 @@ fn the_command_writes_its_curves_summary_and_plots() {
             "{seed}"
         );
     }
+    // The summary holds every run to the bit: `vlab plot` redraws the
+    // plots of two beds from it, byte for byte.
+    let out = vlab(
+        dir.path("").as_path(),
+        &["plot", "seeds/shear_box.json", "--out", "redrawn"],
+    );
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    for f in ["normal.svg", "normal.png"] {
+        let ran = std::fs::read(dir.path("seeds").join(f)).expect("the run's plot");
+        let redrawn = std::fs::read(dir.path("redrawn").join(f)).expect("the redrawn plot");
+        assert!(ran == redrawn, "{f} redrawn from shear_box.json differs");
+    }
+    // A JSON file that is not a shear box's summary is refused by name.
+    std::fs::write(dir.path("other.json"), "{\"a\": 1}\n").expect("write");
+    let out = vlab(dir.path("").as_path(), &["plot", "other.json"]);
+    assert!(!out.status.success());
+    assert!(
+        common::stderr(&out).contains("shear_box.json"),
+        "{}",
+        common::stderr(&out)
+    );
 }

@@ -1,7 +1,8 @@
 //! `vlab plot FILE`: redraws a plot from the CSV it was drawn from. A
 //! `sweep.csv` gives its efficiency curves and map; an `accuracy.csv` (with
 //! its `summary.json`) the accuracy study's three plots; a stepped sine's
-//! `frf.csv` (with its `frf.json`) its receptance; any other vlab CSV record
+//! `frf.csv` (with its `frf.json`) its receptance; a shear box's
+//! `shear_box.json` its normal and shear curves; any other vlab CSV record
 //! (a trace, kinematics, drop-test results) is drawn column against the first
 //! column.
 
@@ -14,13 +15,14 @@ use vlab::experiment::host_test::frf_figure::{is_stepped_sine_csv, redraw_magnit
 use vlab::signals::plot::plot_channels;
 use vlab::signals::read_trace;
 use vlab::study::accuracy::read_back::{is_accuracy_csv, redraw_plots};
+use vlab::study::shear_box_series::ShearBoxOutcome;
 use vlab::study::sweep::{SWEEP_MAGIC, SweepFile};
 use vlab::study::sweep_plot::plot_sweep;
 
 #[derive(Debug, Clone, Args)]
 pub struct PlotArgs {
-    /// The CSV file: a sweep.csv, an accuracy.csv, a stepped sine's frf.csv,
-    /// or a trace/record CSV.
+    /// The file: a sweep.csv, an accuracy.csv, a stepped sine's frf.csv, a
+    /// shear box's shear_box.json, or a trace/record CSV.
     #[arg(value_name = "FILE")]
     file: PathBuf,
     /// Output folder [default: the file's folder].
@@ -37,6 +39,13 @@ pub fn run(a: PlotArgs) -> Result<()> {
             .unwrap_or_else(|| PathBuf::from("."))
     });
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    if a.file.extension().is_some_and(|e| e == "json") {
+        let outcome = ShearBoxOutcome::read(&a.file)?;
+        for p in outcome.plot(&dir)? {
+            println!("wrote {}", p.display());
+        }
+        return Ok(());
+    }
     let head = std::fs::read_to_string(&a.file)
         .with_context(|| format!("cannot read {}", a.file.display()))?;
     if head.starts_with(SWEEP_MAGIC) {

@@ -36,7 +36,7 @@
 use crate::clock::Stopwatch;
 
 use glam::DVec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::dem::error::DemError;
@@ -126,7 +126,7 @@ impl ShearBox {
 }
 
 /// Which test.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum BoxTest {
     Normal,
@@ -152,7 +152,7 @@ impl BoxTest {
 }
 
 /// How a test loads the bed.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Loading {
     /// Normal pre-load the table holds (N).
     pub preload_n: f64,
@@ -165,7 +165,7 @@ pub struct Loading {
 }
 
 /// One point of a force-displacement curve.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CurvePoint {
     /// `z_test` or `x_test` at the end of the point's stretch (m).
     pub displacement_m: f64,
@@ -180,7 +180,7 @@ pub struct CurvePoint {
 }
 
 /// What a test measured.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BoxRun {
     pub test: BoxTest,
     pub loading: Loading,

@@ -8,7 +8,7 @@
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::atomic_write::write_atomic;
 use crate::experiment::bed::cache::BedSource;
@@ -29,7 +29,7 @@ pub struct ShearBoxPlan {
 }
 
 /// One scene's tests on the bed of one seed, as the summary gives them.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Serialize, Deserialize)]
 pub struct SceneRuns {
     pub scene: String,
     pub particles: String,
@@ -62,6 +62,12 @@ pub enum ShearBoxSeriesError {
         scene: String,
         #[source]
         source: Box<ShearBoxError>,
+    },
+    #[error("cannot read {} as a shear box's summary (shear_box.json)", path.display())]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
     },
     #[error("cannot write {}", path.display())]
     Write {
@@ -196,22 +202,49 @@ impl ShearBoxOutcome {
         text.and_then(|t| write_atomic(&path, |w| writeln!(w, "{t}")))
             .map_err(|source| ShearBoxSeriesError::Write { path, source })?;
         #[cfg(feature = "plot")]
+        self.plot(dir)?;
+        Ok(())
+    }
+
+    /// Reads back what [`ShearBoxOutcome::write`] wrote to `shear_box.json`:
+    /// every run to the bit, so its plots can be redrawn without the hours
+    /// of running it (`vlab plot shear_box.json`).
+    pub fn read(path: &Path) -> Result<Self, ShearBoxSeriesError> {
+        let read = |source| ShearBoxSeriesError::Read {
+            path: path.to_path_buf(),
+            source,
+        };
+        let text = std::fs::read_to_string(path).map_err(read)?;
+        let all: Vec<SceneRuns> = serde_json::from_str(&text)
+            .map_err(|e| read(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))?;
+        // A scene with beds of several seeds is what the plan's seeds made.
+        let several_seeds = all
+            .iter()
+            .any(|s| all.iter().filter(|t| t.scene == s.scene).count() > 1);
+        Ok(Self { all, several_seeds })
+    }
+
+    /// Draws one plot per test the runs hold (`normal` and `shear`, SVG
+    /// and PNG) into `dir`; the paths written.
+    #[cfg(feature = "plot")]
+    pub fn plot(&self, dir: &Path) -> Result<Vec<PathBuf>, ShearBoxSeriesError> {
+        let mut written = Vec::new();
         for test in [BoxTest::Normal, BoxTest::Shear] {
             if self
                 .all
                 .iter()
                 .any(|s| s.runs.iter().any(|r| r.test == test))
             {
-                self.plot_test(dir, test)?;
+                written.extend(self.plot_test(dir, test)?);
             }
         }
-        Ok(())
+        Ok(written)
     }
 
     /// One plot of every scene's curve of `test` (over several seeds, their
     /// mean point by point), in mm and N, as SVG and PNG.
     #[cfg(feature = "plot")]
-    fn plot_test(&self, dir: &Path, test: BoxTest) -> Result<(), ShearBoxSeriesError> {
+    fn plot_test(&self, dir: &Path, test: BoxTest) -> Result<Vec<PathBuf>, ShearBoxSeriesError> {
         use crate::signals::{Series, SeriesStyle, plot_xy_svg};
         let series: Vec<Series> = self
             .scene_names()
@@ -249,14 +282,16 @@ impl ShearBoxOutcome {
                 "F_test,x on the fixed container (N)",
             ),
         };
+        let mut written = Vec::new();
         for ext in ["svg", "png"] {
             let path = dir.join(format!("{}.{ext}", test.as_str()));
             plot_xy_svg(&path, title, x, y, &series).map_err(|e| ShearBoxSeriesError::Write {
                 path: path.clone(),
                 source: std::io::Error::other(e.to_string()),
             })?;
+            written.push(path);
         }
-        Ok(())
+        Ok(written)
     }
 }
 
