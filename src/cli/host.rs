@@ -24,6 +24,7 @@ use super::progress::ProgressLine;
 mod decay;
 mod frf;
 mod predict;
+mod updown;
 
 #[derive(Debug, Clone, Args)]
 pub struct HostArgs {

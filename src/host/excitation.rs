@@ -12,6 +12,11 @@
 //! | `random:LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED` | periodic random: every line `k / PERIOD` in the band at one amplitude, phases drawn from SEED, `RMS_N` in all |
 //! | `hammer:IMPULSE_N_S` | a half-sine pulse of 0.5 ms carrying the impulse, at t = 0 |
 //! | `release:X0_M` | nothing: the host starts deflected by `X0_M` at the damper and is let go |
+//!
+//! A stepped sine whose steps follow one another in one run (the bed's and
+//! the host's state carried from each frequency to the next, as a lab's
+//! sine controller steps) has no key: `vlab host frf --up-down` makes it
+//! ([`Excitation::Stepped`]).
 
 use std::f64::consts::{PI, TAU};
 
@@ -57,6 +62,49 @@ pub enum Excitation {
     Hammer { impulse_n_s: f64 },
     /// No force: the host is released from `x0_m` at the damper.
     Release { x0_m: f64 },
+    /// A stepped sine in one run: `F sin 2π f_k (t − t_k)` over `cycles`
+    /// whole cycles of each `f_k` in turn, `t_k` the step's start, so the
+    /// force is continuous at every step (it is zero there); then nothing.
+    Stepped {
+        freqs_hz: Vec<f64>,
+        cycles: u32,
+        force_n: f64,
+    },
+}
+
+/// Most frequencies a stepped sine takes, predicted or measured.
+pub const MAX_FREQUENCIES: usize = 1000;
+
+/// Checks the frequencies of a stepped sine, predicted or measured: each in
+/// (0, 5000] Hz, ascending, 1 to [`MAX_FREQUENCIES`] of them, naming
+/// `freqs_hz`.
+pub fn check_frequencies(freqs_hz: &[f64]) -> Result<(), InvalidParameter> {
+    if freqs_hz.is_empty() || freqs_hz.len() > MAX_FREQUENCIES {
+        return Err(InvalidParameter::new(
+            "freqs_hz",
+            format!("{} frequencies", freqs_hz.len()),
+            "",
+            format!("between 1 and {MAX_FREQUENCIES} frequencies"),
+        ));
+    }
+    for &f in freqs_hz {
+        in_range(
+            "freqs_hz",
+            f,
+            "Hz",
+            Bound::Open(0.0),
+            Bound::Closed(5_000.0),
+        )?;
+    }
+    if let Some(w) = freqs_hz.windows(2).find(|w| w[1] <= w[0]) {
+        return Err(InvalidParameter::new(
+            "freqs_hz",
+            format!("{} after {}", w[1], w[0]),
+            "Hz",
+            "ascending",
+        ));
+    }
+    Ok(())
 }
 
 /// A periodic random force as its key gives it
@@ -125,7 +173,46 @@ impl Excitation {
                 }
             }
             Excitation::Release { .. } => 0.0,
+            Excitation::Stepped {
+                freqs_hz,
+                cycles,
+                force_n,
+            } => {
+                let mut start_s = 0.0;
+                for f in freqs_hz {
+                    let end_s = start_s + f64::from(*cycles) / f;
+                    if t_s < end_s {
+                        return match t_s >= start_s {
+                            true => force_n * (TAU * f * (t_s - start_s)).sin(),
+                            false => 0.0,
+                        };
+                    }
+                    start_s = end_s;
+                }
+                0.0
+            }
         }
+    }
+
+    /// A stepped sine's steps, each as its frequency (Hz) and its start
+    /// and end (s); empty for the other excitations.
+    pub fn steps(&self) -> Vec<(f64, f64, f64)> {
+        let Excitation::Stepped {
+            freqs_hz, cycles, ..
+        } = self
+        else {
+            return Vec::new();
+        };
+        let mut start_s = 0.0;
+        freqs_hz
+            .iter()
+            .map(|f| {
+                let end_s = start_s + f64::from(*cycles) / f;
+                let step = (*f, start_s, end_s);
+                start_s = end_s;
+                step
+            })
+            .collect()
     }
 
     /// The displacement at the damper the host starts from, m.
@@ -146,6 +233,7 @@ impl Excitation {
             Excitation::Lines { lines, .. } => lines.iter().map(|l| l.freq_hz).fold(0.0, f64::max),
             Excitation::Hammer { .. } => 1.0 / HAMMER_PULSE_S,
             Excitation::Release { .. } => 0.0,
+            Excitation::Stepped { freqs_hz, .. } => freqs_hz.iter().copied().fold(0.0, f64::max),
         }
     }
 
@@ -376,6 +464,27 @@ impl Excitation {
                     ));
                 }
             }
+            Excitation::Stepped {
+                freqs_hz,
+                cycles,
+                force_n,
+            } => {
+                if freqs_hz.is_empty() {
+                    return Err(InvalidParameter::new(
+                        "freqs_hz",
+                        "none",
+                        "",
+                        "at least one",
+                    ));
+                }
+                for f in freqs_hz {
+                    freq("freq_hz", *f)?;
+                }
+                if *cycles == 0 {
+                    return Err(InvalidParameter::new("cycles", 0, "", "at least 1 a step"));
+                }
+                force("force_n", *force_n)?;
+            }
         }
         Ok(())
     }
@@ -434,6 +543,54 @@ mod tests {
         assert!((f.force_n(0.123) - f.force_n(1.123)).abs() < 1e-9);
         let other = Excitation::parse("random:20:80:2:1:8").expect("valid");
         assert!((f.force_n(0.123) - other.force_n(0.123)).abs() > 1e-6);
+    }
+
+    /// A stepped sine in one run: each step whole cycles of its sine from
+    /// a zero, so the force is continuous (zero) at every step; the steps
+    /// follow one another without a gap; nothing after the last.
+    #[test]
+    fn a_stepped_sine_in_one_run_steps_at_zeros_of_its_force() {
+        let e = Excitation::Stepped {
+            freqs_hz: vec![40.0, 41.0, 40.0],
+            cycles: 3,
+            force_n: 2.0,
+        };
+        let steps = e.steps();
+        assert_eq!(steps.len(), 3);
+        assert_eq!(steps[0], (40.0, 0.0, 3.0 / 40.0));
+        for w in steps.windows(2) {
+            assert_eq!(w[0].2, w[1].1);
+        }
+        for &(f, start, end) in &steps {
+            for t in [start, end] {
+                for side in [-1e-9, 1e-9] {
+                    assert!(e.force_n(t + side).abs() < 2.0 * TAU * 41.0 * 2e-9, "{t}");
+                }
+            }
+            // A quarter cycle in, the step's own sine at its crest.
+            assert!((e.force_n(start + 0.25 / f) - 2.0).abs() < 1e-9);
+        }
+        assert_eq!(e.force_n(steps[2].2 + 1e-3), 0.0);
+        assert_eq!(e.highest_freq_hz(), 41.0);
+        for bad in [
+            Excitation::Stepped {
+                freqs_hz: vec![],
+                cycles: 3,
+                force_n: 2.0,
+            },
+            Excitation::Stepped {
+                freqs_hz: vec![40.0],
+                cycles: 0,
+                force_n: 2.0,
+            },
+            Excitation::Stepped {
+                freqs_hz: vec![40.0],
+                cycles: 3,
+                force_n: 2e4,
+            },
+        ] {
+            assert!(bad.validate().is_err(), "{bad:?}");
+        }
     }
 
     #[test]

@@ -202,6 +202,32 @@ impl Trace {
         }
     }
 
+    /// The samples from the first at or after `from_s` to the last before
+    /// `to_s` (on its own time axis, which the window keeps).
+    pub fn window(&self, from_s: f64, to_s: f64) -> Trace {
+        let fs = self.sample_rate_hz;
+        // Within a millionth of a sample of an end counts as at it.
+        let index = |t_s: f64| {
+            (((t_s - self.start_time_s) * fs - 1e-6).ceil().max(0.0) as usize).min(self.len())
+        };
+        let (first, end) = (index(from_s), index(to_s));
+        let end = end.max(first);
+        Trace {
+            sample_rate_hz: fs,
+            start_time_s: self.start_time_s + first as f64 / fs,
+            channels: self
+                .channels
+                .iter()
+                .map(|c| Channel {
+                    name: c.name.clone(),
+                    unit: c.unit.clone(),
+                    samples: c.samples[first..end].to_vec(),
+                })
+                .collect(),
+            metadata: self.metadata.clone(),
+        }
+    }
+
     /// Re-checks the invariants: rate positive and finite, start time finite,
     /// names unique and non-empty, lengths equal, every sample finite.
     pub fn validate(&self) -> Result<()> {
@@ -288,6 +314,18 @@ mod tests {
             "channel 'v' sample 1 is NaN: samples must be finite"
         );
         assert_eq!(t.channels.len(), 2, "failed adds must not modify the trace");
+    }
+
+    #[test]
+    fn a_window_keeps_its_samples_and_their_times() {
+        let t = two_channel();
+        // Samples at 0.500, 0.501, 0.502 s: [0.501, 0.502) holds the middle.
+        let w = t.window(0.501, 0.502);
+        assert_eq!(w.channel("force").expect("kept").samples, vec![2.0]);
+        assert_eq!(w.start_time_s, t.time_s(1));
+        // Past either end: clipped; reversed: empty.
+        assert_eq!(t.window(0.0, 9.0).channels, t.channels);
+        assert!(t.window(0.502, 0.501).is_empty());
     }
 
     #[test]

@@ -12,48 +12,15 @@ use crate::host::{DissipationMap, HostSpec};
 use crate::scene::SceneError;
 
 use super::dissipation_map::MapSource;
-use crate::validation::{Bound, InvalidParameter, in_range, positive};
+use crate::validation::{InvalidParameter, positive};
 
-/// Most frequencies a prediction takes.
-pub const MAX_FREQUENCIES: usize = 1000;
+pub use crate::host::excitation::{MAX_FREQUENCIES, check_frequencies};
 
 /// Checks a prediction's force (positive, N) and frequencies
 /// ([`check_frequencies`]), naming `force_n` or `freqs_hz`.
 pub fn check_request(freqs_hz: &[f64], force_n: f64) -> Result<(), InvalidParameter> {
     positive("force_n", force_n, "N")?;
     check_frequencies(freqs_hz)
-}
-
-/// Checks the frequencies of a stepped sine, predicted or measured: each in
-/// (0, 5000] Hz, ascending, 1 to [`MAX_FREQUENCIES`] of them, naming
-/// `freqs_hz`.
-pub fn check_frequencies(freqs_hz: &[f64]) -> Result<(), InvalidParameter> {
-    if freqs_hz.is_empty() || freqs_hz.len() > MAX_FREQUENCIES {
-        return Err(InvalidParameter::new(
-            "freqs_hz",
-            format!("{} frequencies", freqs_hz.len()),
-            "",
-            format!("between 1 and {MAX_FREQUENCIES} frequencies"),
-        ));
-    }
-    for &f in freqs_hz {
-        in_range(
-            "freqs_hz",
-            f,
-            "Hz",
-            Bound::Open(0.0),
-            Bound::Closed(5_000.0),
-        )?;
-    }
-    if let Some(w) = freqs_hz.windows(2).find(|w| w[1] <= w[0]) {
-        return Err(InvalidParameter::new(
-            "freqs_hz",
-            format!("{} after {}", w[1], w[0]),
-            "Hz",
-            "ascending",
-        ));
-    }
-    Ok(())
 }
 
 /// A finished prediction: each frequency's response with its count of

@@ -51,6 +51,12 @@ pub struct FrfArgs {
     /// times one bed.
     #[arg(long, value_name = "N", default_value_t = 1)]
     beds: u32,
+    /// Stepped sine in one run, up the frequencies and back down, the bed's
+    /// and the host's state carried from each step to the next (a lab's
+    /// sine controller): shows a jump or hysteresis where the damper has
+    /// one. One bed; writes updown.csv, updown.json and updown.svg.
+    #[arg(long = "up-down", conflicts_with_all = ["random", "map"])]
+    up_down: bool,
     /// Periodic random instead: LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED (H1, H2,
     /// coherence over --duration-s, the first period dropped).
     #[arg(long, value_name = "KEY", conflicts_with = "freqs")]
@@ -80,10 +86,18 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
     });
     let maps = maps(&a, &scene)?;
     let plan = stepped_sine(&a)?;
+    let carried = match a.up_down {
+        true => Some(super::updown::plan(&a.freqs, &plan)?),
+        false => None,
+    };
     let made = OutputDir::prepare(&out)
         .with_context(|| format!("cannot create output folder {}", out.display()))?;
     if let Some(key) = &a.random {
         return made.keep_if_ok(random(&a, key, &scene, test, &out, quiet));
+    }
+    if let Some(carried) = carried {
+        let run = super::updown::run(&scene, &test, &carried, a.common.cache, &out, quiet);
+        return made.keep_if_ok(run);
     }
     let progress = Mutex::new((ProgressLine::new("host frf", quiet), 0usize));
     let total = plan.freqs_hz.len();

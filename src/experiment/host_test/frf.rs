@@ -352,7 +352,7 @@ fn rate(v: &[f64], i0: usize, i1: usize, span_s: f64) -> f64 {
 /// Over 80 lines: one point's chain as a lab works it, the receptance with its
 /// phase correction, the drive point's acceleration, then the balanced periods,
 /// each step reading the last's slices.
-fn measure_point(
+pub(crate) fn measure_point(
     run: &HostRun,
     test: &HostTest,
     freq_hz: f64,

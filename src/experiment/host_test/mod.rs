@@ -37,6 +37,7 @@ use crate::signals::{Trace, TraceMetadata};
 use crate::validation::{Bound, InvalidParameter, in_range};
 
 pub mod bed_spread;
+pub mod carried_sine;
 pub mod decay;
 pub mod frf;
 pub mod frf_figure;
@@ -129,9 +130,10 @@ pub struct HostTest {
     pub excitation: Excitation,
     /// Length of the test, s.
     pub duration_s: f64,
-    /// Start a sine at a steady response of the host (a stepped-sine point
-    /// then needs few cycles to settle): its own with a linear payload, and
-    /// with particles [`particles_guess`]'s.
+    /// Start a sine (a stepped sine in one run: its first step) at a steady
+    /// response of the host (a stepped-sine point then needs few cycles to
+    /// settle): its own with a linear payload, and with particles
+    /// [`particles_guess`]'s.
     pub start_steady: bool,
     /// The rig whose channels record the test (its accelerometer at the
     /// damper, its force transducer at the drive point).
@@ -255,7 +257,60 @@ pub struct HostRun {
     pub warnings: Vec<RunWarning>,
 }
 
+impl HostRecord {
+    /// The samples whose times are in `[from_s, to_s)`.
+    pub fn window(&self, from_s: f64, to_s: f64) -> HostRecord {
+        let first = self.time_s.partition_point(|t| *t < from_s - 1e-9);
+        let end = self.time_s.partition_point(|t| *t < to_s - 1e-9).max(first);
+        let cut = |v: &Vec<f64>| v[first.min(v.len())..end.min(v.len())].to_vec();
+        HostRecord {
+            time_s: cut(&self.time_s),
+            displacement_m: cut(&self.displacement_m),
+            velocity_mps: cut(&self.velocity_mps),
+            acceleration_mps2: cut(&self.acceleration_mps2),
+            drive_force_n: cut(&self.drive_force_n),
+            drive_velocity_mps: cut(&self.drive_velocity_mps),
+            damper_force_n: cut(&self.damper_force_n),
+            host_energy_j: cut(&self.host_energy_j),
+            damper_dissipated_j: cut(&self.damper_dissipated_j),
+            damper_work_in_j: cut(&self.damper_work_in_j),
+            host_dissipated_j: cut(&self.host_dissipated_j),
+            dashpot_dissipated_j: cut(&self.dashpot_dissipated_j),
+            excitation_work_j: cut(&self.excitation_work_j),
+        }
+    }
+}
+
 impl HostRun {
+    /// The part of the run in `[from_s, to_s)`: its record and trace cut
+    /// there, its steps and wall time in proportion, its warnings whole (a
+    /// channel that clipped anywhere is not trusted anywhere).
+    pub fn window(&self, from_s: f64, to_s: f64) -> HostRun {
+        let record = self.record.window(from_s, to_s);
+        let whole_s = self.steps as f64 * self.dt_s;
+        let part = match whole_s > 0.0 {
+            true => ((to_s.min(whole_s) - from_s.max(0.0)) / whole_s).clamp(0.0, 1.0),
+            false => 0.0,
+        };
+        HostRun {
+            damper_dissipated_j: record
+                .damper_dissipated_j
+                .last()
+                .zip(record.damper_dissipated_j.first())
+                .map_or(0.0, |(b, a)| b - a),
+            record,
+            trace: self.trace.window(from_s, to_s),
+            energy: self.energy,
+            bed: None,
+            particle_mass_kg: self.particle_mass_kg,
+            particles: self.particles,
+            dt_s: self.dt_s,
+            steps: (self.steps as f64 * part).round() as u64,
+            wall_time_s: self.wall_time_s * part,
+            warnings: self.warnings.clone(),
+        }
+    }
+
     /// Writes the lab's channels (`trace.csv`, `trace.wav`), the truth
     /// (`record.csv`) and, with plots, the damper's displacement
     /// (`record.svg`) into `dir`, which must exist, each file atomically.
@@ -447,7 +502,14 @@ pub fn run_host_test(
         .map_or(0.0, |w| -w.wall_force().dot(w.walls.axis));
     let payload = test.damper.payload(particle_mass_kg);
     let mut motion = HostMotion::new(&test.host, payload, test.excitation.clone(), resting_n);
-    if let (true, Excitation::Sine { freq_hz, force_n }) = (test.start_steady, &test.excitation) {
+    let first_sine = match &test.excitation {
+        Excitation::Sine { freq_hz, force_n } => Some((*freq_hz, *force_n)),
+        Excitation::Stepped {
+            freqs_hz, force_n, ..
+        } => freqs_hz.first().map(|f| (*f, *force_n)),
+        _ => None,
+    };
+    if let (true, Some((freq_hz, force_n))) = (test.start_steady, first_sine) {
         let omega = std::f64::consts::TAU * freq_hz;
         let with = if test.damper == Damper::Particles {
             particles_guess(particle_mass_kg, omega)
@@ -455,7 +517,7 @@ pub fn run_host_test(
             payload
         };
         // sin(w t) at t = 0: the state of the steady response there.
-        motion.start_at(&sine_steady_state(&test.host, with, omega, *force_n));
+        motion.start_at(&sine_steady_state(&test.host, with, omega, force_n));
     }
     let mut daq = Daq::new(&test.rig, dt, 0.0, test.noise_seed)?;
     daq.reserve(test.duration_s + 0.01);
@@ -563,7 +625,7 @@ pub fn run_host_test(
 fn dominant_freq_hz(test: &HostTest) -> f64 {
     match &test.excitation {
         Excitation::Sine { freq_hz, .. } => *freq_hz,
-        Excitation::Sweep { .. } | Excitation::Lines { .. } => test
+        Excitation::Sweep { .. } | Excitation::Lines { .. } | Excitation::Stepped { .. } => test
             .excitation
             .highest_freq_hz()
             .min(test.host.highest_freq_hz()),
