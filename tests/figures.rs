@@ -164,7 +164,9 @@ fn the_host_receptance_is_redrawn_from_its_kept_run() {
 fn the_shear_box_figures_are_redrawn_from_their_kept_runs() {
     let dir = Scratch::new("figures-shear-box");
     for shapes in ["prolates", "toroids"] {
-        let json = root().join(format!("signals/reference/shear-box-{shapes}/shear_box.json"));
+        let json = root().join(format!(
+            "signals/reference/shear-box-{shapes}/shear_box.json"
+        ));
         let out = format!("drawn-{shapes}");
         vlab_in(&dir.0, &["plot", &json.to_string_lossy(), "--out", &out]);
         common::same_figure(

@@ -14,7 +14,9 @@ use clap::Args;
 use vlab::atomic_write::OutputDir;
 use vlab::experiment::host_test::HostTest;
 use vlab::experiment::host_test::frf::{FrfPoint, SteppedSine};
-use vlab::experiment::host_test::frf_outcome::{FrfMaps, RandomFrfOutcome, SteppedSineOutcome};
+use vlab::experiment::host_test::frf_outcome::{
+    FrfMaps, RandomFrfOutcome, SteppedSineOutcome, SweptFrfOutcome,
+};
 use vlab::host::DissipationMap;
 use vlab::host::{Excitation, PeriodicRandom};
 use vlab::scene::Scene;
@@ -31,7 +33,7 @@ pub struct FrfArgs {
     #[command(flatten)]
     common: HostTestArgs,
     /// Stepped sine: the frequencies (Hz), FROM:TO:STEP or a comma-separated list.
-    #[arg(long = "freq", value_name = "LIST", value_parser = super::parse_freqs, required_unless_present = "random")]
+    #[arg(long = "freq", value_name = "LIST", value_parser = super::parse_freqs, required_unless_present_any = ["random", "swept"])]
     freqs: Option<FreqList>,
     /// Stepped sine: force amplitude at the drive point (N).
     #[arg(long = "force-n", value_name = "N", default_value = "5", value_parser = args::newtons)]
@@ -61,7 +63,12 @@ pub struct FrfArgs {
     /// coherence over --duration-s, the first period dropped).
     #[arg(long, value_name = "KEY", conflicts_with = "freqs")]
     random: Option<String>,
-    /// Periodic random: length of the test (s).
+    /// Swept sine instead: START_HZ:END_HZ:SWEEP_S, a linear chirp at
+    /// --force-n from rest, then silence until --duration-s (the response
+    /// must die out in it); the receptance from the whole record's DFTs.
+    #[arg(long, value_name = "KEY", conflicts_with_all = ["freqs", "random", "map"])]
+    swept: Option<String>,
+    /// Periodic random or swept sine: length of the test (s).
     #[arg(long = "duration-s", value_name = "S", default_value = "8", value_parser = args::seconds)]
     duration_s: f64,
     /// A sweep (its sweep.csv): the map-based model's prediction of the same
@@ -86,12 +93,16 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
     });
     let maps = maps(&a, &scene)?;
     let plan = stepped_sine(&a)?;
+    let sweep = a.swept.as_deref().map(|k| swept_key(k, &a)).transpose()?;
     let carried = match a.up_down {
         true => Some(super::updown::plan(&a.freqs, &plan)?),
         false => None,
     };
     let made = OutputDir::prepare(&out)
         .with_context(|| format!("cannot create output folder {}", out.display()))?;
+    if let Some(sweep) = sweep {
+        return made.keep_if_ok(swept(&a, sweep, &scene, test, &out, quiet));
+    }
     if let Some(key) = &a.random {
         return made.keep_if_ok(random(&a, key, &scene, test, &out, quiet));
     }
@@ -150,7 +161,7 @@ fn stepped_sine(a: &FrfArgs) -> Result<SteppedSine> {
         record_cycles: a.record_cycles,
         beds: a.beds,
     };
-    if a.random.is_none() {
+    if a.random.is_none() && a.swept.is_none() {
         plan.validate().map_err(|e| {
             let flag = match e.key.as_str() {
                 "record_cycles" => "--record-cycles",
@@ -356,6 +367,75 @@ fn random(
         outcome.run.wall_time_s,
         lowest,
         low_hz
+    );
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// `--swept START_HZ:END_HZ:SWEEP_S` at `--force-n`, checked with
+/// `--duration-s` before any work (a refusal names the flag).
+fn swept_key(key: &str, a: &FrfArgs) -> Result<Excitation> {
+    let sweep = Excitation::parse(&format!("sweep:{key}:{}", a.force_n)).map_err(|e| {
+        match e.key.as_str() {
+            "force_n" => anyhow::Error::from(e.renamed("--force-n")),
+            "excitation" => anyhow::anyhow!("--swept = '{key}': must be START_HZ:END_HZ:SWEEP_S"),
+            field => anyhow::Error::from(e.renamed(&format!("--swept {field}"))),
+        }
+    })?;
+    if let Excitation::Sweep { duration_s, .. } = sweep
+        && a.duration_s <= duration_s
+    {
+        anyhow::bail!(
+            "--duration-s = {} s: must be longer than the sweep ({duration_s} s): the response must die out in the silence after it",
+            a.duration_s
+        );
+    }
+    Ok(sweep)
+}
+
+/// The swept sine: the receptance over the sweep's band, its peak and
+/// half-power loss factor, and whether the response died out.
+fn swept(
+    a: &FrfArgs,
+    sweep: Excitation,
+    scene: &vlab::scene::Scene,
+    test: HostTest,
+    out: &Path,
+    quiet: bool,
+) -> Result<()> {
+    let o = SweptFrfOutcome::run(test, sweep, |t| {
+        super::run_test(scene, t, a.common.cache, quiet)
+    })?;
+    o.write(out)
+        .with_context(|| format!("writing into {}", out.display()))?;
+    let (peak, at_hz, half) = o.peak();
+    println!(
+        "{} on {}, swept sine {}-{} Hz at {} N: {} lines in the band, {:.1} s wall; peak {:.4} mm/N at {:.2} Hz",
+        o.test.damper.label(),
+        o.test.host.name,
+        o.band_hz.0,
+        o.band_hz.1,
+        a.force_n,
+        o.in_band().count(),
+        o.run.wall_time_s,
+        peak * 1e3,
+        at_hz
+    );
+    match half {
+        Ok(h) => println!(
+            "  half-power loss factor {:.4} ({:.2}-{:.2} Hz)",
+            h.loss_factor, h.f_low_hz, h.f_high_hz
+        ),
+        Err(why) => println!("  no half-power loss factor: {why}"),
+    }
+    if o.swept.tail_fraction > 0.01 {
+        eprintln!(
+            "warning: the response at the record's end is {:.1} % of its peak: it had not died out, so the DFTs' ratio leaks (longer --duration-s)",
+            100.0 * o.swept.tail_fraction
+        );
+    }
+    println!(
+        "  for a linear host the ratio is its receptance; a granular damper's depends on the sweep's rate and direction (compare --up-down)"
     );
     println!("wrote {}", out.display());
     Ok(())

@@ -10,14 +10,14 @@ use std::path::{Path, PathBuf};
 use crate::atomic_write::write_bytes_atomic;
 use crate::experiment::bed::cache::BedSource;
 use crate::experiment::host_test::frf::{
-    SteppedSine, SteppedSineResult, random_frf, run_stepped_sine,
+    SteppedSine, SteppedSineResult, SweptFrf, random_frf, run_stepped_sine, swept_frf,
 };
 use crate::experiment::host_test::frf_figure::{FrfMagnitudes, STEPPED_SINE_CSV_HEADER};
 use crate::experiment::host_test::{Damper, HostRun, HostTest};
 use crate::host::map_model::{DissipationMap, SteadyResponse, stepped_sine};
 use crate::host::{Excitation, PeriodicRandom};
 use crate::scene::{Scene, SceneError};
-use crate::signals::structural::Frf;
+use crate::signals::structural::{Frf, HalfPower, half_power};
 use crate::validation::InvalidParameter;
 
 /// A frequency's predicted response and how many roots it had.
@@ -379,6 +379,132 @@ impl RandomFrfOutcome {
             "coherence",
             &[curve("coherence", &|k| f.coherence[k])],
         )?;
+        Ok(())
+    }
+}
+
+/// A finished swept sine: its run (the records) and the receptance over
+/// the sweep's band from the whole record's DFTs ([`swept_frf`]).
+pub struct SweptFrfOutcome {
+    pub test: HostTest,
+    pub run: HostRun,
+    pub swept: SweptFrf,
+    /// The sweep's band (Hz).
+    pub band_hz: (f64, f64),
+}
+
+impl SweptFrfOutcome {
+    /// `test` with the `sweep` force (an [`Excitation::Sweep`]) instead of
+    /// its excitation, run by `run_test` from rest and analysed; refused
+    /// before any work unless the test outlasts the sweep (the silence
+    /// after it is where the response dies out).
+    pub fn run<E: From<SceneError> + From<InvalidParameter>>(
+        mut test: HostTest,
+        sweep: Excitation,
+        run_test: impl FnOnce(&HostTest) -> Result<HostRun, E>,
+    ) -> Result<Self, E> {
+        let Excitation::Sweep {
+            start_hz,
+            end_hz,
+            duration_s,
+            ..
+        } = sweep
+        else {
+            return Err(InvalidParameter::new("excitation", "not a sweep", "", "a sweep").into());
+        };
+        sweep.validate()?;
+        if test.duration_s <= duration_s {
+            return Err(InvalidParameter::new(
+                "duration_s",
+                test.duration_s,
+                "s",
+                format!(
+                    "longer than the sweep ({duration_s} s): the response must die out in the silence after it"
+                ),
+            )
+            .into());
+        }
+        test.excitation = sweep;
+        test.start_steady = false;
+        let run = run_test(&test)?;
+        let swept = swept_frf(&run, &test.rig)?;
+        Ok(SweptFrfOutcome {
+            test,
+            run,
+            swept,
+            band_hz: (start_hz.min(end_hz), start_hz.max(end_hz)),
+        })
+    }
+
+    /// The indices of the lines inside the sweep's band.
+    pub fn in_band(&self) -> impl Iterator<Item = usize> + '_ {
+        let (low, high) = self.band_hz;
+        let f = &self.swept.frf.freq_hz;
+        (0..f.len()).filter(move |&k| (low..=high).contains(&f[k]))
+    }
+
+    /// The largest receptance magnitude in the band (m/N) and its
+    /// frequency (Hz), and the half-power loss factor read off the lines.
+    pub fn peak(&self) -> (f64, f64, Result<HalfPower, String>) {
+        let f = &self.swept.frf;
+        let (freqs, mags): (Vec<f64>, Vec<f64>) = self
+            .in_band()
+            .map(|k| (f.freq_hz[k], f.h1[k].norm()))
+            .unzip();
+        let (k, peak) = mags
+            .iter()
+            .enumerate()
+            .fold((0, 0.0), |b, (k, m)| if *m > b.1 { (k, *m) } else { b });
+        let half = half_power(&freqs, &mags).map_err(|e| e.to_string());
+        (peak, freqs.get(k).copied().unwrap_or(f64::NAN), half)
+    }
+
+    /// `frf.csv`: a row per line in the band.
+    pub fn csv(&self) -> String {
+        let f = &self.swept.frf;
+        let mut csv = String::from("freq_hz,h_re_m_per_n,h_im_m_per_n,magnitude_m_per_n\n");
+        for k in self.in_band() {
+            csv.push_str(&format!(
+                "{},{},{},{}\n",
+                f.freq_hz[k],
+                f.h1[k].re,
+                f.h1[k].im,
+                f.h1[k].norm()
+            ));
+        }
+        csv
+    }
+
+    /// Writes the records ([`HostRun::write_records`]), `frf.csv` and, with
+    /// plots, `frf-magnitude.svg` into `dir`, which must exist, each
+    /// atomically.
+    pub fn write(&self, dir: &Path) -> Result<(), SceneError> {
+        self.run.write_records(dir)?;
+        write_text(dir.join("frf.csv"), Ok(self.csv()))?;
+        #[cfg(feature = "plot")]
+        {
+            use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+            let f = &self.swept.frf;
+            let (low, high) = self.band_hz;
+            plot_xy_svg(
+                &dir.join("frf-magnitude.svg"),
+                &format!(
+                    "Receptance from a swept sine {low}-{high} Hz, {} on {}",
+                    self.test.damper.label(),
+                    self.test.host.name
+                ),
+                "frequency (Hz)",
+                "|X / F| (dB re 1 m/N)",
+                &[Series {
+                    name: "X(f) / F(f), whole record".into(),
+                    points: self
+                        .in_band()
+                        .map(|k| (f.freq_hz[k], 20.0 * f.h1[k].norm().log10()))
+                        .collect(),
+                    style: SeriesStyle::Line,
+                }],
+            )?;
+        }
         Ok(())
     }
 }
