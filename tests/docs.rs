@@ -711,6 +711,17 @@ fn host_chapter_commands_run() {
         num(&a["damper_energy_sum_j"]),
         num(&a["true_damper_dissipated_sum_j"])
     ));
+    let swept = json_file(&dir, "host/swept-dashpot/frf.json");
+    quote(format!(
+        "Its {} lines read a half-power loss factor of {:.4} from the swept sine against the known {:.4}",
+        swept["lines"].as_u64().unwrap_or(0),
+        num(&swept["half_power"]["loss_factor"]),
+        2.0 * zeta(10.0)
+    ));
+    quote(format!(
+        "(`tail_fraction`: the largest acceleration over the record's last 5 % over the largest anywhere, {:.4} here",
+        num(&swept["tail_fraction"])
+    ));
     let f = json_file(&dir, "host/frf-dashpot/frf.json");
     quote(format!(
         "a loss factor of {:.4} against the known {:.4}",

@@ -475,12 +475,34 @@ impl SweptFrfOutcome {
         csv
     }
 
-    /// Writes the records ([`HostRun::write_records`]), `frf.csv` and, with
-    /// plots, `frf-magnitude.svg` into `dir`, which must exist, each
-    /// atomically.
+    /// `frf.json`: the test, the band, the peak, the half-power loss
+    /// factor (or why not) and the response left at the record's end.
+    pub fn summary(&self) -> serde_json::Value {
+        let (peak, at_hz, half) = self.peak();
+        serde_json::json!({
+            "host": self.test.host,
+            "damper": self.test.damper,
+            "excitation": self.test.excitation,
+            "duration_s": self.test.duration_s,
+            "band_hz": [self.band_hz.0, self.band_hz.1],
+            "lines": self.in_band().count(),
+            "peak_m_per_n": peak,
+            "peak_freq_hz": at_hz,
+            "half_power": half.as_ref().ok(),
+            "half_power_note": half.as_ref().err(),
+            "tail_fraction": self.swept.tail_fraction,
+            "wall_time_s": self.run.wall_time_s,
+        })
+    }
+
+    /// Writes the records ([`HostRun::write_records`]), `frf.csv`,
+    /// `frf.json` and, with plots, `frf-magnitude.svg` into `dir`, which
+    /// must exist, each atomically.
     pub fn write(&self, dir: &Path) -> Result<(), SceneError> {
         self.run.write_records(dir)?;
         write_text(dir.join("frf.csv"), Ok(self.csv()))?;
+        let json = serde_json::to_string_pretty(&self.summary()).map_err(std::io::Error::other);
+        write_text(dir.join("frf.json"), json)?;
         #[cfg(feature = "plot")]
         {
             use crate::signals::{Series, SeriesStyle, plot_xy_svg};
