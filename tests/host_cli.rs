@@ -10,7 +10,7 @@ use common::{Scratch, stderr, vlab};
 #[test]
 fn wrong_host_input_is_refused_and_leaves_nothing() {
     let dir = Scratch::new("host-cli");
-    let cases: [(&[&str], &str); 13] = [
+    let cases: [(&[&str], &str); 15] = [
         (
             &["host", "decay", "--damper", "dashpot:-1", "--out", "out"],
             "damper dashpot = -1 N s/m: must be in (0, 1000000]",
@@ -96,6 +96,34 @@ fn wrong_host_input_is_refused_and_leaves_nothing() {
         (
             &["host", "frf", "--swept", "30:50", "--out", "out"],
             "--swept = '30:50': must be START_HZ:END_HZ:SWEEP_S",
+        ),
+        // Force levels: ascending, and for the plain stepped sine.
+        (
+            &[
+                "host",
+                "frf",
+                "--freq",
+                "40",
+                "--force-n",
+                "5,3",
+                "--out",
+                "out",
+            ],
+            "--force-n = 3 after 5 N: force levels must be ascending",
+        ),
+        (
+            &[
+                "host",
+                "frf",
+                "--freq",
+                "39,40",
+                "--force-n",
+                "3,5",
+                "--up-down",
+                "--out",
+                "out",
+            ],
+            "several force levels are for the stepped sine",
         ),
     ];
     for (args, wanted) in cases {
@@ -350,4 +378,57 @@ fn a_dashpot_swept_sine_reads_its_loss_factor() {
         "{}",
         stderr(&cut)
     );
+}
+
+/// Stepped sines at three forces in one command: on the dashpot host (a
+/// linear one) the levels' receptances coincide within 0.1 % at every
+/// frequency (measured: 0.005 % at most, the channels' noise weighing more
+/// at 1 N), each level in its folder.
+#[test]
+fn a_linear_host_reads_one_receptance_at_every_force() {
+    let dir = Scratch::new("host-cli-levels");
+    let out = vlab(
+        &dir.0,
+        &[
+            "--quiet",
+            "host",
+            "frf",
+            "--damper",
+            "dashpot:10",
+            "--freq",
+            "39:41:1",
+            "--force-n",
+            "1,2,4",
+            "--settle-cycles",
+            "20",
+            "--out",
+            "l",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    for f in [
+        "levels.csv",
+        "levels.svg",
+        "force-1N/frf.csv",
+        "force-4N/frf.json",
+    ] {
+        assert!(dir.path(&format!("l/{f}")).is_file(), "{f}");
+    }
+    let csv = std::fs::read_to_string(dir.path("l/levels.csv")).expect("csv");
+    let rows: Vec<(f64, f64, f64)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<f64> = l.split(',').map(|x| x.parse().expect("number")).collect();
+            (c[0], c[1], c[2])
+        })
+        .collect();
+    assert_eq!(rows.len(), 9);
+    for f in [39.0, 40.0, 41.0] {
+        let at: Vec<f64> = rows.iter().filter(|r| r.0 == f).map(|r| r.2).collect();
+        assert_eq!(at.len(), 3);
+        for h in &at {
+            assert!((h / at[0] - 1.0).abs() < 1e-3, "{f} Hz: {at:?}");
+        }
+    }
 }

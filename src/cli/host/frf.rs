@@ -15,7 +15,7 @@ use vlab::atomic_write::OutputDir;
 use vlab::experiment::host_test::HostTest;
 use vlab::experiment::host_test::frf::{FrfPoint, SteppedSine};
 use vlab::experiment::host_test::frf_outcome::{
-    FrfMaps, RandomFrfOutcome, SteppedSineOutcome, SweptFrfOutcome,
+    ForceLevels, FrfMaps, RandomFrfOutcome, SteppedSineOutcome, SweptFrfOutcome,
 };
 use vlab::host::DissipationMap;
 use vlab::host::{Excitation, PeriodicRandom};
@@ -35,9 +35,12 @@ pub struct FrfArgs {
     /// Stepped sine: the frequencies (Hz), FROM:TO:STEP or a comma-separated list.
     #[arg(long = "freq", value_name = "LIST", value_parser = super::parse_freqs, required_unless_present_any = ["random", "swept"])]
     freqs: Option<FreqList>,
-    /// Stepped sine: force amplitude at the drive point (N).
-    #[arg(long = "force-n", value_name = "N", default_value = "5", value_parser = args::newtons)]
-    force_n: f64,
+    /// Force amplitude at the drive point (N). A stepped sine takes several,
+    /// comma-separated (3,5,8): one stepped sine per level, each in its own
+    /// folder force-<N>N, and the receptances side by side in levels.csv and
+    /// levels.svg (a linear host's coincide; a granular damper's do not).
+    #[arg(long = "force-n", value_name = "N", default_value = "5", value_parser = args::newtons, value_delimiter = ',', num_args = 1..)]
+    force_n: Vec<f64>,
     /// Stepped sine: cycles to settle at each frequency (from a steady
     /// response of the host with half the particles' mass and a dashpot of
     /// efficiency 0.5).
@@ -110,6 +113,48 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
         let run = super::updown::run(&scene, &test, &carried, a.common.cache, &out, quiet);
         return made.keep_if_ok(run);
     }
+    let maps = maps.as_ref().map(|(dem, yang)| FrfMaps { dem, yang });
+    if a.force_n.len() == 1 {
+        made.keep_if_ok(stepped(&a, &scene, &test, &plan, maps, &out, quiet))?;
+        println!("wrote {}", out.display());
+        return Ok(());
+    }
+    let mut outcomes = Vec::new();
+    for &force_n in &a.force_n {
+        let plan = SteppedSine {
+            force_n,
+            ..plan.clone()
+        };
+        let dir = out.join(format!("force-{force_n}N"));
+        let made_level = std::fs::create_dir_all(&dir)
+            .with_context(|| format!("cannot create {}", dir.display()));
+        made.keep_if_ok(made_level)?;
+        let outcome = stepped(&a, &scene, &test, &plan, maps, &dir, quiet);
+        outcomes.push(made.keep_if_ok(outcome)?);
+    }
+    let levels = ForceLevels {
+        outcomes: &outcomes,
+    };
+    made.keep_if_ok(
+        levels
+            .write(&out)
+            .with_context(|| format!("writing into {}", out.display())),
+    )?;
+    report_levels(&levels);
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// One stepped sine of `plan`: run, printed, written into `out`.
+fn stepped(
+    a: &FrfArgs,
+    scene: &Scene,
+    test: &HostTest,
+    plan: &SteppedSine,
+    maps: Option<FrfMaps<'_>>,
+    out: &Path,
+    quiet: bool,
+) -> Result<SteppedSineOutcome> {
     let progress = Mutex::new((ProgressLine::new("host frf", quiet), 0usize));
     let total = plan.freqs_hz.len();
     let done = |p: &FrfPoint| {
@@ -123,18 +168,36 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
         }
     };
     let beds = a.common.cache.source(&mut |n| eprintln!("{n}"));
-    let maps = maps.as_ref().map(|(dem, yang)| FrfMaps { dem, yang });
-    let outcome = made.keep_if_ok(
-        SteppedSineOutcome::run(&scene, &beds, &test, &plan, maps, &done)
-            .context("the stepped sine"),
-    )?;
+    let outcome = SteppedSineOutcome::run(scene, &beds, test, plan, maps, &done)
+        .context("the stepped sine")?;
     report(&outcome);
-    let written = outcome
-        .write(&out)
-        .with_context(|| format!("writing into {}", out.display()));
-    made.keep_if_ok(written)?;
-    println!("wrote {}", out.display());
-    Ok(())
+    outcome
+        .write(out)
+        .with_context(|| format!("writing into {}", out.display()))?;
+    Ok(outcome)
+}
+
+/// The levels side by side: at each frequency |X|/F at every force, and
+/// how far the levels part.
+fn report_levels(levels: &ForceLevels<'_>) {
+    let forces: Vec<String> = levels
+        .outcomes
+        .iter()
+        .map(|o| format!("{} N", o.plan.force_n))
+        .collect();
+    println!(
+        "receptance |X|/F (mm/N) at each force ({}):",
+        forces.join(", ")
+    );
+    for (f, row) in levels.rows() {
+        let cells: Vec<String> = row.iter().map(|h| format!("{:9.4}", h * 1e3)).collect();
+        println!("  {f:7.2} Hz  {}", cells.join("  "));
+    }
+    let (spread, at_hz) = levels.largest_spread();
+    println!(
+        "  the levels part by up to {:.2} % (at {at_hz} Hz: the largest over the smallest |X|/F, less 1); a linear host's coincide",
+        100.0 * spread
+    );
 }
 
 /// The map of `--map`: the DEM's efficiency for the model, Yang's for the
@@ -156,12 +219,39 @@ fn maps(a: &FrfArgs, scene: &Scene) -> Result<Option<(DissipationMap, Dissipatio
 fn stepped_sine(a: &FrfArgs) -> Result<SteppedSine> {
     let plan = SteppedSine {
         freqs_hz: a.freqs.clone().map(|f| f.0).unwrap_or_default(),
-        force_n: a.force_n,
+        force_n: a.force_n[0],
         settle_cycles: a.settle_cycles,
         record_cycles: a.record_cycles,
         beds: a.beds,
     };
+    if a.force_n.len() > 1 && (a.random.is_some() || a.swept.is_some() || a.up_down) {
+        anyhow::bail!(
+            "--force-n = {:?} N: several force levels are for the stepped sine (--freq alone); --swept, --up-down and --random take one",
+            a.force_n
+        );
+    }
+    if let Some(w) = a.force_n.windows(2).find(|w| w[1] <= w[0]) {
+        anyhow::bail!(
+            "--force-n = {} after {} N: force levels must be ascending",
+            w[1],
+            w[0]
+        );
+    }
+    if a.force_n.len() > 8 {
+        anyhow::bail!(
+            "--force-n: {} levels: at most 8 (each is a stepped sine)",
+            a.force_n.len()
+        );
+    }
     if a.random.is_none() && a.swept.is_none() {
+        for &force_n in &a.force_n[1..] {
+            SteppedSine {
+                force_n,
+                ..plan.clone()
+            }
+            .validate()
+            .map_err(|e| anyhow::Error::from(e.renamed("--force-n")))?;
+        }
         plan.validate().map_err(|e| {
             let flag = match e.key.as_str() {
                 "record_cycles" => "--record-cycles",
@@ -375,12 +465,13 @@ fn random(
 /// `--swept START_HZ:END_HZ:SWEEP_S` at `--force-n`, checked with
 /// `--duration-s` before any work (a refusal names the flag).
 fn swept_key(key: &str, a: &FrfArgs) -> Result<Excitation> {
-    let sweep = Excitation::parse(&format!("sweep:{key}:{}", a.force_n)).map_err(|e| {
-        match e.key.as_str() {
-            "force_n" => anyhow::Error::from(e.renamed("--force-n")),
-            "excitation" => anyhow::anyhow!("--swept = '{key}': must be START_HZ:END_HZ:SWEEP_S"),
-            field => anyhow::Error::from(e.renamed(&format!("--swept {field}"))),
-        }
+    let sweep = Excitation::parse(&format!("sweep:{key}:{}", a.force_n[0])).map_err(|e| match e
+        .key
+        .as_str()
+    {
+        "force_n" => anyhow::Error::from(e.renamed("--force-n")),
+        "excitation" => anyhow::anyhow!("--swept = '{key}': must be START_HZ:END_HZ:SWEEP_S"),
+        field => anyhow::Error::from(e.renamed(&format!("--swept {field}"))),
     })?;
     if let Excitation::Sweep { duration_s, .. } = sweep
         && a.duration_s <= duration_s
@@ -415,7 +506,7 @@ fn swept(
         o.test.host.name,
         o.band_hz.0,
         o.band_hz.1,
-        a.force_n,
+        a.force_n[0],
         o.in_band().count(),
         o.run.wall_time_s,
         peak * 1e3,

@@ -253,6 +253,108 @@ impl SteppedSineOutcome {
     }
 }
 
+/// Stepped sines of one plan at several force levels, ascending: the
+/// nonlinearity at a glance (a linear host's receptance is the same at
+/// every force; a granular damper's is not, thesis Section 2.3.1).
+pub struct ForceLevels<'a> {
+    pub outcomes: &'a [SteppedSineOutcome],
+}
+
+impl ForceLevels<'_> {
+    /// Each frequency of the plan with the measured |X|/F (m/N) at every
+    /// level, in the levels' order.
+    pub fn rows(&self) -> Vec<(f64, Vec<f64>)> {
+        let Some(first) = self.outcomes.first() else {
+            return Vec::new();
+        };
+        (0..first.measured.points.len())
+            .map(|k| {
+                let row = self
+                    .outcomes
+                    .iter()
+                    .map(|o| {
+                        o.measured
+                            .points
+                            .get(k)
+                            .map_or(f64::NAN, |p| p.receptance().norm())
+                    })
+                    .collect();
+                (first.measured.points[k].freq_hz, row)
+            })
+            .collect()
+    }
+
+    /// The largest ratio of the levels' largest |X|/F to their smallest at
+    /// one frequency, less 1, and that frequency (Hz).
+    pub fn largest_spread(&self) -> (f64, f64) {
+        self.rows()
+            .into_iter()
+            .map(|(f, row)| {
+                let hi = row.iter().copied().fold(f64::MIN, f64::max);
+                let lo = row.iter().copied().fold(f64::MAX, f64::min);
+                (hi / lo - 1.0, f)
+            })
+            .fold((0.0, f64::NAN), |b, p| if p.0 > b.0 { p } else { b })
+    }
+
+    /// `levels.csv`: a row per frequency and level: the force, |X|/F and
+    /// the Γ the damper reached.
+    pub fn csv(&self) -> String {
+        let mut csv = String::from("freq_hz,force_n,receptance_magnitude_m_per_n,gamma\n");
+        for o in self.outcomes {
+            for p in &o.measured.points {
+                csv.push_str(&format!(
+                    "{},{},{},{}\n",
+                    p.freq_hz,
+                    o.plan.force_n,
+                    p.receptance().norm(),
+                    p.gamma
+                ));
+            }
+        }
+        csv
+    }
+
+    /// Writes `levels.csv` and, with plots, `levels.svg` (|X|/F in dB re
+    /// 1 m/N against frequency, a curve per force) into `dir`, which must
+    /// exist, each atomically.
+    pub fn write(&self, dir: &Path) -> Result<(), SceneError> {
+        write_text(dir.join("levels.csv"), Ok(self.csv()))?;
+        #[cfg(feature = "plot")]
+        {
+            use crate::signals::{Series, SeriesStyle, plot_xy_svg};
+            let series: Vec<Series> = self
+                .outcomes
+                .iter()
+                .map(|o| Series {
+                    name: format!("{} N", o.plan.force_n),
+                    points: o
+                        .measured
+                        .points
+                        .iter()
+                        .map(|p| (p.freq_hz, 20.0 * p.receptance().norm().log10()))
+                        .collect(),
+                    style: SeriesStyle::Line,
+                })
+                .collect();
+            let (host, damper) = self
+                .outcomes
+                .first()
+                .map_or((String::new(), String::new()), |o| {
+                    (o.test.host.name.clone(), o.test.damper.label())
+                });
+            plot_xy_svg(
+                &dir.join("levels.svg"),
+                &format!("Receptance at several forces, {damper} on {host}"),
+                "frequency (Hz)",
+                "|X / F| (dB re 1 m/N)",
+                &series,
+            )?;
+        }
+        Ok(())
+    }
+}
+
 /// A finished periodic random test: its run (the records) and H1, H2 and
 /// coherence over the force's band.
 pub struct RandomFrfOutcome {
