@@ -52,9 +52,11 @@ impl HostPredict {
             p.points.iter().map(|(r, _)| f(r)).collect()
         };
         let d = pyo3::types::PyDict::new(py);
-        let floats: [(&str, Vec<f64>); 12] = [
+        let floats: [(&str, Vec<f64>); 16] = [
             ("freq_hz", col(&|r| r.freq_hz)),
             ("amplitude_m", col(&|r| r.amplitude_m)),
+            ("amplitude_low_m", col(&|r| r.amplitude_low_m)),
+            ("amplitude_high_m", col(&|r| r.amplitude_high_m)),
             (
                 "amplitude_if_more_damping_m",
                 col(&|r| r.amplitude_if_more_damping_m),
@@ -68,6 +70,8 @@ impl HostPredict {
             ("gamma", col(&|r| r.damper.gamma)),
             ("efficiency", col(&|r| r.damper.efficiency)),
             ("efficiency_se", col(&|r| r.damper.efficiency_se)),
+            ("efficiency_low", col(&|r| r.damper.efficiency_low)),
+            ("efficiency_high", col(&|r| r.damper.efficiency_high)),
             ("damping_n_s_per_m", col(&|r| r.damper.damping_n_s_per_m)),
             ("apparent_mass_kg", col(&|r| r.damper.apparent_mass_kg)),
             (

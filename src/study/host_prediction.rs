@@ -78,13 +78,15 @@ impl HostPrediction {
     /// `predict.csv`: one row per frequency.
     pub fn csv(&self) -> String {
         let mut csv = String::from(
-            "freq_hz,amplitude_m,amplitude_if_more_damping_m,amplitude_if_less_damping_m,phase_rad,receptance_m_per_n,gamma,efficiency,efficiency_se,damping_n_s_per_m,apparent_mass_kg,damper_energy_per_cycle_j,extrapolated,roots\n",
+            "freq_hz,amplitude_m,amplitude_low_m,amplitude_high_m,amplitude_if_more_damping_m,amplitude_if_less_damping_m,phase_rad,receptance_m_per_n,gamma,efficiency,efficiency_se,efficiency_low,efficiency_high,damping_n_s_per_m,apparent_mass_kg,damper_energy_per_cycle_j,extrapolated,roots\n",
         );
         for (p, roots) in &self.points {
             csv.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 p.freq_hz,
                 p.amplitude_m,
+                p.amplitude_low_m,
+                p.amplitude_high_m,
                 p.amplitude_if_more_damping_m,
                 p.amplitude_if_less_damping_m,
                 p.phase_rad,
@@ -92,6 +94,8 @@ impl HostPrediction {
                 p.damper.gamma,
                 p.damper.efficiency,
                 p.damper.efficiency_se,
+                p.damper.efficiency_low,
+                p.damper.efficiency_high,
                 p.damper.damping_n_s_per_m,
                 p.damper.apparent_mass_kg,
                 p.damper_energy_per_cycle_j,

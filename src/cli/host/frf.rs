@@ -322,7 +322,7 @@ fn report(o: &SteppedSineOutcome) {
     println!(
         "  freq_hz  |X|/F mm/N  Gamma   P_in W    dE/dt W   damper W (P_in - dE/dt - host)  truth: work on damper W  damper dissipated W{}",
         if o.predicted.is_some() {
-            "  map |X|/F mm/N  Yang's map W"
+            "  map |X|/F mm/N (range claimed)  Yang's map W"
         } else {
             ""
         }
@@ -357,11 +357,21 @@ fn report_point(o: &SteppedSineOutcome, k: usize) {
         p.damper_power_stderr_w,
         p.true_damper_work_w,
         p.true_damper_w,
-        o.predicted_receptance(k).map_or(String::new(), |h| format!(
-            "        {:10.4}  {:12.5}",
-            h * 1e3,
-            o.yang_map_w[k]
-        ))
+        o.predicted_receptance(k).zip(o.predicted_range(k)).map_or(
+            String::new(),
+            |(h, (lo, hi))| format!(
+                "        {:10.4} ({:.4} .. {:.4}{})  {:12.5}",
+                h * 1e3,
+                lo * 1e3,
+                hi * 1e3,
+                if (lo..=hi).contains(&p.receptance().norm()) {
+                    ""
+                } else {
+                    ", the DEM outside"
+                },
+                o.yang_map_w[k]
+            )
+        )
     );
     if p.damper_power_stderr_w.is_nan() {
         // The balance uses the record's whole periods less the first and

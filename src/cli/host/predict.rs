@@ -70,17 +70,19 @@ pub fn run(a: PredictArgs) -> Result<()> {
         p.elapsed_ms
     );
     println!(
-        "  freq_hz  amplitude_mm  (+- from the map)      Gamma  efficiency  c_eq_n_s_per_m  roots"
+        "  freq_hz  amplitude_mm  (range claimed)         Gamma  efficiency (its range)  c_eq_n_s_per_m  roots"
     );
     for (r, roots) in &p.points {
         println!(
-            "  {:7.2}  {:12.4}  ({:.4} .. {:.4})  {:9.2}  {:10.3}  {:14.3}  {}{}",
+            "  {:7.2}  {:12.4}  ({:.4} .. {:.4})  {:5.2}  {:5.3} ({:.3} .. {:.3})  {:14.3}  {}{}",
             r.freq_hz,
             r.amplitude_m * 1e3,
-            r.amplitude_if_more_damping_m * 1e3,
-            r.amplitude_if_less_damping_m * 1e3,
+            r.amplitude_low_m * 1e3,
+            r.amplitude_high_m * 1e3,
             r.damper.gamma,
             r.damper.efficiency,
+            r.damper.efficiency_low,
+            r.damper.efficiency_high,
             r.damper.damping_n_s_per_m,
             roots,
             if r.damper.extrapolated {

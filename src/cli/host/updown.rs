@@ -104,7 +104,7 @@ fn report(r: &CarriedSineResult, test: &HostTest) {
             )
         })
         .collect();
-    let unknown = pairs.iter().filter(|p| !p.stderr.is_finite()).count();
+    let unknown = pairs.iter().filter(|p| p.from_spread).count();
     if apart.is_empty() {
         println!(
             "  the branches do not stand apart: at no frequency are the amplitudes going up and coming down more than {BRANCHES_APART_SIGMA} combined standard errors apart (the records' errors, from their periods)"
@@ -117,7 +117,7 @@ fn report(r: &CarriedSineResult, test: &HostTest) {
     }
     if unknown > 0 {
         println!(
-            "  at {unknown} of {} frequencies a record's amplitude error is not known (its periods correlated over the record): those are not compared",
+            "  at {unknown} of {} frequencies a record's periods are correlated over about its length (the host beats): its error there is the periods' spread, a cautious one",
             pairs.len()
         );
     }

@@ -71,9 +71,13 @@ pub struct CarriedPoint {
     pub branch: Branch,
     /// The damper's displacement amplitude's one-sigma error (m), from
     /// the recorded periods' amplitudes
-    /// ([`crate::stats::mean_stderr_ar2`]); NaN where the periods are too
-    /// few or correlated over the record.
+    /// ([`crate::stats::mean_stderr_ar2`]); where the periods are
+    /// correlated over about the whole record (the host beats) that error
+    /// cannot be told, and the periods' spread itself (their standard
+    /// deviation: the record could sit anywhere in its beat) stands in,
+    /// cautiously (`amplitude_error_is_spread`).
     pub amplitude_stderr_m: f64,
+    pub amplitude_error_is_spread: bool,
     pub point: FrfPoint,
 }
 
@@ -87,9 +91,11 @@ pub struct BranchPair {
     pub down_gamma: f64,
     /// `(down − up) / up`.
     pub down_over_up_minus_1: f64,
-    /// Its one-sigma error from the two records' amplitude errors; NaN
-    /// where either is not known.
+    /// Its one-sigma error from the two records' amplitude errors (a
+    /// record's periods' spread where its error could not be told).
     pub stderr: f64,
+    /// Either record's error is its periods' spread.
+    pub from_spread: bool,
     /// The branches stand more than [`BRANCHES_APART_SIGMA`] combined
     /// errors apart: hysteresis the records can tell.
     pub apart: bool,
@@ -187,10 +193,12 @@ pub fn run_carried_sine(
             let from_s = start_s + f64::from(plan.settle_cycles) / freq_hz;
             let window = run.window(from_s, end_s);
             let point = measure_point(&window, &t, freq_hz, from_s, g)?;
-            let amplitude_stderr_m = amplitude_stderr_m(&window, freq_hz)?;
+            let (amplitude_stderr_m, amplitude_error_is_spread) =
+                amplitude_stderr_m(&window, freq_hz)?;
             Ok(CarriedPoint {
                 branch,
                 amplitude_stderr_m,
+                amplitude_error_is_spread,
                 point,
             })
         })
@@ -203,12 +211,14 @@ pub fn run_carried_sine(
     })
 }
 
-/// The error of a window's displacement amplitude at `freq_hz`: the
-/// amplitude of each whole period from the lab's acceleration, as a series.
+/// The error of a window's displacement amplitude at `freq_hz`, and
+/// whether it is the periods' spread: the amplitude of each whole period
+/// from the lab's acceleration, as a series
+/// ([`CarriedPoint::amplitude_stderr_m`]).
 fn amplitude_stderr_m(
     window: &crate::experiment::host_test::HostRun,
     freq_hz: f64,
-) -> Result<f64, SceneError> {
+) -> Result<(f64, bool), SceneError> {
     let accel = &window.trace.channel(ACCEL_CHANNEL)?.samples;
     let rate_hz = window.trace.sample_rate_hz;
     let per_period = rate_hz / freq_hz;
@@ -226,10 +236,20 @@ fn amplitude_stderr_m(
         })
         .collect::<Result<Vec<f64>, SignalsError>>()?;
     let series = crate::stats::mean_stderr_ar2(&amplitudes);
-    Ok(match series.dof > 1.0 {
-        true => series.stderr_or_nan(),
+    if series.dof > 1.0 && series.stderr_or_nan().is_finite() {
+        return Ok((series.stderr_or_nan(), false));
+    }
+    let n = amplitudes.len() as f64;
+    let spread = match n > 1.0 {
+        true => (amplitudes
+            .iter()
+            .map(|a| (a - series.mean).powi(2))
+            .sum::<f64>()
+            / (n - 1.0))
+            .sqrt(),
         false => f64::NAN,
-    })
+    };
+    Ok((spread, true))
 }
 
 impl CarriedSineResult {
@@ -260,6 +280,7 @@ impl CarriedSineResult {
                     down_gamma: down.point.gamma,
                     down_over_up_minus_1: rel,
                     stderr,
+                    from_spread: up.amplitude_error_is_spread || down.amplitude_error_is_spread,
                     apart: stderr.is_finite() && rel.abs() > BRANCHES_APART_SIGMA * stderr,
                 })
             })
@@ -270,7 +291,7 @@ impl CarriedSineResult {
 }
 
 /// The header of `updown.csv`.
-pub const UP_DOWN_CSV_HEADER: &str = "step,branch,freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,amplitude_stderr_m,gamma,damper_power_w,damper_power_stderr_w,true_damper_w,steady";
+pub const UP_DOWN_CSV_HEADER: &str = "step,branch,freq_hz,receptance_re_m_per_n,receptance_im_m_per_n,amplitude_m,amplitude_stderr_m,amplitude_error_is_spread,gamma,damper_power_w,damper_power_stderr_w,true_damper_w,steady";
 
 impl CarriedSineResult {
     /// `updown.csv`: a row per step, in the order driven.
@@ -279,7 +300,7 @@ impl CarriedSineResult {
         for (k, c) in self.points.iter().enumerate() {
             let p = &c.point;
             csv.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 k + 1,
                 c.branch.as_str(),
                 p.freq_hz,
@@ -287,6 +308,7 @@ impl CarriedSineResult {
                 p.receptance_im,
                 p.amplitude_m,
                 c.amplitude_stderr_m,
+                c.amplitude_error_is_spread,
                 p.gamma,
                 p.damper_power_w,
                 p.damper_power_stderr_w,
@@ -429,6 +451,7 @@ mod tests {
         );
         for p in &pairs {
             assert!(p.down_over_up_minus_1.abs() < 0.005, "{p:?}");
+            assert!(!p.apart && p.stderr.is_finite(), "{p:?}");
         }
     }
 

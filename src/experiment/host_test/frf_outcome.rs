@@ -120,6 +120,23 @@ impl SteppedSineOutcome {
             .map(|(r, _)| r.amplitude_m / self.plan.force_n)
     }
 
+    /// The range of receptance magnitudes the prediction claims at
+    /// measured point `k` (m/N; [`SteadyResponse::amplitude_low_m`]), with
+    /// maps.
+    pub fn predicted_range(&self, k: usize) -> Option<(f64, f64)> {
+        let f = self.measured.points.get(k)?.freq_hz;
+        self.predicted
+            .as_ref()?
+            .iter()
+            .find(|(r, _)| r.freq_hz == f)
+            .map(|(r, _)| {
+                (
+                    r.amplitude_low_m / self.plan.force_n,
+                    r.amplitude_high_m / self.plan.force_n,
+                )
+            })
+    }
+
     /// The peak's change against another stepped sine (dB).
     pub fn reduction_db(&self, other: &SteppedSineResult) -> f64 {
         20.0 * (self.measured.peak_m_per_n / other.peak_m_per_n).log10()
