@@ -10,7 +10,7 @@ use common::{Scratch, stderr, vlab};
 #[test]
 fn wrong_host_input_is_refused_and_leaves_nothing() {
     let dir = Scratch::new("host-cli");
-    let cases: [(&[&str], &str); 15] = [
+    let cases: [(&[&str], &str); 17] = [
         (
             &["host", "decay", "--damper", "dashpot:-1", "--out", "out"],
             "damper dashpot = -1 N s/m: must be in (0, 1000000]",
@@ -124,6 +124,34 @@ fn wrong_host_input_is_refused_and_leaves_nothing() {
                 "out",
             ],
             "several force levels are for the stepped sine",
+        ),
+        // True and burst random: a block that holds the band, a test that
+        // holds two blocks.
+        (
+            &[
+                "host",
+                "frf",
+                "--noise",
+                "20:60:1:4",
+                "--block-s",
+                "0.1",
+                "--out",
+                "out",
+            ],
+            "--block-s = 0.1 s: must hold 4 cycles of the band's lowest frequency (20 Hz)",
+        ),
+        (
+            &[
+                "host",
+                "frf",
+                "--burst",
+                "20:60:1:2:0.5:4",
+                "--duration-s",
+                "3",
+                "--out",
+                "out",
+            ],
+            "--duration-s = 3 s: must be at least 4 s",
         ),
     ];
     for (args, wanted) in cases {

@@ -640,7 +640,7 @@ pub(crate) fn host_frf(
     )?;
     if let Some(key) = random {
         let force = PeriodicRandom::parse(&key).map_err(|e| value_error(e.renamed("random")))?;
-        RandomFrfOutcome::check_duration(duration_s, &force).map_err(value_error)?;
+        RandomFrfOutcome::check_duration(duration_s, force).map_err(value_error)?;
         let outcome = RandomFrfOutcome::run(test, force, |t: &HostTest| {
             run_on_pool(py, &scene, t, cache, threads, progress).map_err(RandomError)
         })

@@ -23,6 +23,7 @@ use std::f64::consts::{PI, TAU};
 use rand_core::Rng;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
+use realfft::num_complex::Complex64;
 use serde::Serialize;
 
 use crate::validation::{Bound, InvalidParameter, in_range, positive};
@@ -62,6 +63,14 @@ pub enum Excitation {
     Hammer { impulse_n_s: f64 },
     /// No force: the host is released from `x0_m` at the damper.
     Release { x0_m: f64 },
+    /// A force given by its samples at `rate_hz` from t = 0, linearly
+    /// interpolated, nothing after the last: a true or burst random force
+    /// ([`RandomNoise`]) that no formula of a few numbers repeats.
+    Sampled {
+        rate_hz: f64,
+        #[serde(skip)]
+        samples_n: Vec<f64>,
+    },
     /// A stepped sine in one run: `F sin 2π f_k (t − t_k)` over `cycles`
     /// whole cycles of each `f_k` in turn, `t_k` the step's start, so the
     /// force is continuous at every step (it is zero there); then nothing.
@@ -105,6 +114,182 @@ pub fn check_frequencies(freqs_hz: &[f64]) -> Result<(), InvalidParameter> {
         ));
     }
     Ok(())
+}
+
+/// Samples a cycle of a random force's highest frequency: linear
+/// interpolation between them is within 0.4 % of the band-limited force
+/// (the force transducer measures what is applied, so the FRF does not
+/// see even that).
+pub const NOISE_RATE_PER_HZ: f64 = 20.0;
+
+/// Longest random force made, s.
+pub const MAX_NOISE_S: f64 = 600.0;
+
+/// A random force that does not repeat within a test: band-limited noise
+/// (every line `k / span` in the band at one amplitude, phases drawn from
+/// `seed`, `span` the whole force's length: over any block shorter than
+/// the test it is true random, and an FRF of it leaks unless windowed),
+/// or, with `burst`, that noise switched on for the first `on_fraction` of
+/// every `period_s` and off for the rest (burst random: a block of one
+/// period holds a whole response when it has died out in the silence, so
+/// needs no window).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RandomNoise {
+    pub low_hz: f64,
+    pub high_hz: f64,
+    /// The rms while on (N).
+    pub rms_n: f64,
+    pub seed: u64,
+    /// `(period_s, on_fraction)` of a burst random force.
+    pub burst: Option<(f64, f64)>,
+}
+
+impl RandomNoise {
+    /// Parses `noise:LOW_HZ:HIGH_HZ:RMS_N:SEED` or
+    /// `burst:LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:ON_FRACTION:SEED`.
+    pub fn parse(key: &str) -> Result<Self, InvalidParameter> {
+        let refuse = || {
+            InvalidParameter::new(
+                "excitation",
+                format!("'{key}'"),
+                "",
+                "noise:LOW_HZ:HIGH_HZ:RMS_N:SEED or burst:LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:ON_FRACTION:SEED",
+            )
+        };
+        let parts: Vec<&str> = key.split(':').collect();
+        let names: &[(&str, &str)] = match parts.first() {
+            Some(&"noise") => &[
+                ("low_hz", "Hz"),
+                ("high_hz", "Hz"),
+                ("rms_n", "N"),
+                ("seed", ""),
+            ],
+            Some(&"burst") => &[
+                ("low_hz", "Hz"),
+                ("high_hz", "Hz"),
+                ("rms_n", "N"),
+                ("period_s", "s"),
+                ("on_fraction", ""),
+                ("seed", ""),
+            ],
+            _ => return Err(refuse()),
+        };
+        if parts.len() != names.len() + 1 {
+            return Err(refuse());
+        }
+        let v = parts[1..]
+            .iter()
+            .zip(names)
+            .map(|(p, (name, unit))| {
+                p.trim()
+                    .parse::<f64>()
+                    .map_err(|_| InvalidParameter::new(*name, format!("'{p}'"), unit, "a number"))
+            })
+            .collect::<Result<Vec<f64>, _>>()?;
+        let seed = v[v.len() - 1];
+        in_range(
+            "seed",
+            seed,
+            "",
+            Bound::Closed(0.0),
+            Bound::Closed(u32::MAX.into()),
+        )?;
+        let noise = RandomNoise {
+            low_hz: v[0],
+            high_hz: v[1],
+            rms_n: v[2],
+            seed: seed as u64,
+            burst: (v.len() == 6).then(|| (v[3], v[4])),
+        };
+        noise.validate()?;
+        Ok(noise)
+    }
+
+    /// Checks the band (0 < low < high <= 5 kHz), the rms (at most
+    /// [`MAX_FORCE_N`]) and a burst's on-fraction (in (0, 1)) and period
+    /// (holding a cycle of the lowest frequency while on, at most
+    /// [`MAX_NOISE_S`]).
+    pub fn validate(&self) -> Result<(), InvalidParameter> {
+        positive("low_hz", self.low_hz, "Hz")?;
+        in_range(
+            "high_hz",
+            self.high_hz,
+            "Hz",
+            Bound::Open(self.low_hz),
+            Bound::Closed(5_000.0),
+        )?;
+        in_range(
+            "rms_n",
+            self.rms_n,
+            "N",
+            Bound::Open(0.0),
+            Bound::Closed(MAX_FORCE_N),
+        )?;
+        if let Some((period_s, on)) = self.burst {
+            in_range("on_fraction", on, "", Bound::Open(0.0), Bound::Open(1.0))?;
+            in_range(
+                "period_s",
+                period_s,
+                "s",
+                Bound::Closed(1.0 / (on * self.low_hz)),
+                Bound::Closed(MAX_NOISE_S),
+            )
+            .map_err(|e| e.because("a burst holds a cycle of the lowest frequency"))?;
+        }
+        Ok(())
+    }
+
+    /// The force over `duration_s` (at most [`MAX_NOISE_S`]), sampled at
+    /// [`NOISE_RATE_PER_HZ`] times the band's top.
+    pub fn excitation(&self, duration_s: f64) -> Result<Excitation, InvalidParameter> {
+        self.validate()?;
+        in_range(
+            "duration_s",
+            duration_s,
+            "s",
+            Bound::Open(0.0),
+            Bound::Closed(MAX_NOISE_S),
+        )?;
+        let rate_hz = NOISE_RATE_PER_HZ * self.high_hz;
+        let n = ((duration_s * rate_hz).ceil() as usize + 2).max(8);
+        let span_s = n as f64 / rate_hz;
+        let first = ((self.low_hz * span_s).ceil() as usize).max(1);
+        let last = ((self.high_hz * span_s).floor() as usize).min(n / 2 - 1);
+        if last < first {
+            return Err(InvalidParameter::new(
+                "duration_s",
+                duration_s,
+                "s",
+                format!(
+                    "long enough to hold a line in [{}, {}] Hz",
+                    self.low_hz, self.high_hz
+                ),
+            ));
+        }
+        // Each line of amplitude A carries A^2 / 2 of the mean square; the
+        // inverse transform sums each bin with its conjugate and does not
+        // divide by n, so the bin A / 2 gives a cosine of amplitude A.
+        let amplitude = self.rms_n * (2.0 / (last - first + 1) as f64).sqrt();
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(self.seed);
+        let mut spectrum = vec![Complex64::new(0.0, 0.0); n / 2 + 1];
+        for bin in spectrum.iter_mut().take(last + 1).skip(first) {
+            let phase = TAU * (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+            *bin = Complex64::from_polar(0.5 * amplitude, phase);
+        }
+        let mut samples_n = vec![0.0; n];
+        realfft::RealFftPlanner::<f64>::new()
+            .plan_fft_inverse(n)
+            .process(&mut spectrum, &mut samples_n)
+            .map_err(|e| InvalidParameter::new("noise", n as f64, "samples", e.to_string()))?;
+        if let Some((period_s, on)) = self.burst {
+            for (k, f) in samples_n.iter_mut().enumerate() {
+                if (k as f64 / rate_hz / period_s).fract() >= on {
+                    *f = 0.0;
+                }
+            }
+        }
+        Ok(Excitation::Sampled { rate_hz, samples_n })
+    }
 }
 
 /// A periodic random force as its key gives it
@@ -173,6 +358,18 @@ impl Excitation {
                 }
             }
             Excitation::Release { .. } => 0.0,
+            Excitation::Sampled { rate_hz, samples_n } => {
+                let x = t_s * rate_hz;
+                if x.is_nan() || x < 0.0 {
+                    return 0.0;
+                }
+                let k = x.floor() as usize;
+                match (samples_n.get(k), samples_n.get(k + 1)) {
+                    (Some(a), Some(b)) => a + (x - k as f64) * (b - a),
+                    (Some(a), None) if x == k as f64 => *a,
+                    _ => 0.0,
+                }
+            }
             Excitation::Stepped {
                 freqs_hz,
                 cycles,
@@ -234,6 +431,8 @@ impl Excitation {
             Excitation::Hammer { .. } => 1.0 / HAMMER_PULSE_S,
             Excitation::Release { .. } => 0.0,
             Excitation::Stepped { freqs_hz, .. } => freqs_hz.iter().copied().fold(0.0, f64::max),
+            // Made with [`NOISE_RATE_PER_HZ`] samples a cycle of its top.
+            Excitation::Sampled { rate_hz, .. } => rate_hz / NOISE_RATE_PER_HZ,
         }
     }
 
@@ -464,6 +663,17 @@ impl Excitation {
                     ));
                 }
             }
+            Excitation::Sampled { rate_hz, samples_n } => {
+                positive("rate_hz", *rate_hz, "Hz")?;
+                if let Some(k) = samples_n.iter().position(|f| !f.is_finite()) {
+                    return Err(InvalidParameter::new(
+                        "samples_n",
+                        format!("sample {k} = {}", samples_n[k]),
+                        "N",
+                        "finite",
+                    ));
+                }
+            }
             Excitation::Stepped {
                 freqs_hz,
                 cycles,
@@ -590,6 +800,53 @@ mod tests {
             },
         ] {
             assert!(bad.validate().is_err(), "{bad:?}");
+        }
+    }
+
+    /// Noise: its rms is the asked one to rounding (Parseval over the
+    /// whole force), its spectrum holds the band only, two seeds differ; a
+    /// burst is zero while off; wrong keys are refused by field.
+    #[test]
+    fn random_noise_has_its_rms_its_band_and_its_bursts() {
+        let noise = RandomNoise::parse("noise:20:60:2:7").expect("a key");
+        let Excitation::Sampled { rate_hz, samples_n } = noise.excitation(3.0).expect("made")
+        else {
+            panic!("not sampled")
+        };
+        assert_eq!(rate_hz, 1200.0);
+        let ms = samples_n.iter().map(|f| f * f).sum::<f64>() / samples_n.len() as f64;
+        assert!((ms.sqrt() / 2.0 - 1.0).abs() < 1e-12, "{}", ms.sqrt());
+        let n = samples_n.len();
+        let mut input = samples_n.clone();
+        let mut spectrum = vec![Complex64::new(0.0, 0.0); n / 2 + 1];
+        realfft::RealFftPlanner::<f64>::new()
+            .plan_fft_forward(n)
+            .process(&mut input, &mut spectrum)
+            .expect("a spectrum");
+        for (k, bin) in spectrum.iter().enumerate() {
+            let f = k as f64 * rate_hz / n as f64;
+            let amplitude = 2.0 * bin.norm() / n as f64;
+            if !(19.9..=60.1).contains(&f) {
+                assert!(amplitude < 1e-9, "{f} Hz: {amplitude}");
+            }
+        }
+        let other = RandomNoise::parse("noise:20:60:2:8").expect("a key");
+        assert_ne!(other.excitation(3.0), noise.excitation(3.0));
+        let burst = RandomNoise::parse("burst:20:60:2:0.5:0.25:7").expect("a key");
+        let e = burst.excitation(2.0).expect("made");
+        for t in [0.2, 0.3, 0.45, 0.8, 1.4] {
+            assert_eq!(e.force_n(t), 0.0, "{t} s is off");
+        }
+        assert!((0..100).any(|k| e.force_n(f64::from(k) * 1e-3) != 0.0));
+        for (key, field) in [
+            ("noise:60:20:2:7", "high_hz"),
+            ("noise:20:60:0:7", "rms_n"),
+            ("noise:20:60:2", "excitation"),
+            ("burst:20:60:2:0.5:1.5:7", "on_fraction"),
+            ("burst:20:60:2:0.01:0.5:7", "period_s"),
+            ("noise:20:x:2:7", "high_hz"),
+        ] {
+            assert_eq!(RandomNoise::parse(key).expect_err(key).key, field, "{key}");
         }
     }
 

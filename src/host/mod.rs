@@ -25,7 +25,7 @@ pub mod motion;
 pub mod spec;
 
 pub use dynamics::{HostDynamics, HostEnergy, Payload, Point, receptance};
-pub use excitation::{Excitation, PeriodicRandom};
+pub use excitation::{Excitation, PeriodicRandom, RandomNoise};
 pub use map_model::{DissipationMap, MapPoint};
 pub use motion::HostMotion;
 pub use spec::{DEFAULT_HOST, HostSpec, ModeSpec};

@@ -15,10 +15,10 @@ use vlab::atomic_write::OutputDir;
 use vlab::experiment::host_test::HostTest;
 use vlab::experiment::host_test::frf::{FrfPoint, SteppedSine};
 use vlab::experiment::host_test::frf_outcome::{
-    ForceLevels, FrfMaps, RandomFrfOutcome, SteppedSineOutcome, SweptFrfOutcome,
+    ForceLevels, FrfMaps, RandomForce, RandomFrfOutcome, SteppedSineOutcome, SweptFrfOutcome,
 };
 use vlab::host::DissipationMap;
-use vlab::host::{Excitation, PeriodicRandom};
+use vlab::host::{Excitation, PeriodicRandom, RandomNoise};
 use vlab::scene::Scene;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
 use vlab::study::sweep::SweepFile;
@@ -33,7 +33,7 @@ pub struct FrfArgs {
     #[command(flatten)]
     common: HostTestArgs,
     /// Stepped sine: the frequencies (Hz), FROM:TO:STEP or a comma-separated list.
-    #[arg(long = "freq", value_name = "LIST", value_parser = super::parse_freqs, required_unless_present_any = ["random", "swept"])]
+    #[arg(long = "freq", value_name = "LIST", value_parser = super::parse_freqs, required_unless_present_any = ["random", "swept", "noise", "burst"])]
     freqs: Option<FreqList>,
     /// Force amplitude at the drive point (N). A stepped sine takes several,
     /// comma-separated (3,5,8): one stepped sine per level, each in its own
@@ -60,7 +60,7 @@ pub struct FrfArgs {
     /// and the host's state carried from each step to the next (a lab's
     /// sine controller): shows a jump or hysteresis where the damper has
     /// one. One bed; writes updown.csv, updown.json and updown.svg.
-    #[arg(long = "up-down", conflicts_with_all = ["random", "map"])]
+    #[arg(long = "up-down", conflicts_with_all = ["random", "map", "swept", "noise", "burst"])]
     up_down: bool,
     /// Periodic random instead: LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED (H1, H2,
     /// coherence over --duration-s, the first period dropped).
@@ -71,7 +71,21 @@ pub struct FrfArgs {
     /// must die out in it); the receptance from the whole record's DFTs.
     #[arg(long, value_name = "KEY", conflicts_with_all = ["freqs", "random", "map"])]
     swept: Option<String>,
-    /// Periodic random or swept sine: length of the test (s).
+    /// True random instead: LOW_HZ:HIGH_HZ:RMS_N:SEED, band-limited noise
+    /// that does not repeat, analysed in Hann-windowed blocks of --block-s
+    /// overlapping by half (the first block's length dropped).
+    #[arg(long, value_name = "KEY", conflicts_with_all = ["freqs", "random", "swept", "map"])]
+    noise: Option<String>,
+    /// True random: length of a block (s); its lines are 1 / BLOCK_S apart.
+    #[arg(long = "block-s", value_name = "S", default_value = "2", value_parser = args::seconds)]
+    block_s: f64,
+    /// Burst random instead: LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:ON_FRACTION:SEED,
+    /// the noise on for the first ON_FRACTION of every PERIOD_S and off for
+    /// the rest; blocks of one period, no window (the response must die out
+    /// while off).
+    #[arg(long, value_name = "KEY", conflicts_with_all = ["freqs", "random", "swept", "map", "noise"])]
+    burst: Option<String>,
+    /// Random or swept sine: length of the test (s).
     #[arg(long = "duration-s", value_name = "S", default_value = "8", value_parser = args::seconds)]
     duration_s: f64,
     /// A sweep (its sweep.csv): the map-based model's prediction of the same
@@ -97,6 +111,7 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
     let maps = maps(&a, &scene)?;
     let plan = stepped_sine(&a)?;
     let sweep = a.swept.as_deref().map(|k| swept_key(k, &a)).transpose()?;
+    let random = random_force(&a)?;
     let carried = match a.up_down {
         true => Some(super::updown::plan(&a.freqs, &plan)?),
         false => None,
@@ -106,8 +121,8 @@ pub fn run(a: FrfArgs, quiet: bool) -> Result<()> {
     if let Some(sweep) = sweep {
         return made.keep_if_ok(swept(&a, sweep, &scene, test, &out, quiet));
     }
-    if let Some(key) = &a.random {
-        return made.keep_if_ok(random(&a, key, &scene, test, &out, quiet));
+    if let Some(force) = random {
+        return made.keep_if_ok(self::random(&a, force, &scene, test, &out, quiet));
     }
     if let Some(carried) = carried {
         let run = super::updown::run(&scene, &test, &carried, a.common.cache, &out, quiet);
@@ -224,7 +239,8 @@ fn stepped_sine(a: &FrfArgs) -> Result<SteppedSine> {
         record_cycles: a.record_cycles,
         beds: a.beds,
     };
-    if a.force_n.len() > 1 && (a.random.is_some() || a.swept.is_some() || a.up_down) {
+    let other = a.random.is_some() || a.swept.is_some() || a.noise.is_some() || a.burst.is_some();
+    if a.force_n.len() > 1 && (other || a.up_down) {
         anyhow::bail!(
             "--force-n = {:?} N: several force levels are for the stepped sine (--freq alone); --swept, --up-down and --random take one",
             a.force_n
@@ -243,7 +259,7 @@ fn stepped_sine(a: &FrfArgs) -> Result<SteppedSine> {
             a.force_n.len()
         );
     }
-    if a.random.is_none() && a.swept.is_none() {
+    if a.random.is_none() && a.swept.is_none() && a.noise.is_none() && a.burst.is_none() {
         for &force_n in &a.force_n[1..] {
             SteppedSine {
                 force_n,
@@ -435,22 +451,50 @@ fn report_peak(o: &SteppedSineOutcome) {
     }
 }
 
-/// The periodic random test: H1, H2 and coherence over `--duration-s`.
+/// The random force of `--random`, `--noise` or `--burst` (with
+/// `--block-s`), checked with `--duration-s` before any work; a refused
+/// field keeps its name after the flag (`--random rms_n = ...`).
+fn random_force(a: &FrfArgs) -> Result<Option<(RandomForce, String)>> {
+    let named = |flag: &str, e: vlab::validation::InvalidParameter| match e.key.as_str() {
+        "excitation" => anyhow::Error::from(e.renamed(flag)),
+        field => anyhow::Error::from(e.renamed(&format!("{flag} {field}"))),
+    };
+    let (force, key) = if let Some(key) = &a.random {
+        let force = PeriodicRandom::parse(key).map_err(|e| named("--random", e))?;
+        (RandomForce::from(force), key.clone())
+    } else if let Some(key) = &a.noise {
+        let noise = RandomNoise::parse(&format!("noise:{key}")).map_err(|e| named("--noise", e))?;
+        if !(a.block_s.is_finite() && a.block_s > 0.0 && a.block_s * noise.low_hz >= 4.0) {
+            anyhow::bail!(
+                "--block-s = {} s: must hold 4 cycles of the band's lowest frequency ({} Hz), at least {} s",
+                a.block_s,
+                noise.low_hz,
+                4.0 / noise.low_hz
+            );
+        }
+        let block_s = a.block_s;
+        (RandomForce::Noise { noise, block_s }, key.clone())
+    } else if let Some(key) = &a.burst {
+        let noise = RandomNoise::parse(&format!("burst:{key}")).map_err(|e| named("--burst", e))?;
+        let block_s = noise.burst.map_or(0.0, |b| b.0);
+        (RandomForce::Noise { noise, block_s }, key.clone())
+    } else {
+        return Ok(None);
+    };
+    RandomFrfOutcome::check_duration(a.duration_s, force)
+        .map_err(|e| anyhow::Error::from(e.renamed("--duration-s")))?;
+    Ok(Some((force, key)))
+}
+
+/// A random test: H1, H2 and coherence over `--duration-s`.
 fn random(
     a: &FrfArgs,
-    key: &str,
+    (force, key): (RandomForce, String),
     scene: &vlab::scene::Scene,
     test: HostTest,
     out: &Path,
     quiet: bool,
 ) -> Result<()> {
-    // A refused field keeps its name after the flag: `--random rms_n = ...`.
-    let force = PeriodicRandom::parse(key).map_err(|e| match e.key.as_str() {
-        "excitation" => anyhow::Error::from(e.renamed("--random")),
-        field => anyhow::Error::from(e.renamed(&format!("--random {field}"))),
-    })?;
-    RandomFrfOutcome::check_duration(a.duration_s, &force)
-        .map_err(|e| anyhow::Error::from(e.renamed("--duration-s")))?;
     let outcome = RandomFrfOutcome::run(test, force, |t| {
         super::run_test(scene, t, a.common.cache, quiet)
     })?;
@@ -459,11 +503,16 @@ fn random(
         .with_context(|| format!("writing into {}", out.display()))?;
     let (low_hz, lowest) = outcome.lowest_coherence();
     println!(
-        "{} on {}, periodic random {}: {} periods averaged, {:.1} s wall; coherence lowest {:.3} at {:.1} Hz",
+        "{} on {}, {} {}: {} {} averaged, {:.1} s wall; coherence lowest {:.3} at {:.1} Hz",
         outcome.test.damper.label(),
         outcome.test.host.name,
+        force.kind(),
         key,
         outcome.frf.blocks,
+        match force {
+            RandomForce::Periodic(_) => "periods",
+            RandomForce::Noise { .. } => "blocks",
+        },
         outcome.run.wall_time_s,
         lowest,
         low_hz

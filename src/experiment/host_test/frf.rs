@@ -641,18 +641,28 @@ pub fn run_stepped_sine(
     })
 }
 
-/// H1, H2 and coherence of a periodic random test: blocks of one period of
-/// the force (rectangular window: no leakage), the first period dropped
-/// (the transient); receptance = accelerance over `−ω²`, the phase error of
-/// `rig`'s channels taken out as the stepped sine takes it out.
-pub fn random_frf(run: &HostRun, rig: &RigSpec, period_s: f64) -> Result<Frf, SceneError> {
-    let trace = run.trace.from_time(period_s);
+/// H1, H2 and coherence of a random test: Welch's average over blocks of
+/// `block_s` with `window`, overlapping by `overlap`, from `skip_s` in (a
+/// periodic random force: blocks of one period, rectangular, no leakage,
+/// the first period dropped as the transient; a true random one: Hann
+/// windows overlapping by half; a burst: blocks of one burst, no window);
+/// receptance = accelerance over `−ω²`, the phase error of `rig`'s
+/// channels taken out as the stepped sine takes it out.
+pub fn random_frf(
+    run: &HostRun,
+    rig: &RigSpec,
+    skip_s: f64,
+    block_s: f64,
+    overlap: f64,
+    window: Window,
+) -> Result<Frf, SceneError> {
+    let trace = run.trace.from_time(skip_s);
     let rate_hz = trace.sample_rate_hz;
     let accel = &trace.channel(ACCEL_CHANNEL)?.samples;
     let force = &trace.channel(FORCE_CHANNEL)?.samples;
-    let block = (period_s * rate_hz).round() as usize;
-    let mut frf = welch_frf(force, accel, rate_hz, block, 0.0, Window::Rectangular)
-        .map_err(SignalsError::from)?;
+    let block = (block_s * rate_hz).round() as usize;
+    let mut frf =
+        welch_frf(force, accel, rate_hz, block, overlap, window).map_err(SignalsError::from)?;
     to_receptance(&mut frf, rig);
     Ok(frf)
 }
@@ -965,7 +975,7 @@ mod tests {
         test.start_steady = false;
         let run =
             run_host_test(&Scene::thesis(), &BedSource::Settle, &test, &mut |_| {}).expect("runs");
-        let frf = random_frf(&run, &test.rig, 1.0).expect("frf");
+        let frf = random_frf(&run, &test.rig, 1.0, 1.0, 0.0, Window::Rectangular).expect("frf");
         let mut checked = 0;
         for (k, f) in frf.freq_hz.iter().enumerate() {
             if !(36.0..=44.0).contains(f) {
