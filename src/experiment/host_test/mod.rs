@@ -625,7 +625,10 @@ pub fn run_host_test(
 fn dominant_freq_hz(test: &HostTest) -> f64 {
     match &test.excitation {
         Excitation::Sine { freq_hz, .. } => *freq_hz,
-        Excitation::Sweep { .. } | Excitation::Lines { .. } | Excitation::Stepped { .. } => test
+        Excitation::Sweep { .. }
+        | Excitation::Lines { .. }
+        | Excitation::Stepped { .. }
+        | Excitation::Sampled { .. } => test
             .excitation
             .highest_freq_hz()
             .min(test.host.highest_freq_hz()),
