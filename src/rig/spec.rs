@@ -18,6 +18,7 @@
 //! The model's own inter-channel phase error, the quantity the empty-enclosure
 //! calibration of Fig. 7.9 estimates, is [`RigSpec::expected_phase_error_rad`].
 
+use realfft::num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 use super::channel_spec::{Acceleration, ChannelParams, ChannelSpec, Force};
@@ -218,6 +219,18 @@ impl RigSpec {
         let hf = self.force_channel().response(freq_hz, fs);
         let ha = self.accel_channel().response(freq_hz, fs);
         wrap_phase_rad(hf.arg() - ha.arg())
+    }
+
+    /// The force channel's response over the accelerometer's at
+    /// `freq_hz`: what a ratio of the two records (an accelerance, a
+    /// receptance) is multiplied by through the chains, whose argument is
+    /// [`Self::expected_phase_error_rad`] and whose magnitude differs from
+    /// 1 by the chains' filters (the high-passes: 2.5e-5 at 40 Hz on the
+    /// thesis rig, 0.3 % at 5 Hz). Dividing a measured ratio by it takes
+    /// both out, as a lab's calibration of its chains does.
+    pub fn expected_channel_ratio(&self, freq_hz: f64) -> Complex64 {
+        let fs = self.daq.sample_rate_hz;
+        self.force_channel().response(freq_hz, fs) / self.accel_channel().response(freq_hz, fs)
     }
 
     /// The high-pass + skew part of [`Self::expected_phase_error_rad`]

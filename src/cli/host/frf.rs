@@ -336,7 +336,7 @@ fn report(o: &SteppedSineOutcome) {
         plan.record_cycles
     );
     println!(
-        "  freq_hz  |X|/F mm/N  Gamma   P_in W    dE/dt W   damper W (P_in - dE/dt - host)  truth: work on damper W  damper dissipated W{}",
+        "  freq_hz  |X|/F mm/N (+- %)     Gamma   P_in W    dE/dt W   damper W (P_in - dE/dt - host)  truth: work on damper W  damper dissipated W{}",
         if o.predicted.is_some() {
             "  map |X|/F mm/N (range claimed)  Yang's map W"
         } else {
@@ -347,6 +347,11 @@ fn report(o: &SteppedSineOutcome) {
         report_point(o, k);
     }
     println!("{}", error_note(&measured.points));
+    if measured.points.iter().any(|p| p.amplitude_error_is_spread) {
+        println!(
+            "  |X|/F's +- from the record's periods; * where they are correlated over the record (the host beats): their spread, a cautious error"
+        );
+    }
     report_peak(o);
     if o.predicted.is_some() {
         println!(
@@ -363,9 +368,15 @@ fn report(o: &SteppedSineOutcome) {
 fn report_point(o: &SteppedSineOutcome, k: usize) {
     let p = &o.measured.points[k];
     println!(
-        "  {:7.2}  {:10.4}  {:5.2}  {:8.5}  {:8.5}  {:8.5} +- {:7.5}            {:10.5}  {:10.5}{}",
+        "  {:7.2}  {:10.4} +- {:<6.3}{} {:5.2}  {:8.5}  {:8.5}  {:8.5} +- {:7.5}            {:10.5}  {:10.5}{}",
         p.freq_hz,
         p.receptance().norm() * 1e3,
+        100.0 * p.amplitude_stderr_m / p.amplitude_m,
+        if p.amplitude_error_is_spread {
+            "*"
+        } else {
+            " "
+        },
         p.gamma,
         p.power_input_w,
         p.host_storage_w,

@@ -12,12 +12,9 @@
 //! frequency response can differ going up and coming down, and jump. Here
 //! each step is measured as a stepped-sine point is
 //! ([`crate::experiment::host_test::frf`]: the receptance with the channels'
-//! phase error taken out, Γ, the power-input estimate against the DEM's),
-//! plus the response amplitude's error from its periods' series, so that
-//! the two branches' difference at a frequency can be told from a record's
-//! scatter.
-
-use std::f64::consts::TAU;
+//! phase error taken out, Γ, its amplitude's error from the periods, the
+//! power-input estimate against the DEM's), so that the two branches'
+//! difference at a frequency can be told from a record's scatter.
 
 use serde::Serialize;
 
@@ -27,10 +24,7 @@ use crate::experiment::host_test::frf::{FrfPoint, measure_point};
 use crate::experiment::host_test::{HostTest, run_host_test};
 use crate::host::Excitation;
 use crate::host::excitation::check_frequencies;
-use crate::rig::ACCEL_CHANNEL;
 use crate::scene::{Scene, SceneError};
-use crate::signals::SignalsError;
-use crate::signals::structural::sine_component;
 use crate::validation::{InvalidParameter, count_in};
 
 /// How many combined standard errors apart the branches must be to be
@@ -69,15 +63,6 @@ impl Branch {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CarriedPoint {
     pub branch: Branch,
-    /// The damper's displacement amplitude's one-sigma error (m), from
-    /// the recorded periods' amplitudes
-    /// ([`crate::stats::mean_stderr_ar2`]); where the periods are
-    /// correlated over about the whole record (the host beats) that error
-    /// cannot be told, and the periods' spread itself (their standard
-    /// deviation: the record could sit anywhere in its beat) stands in,
-    /// cautiously (`amplitude_error_is_spread`).
-    pub amplitude_stderr_m: f64,
-    pub amplitude_error_is_spread: bool,
     pub point: FrfPoint,
 }
 
@@ -193,14 +178,7 @@ pub fn run_carried_sine(
             let from_s = start_s + f64::from(plan.settle_cycles) / freq_hz;
             let window = run.window(from_s, end_s);
             let point = measure_point(&window, &t, freq_hz, from_s, g)?;
-            let (amplitude_stderr_m, amplitude_error_is_spread) =
-                amplitude_stderr_m(&window, freq_hz)?;
-            Ok(CarriedPoint {
-                branch,
-                amplitude_stderr_m,
-                amplitude_error_is_spread,
-                point,
-            })
+            Ok(CarriedPoint { branch, point })
         })
         .collect::<Result<Vec<_>, SceneError>>()?;
     Ok(CarriedSineResult {
@@ -209,47 +187,6 @@ pub fn run_carried_sine(
         steps: run.steps,
         wall_time_s: run.wall_time_s,
     })
-}
-
-/// The error of a window's displacement amplitude at `freq_hz`, and
-/// whether it is the periods' spread: the amplitude of each whole period
-/// from the lab's acceleration, as a series
-/// ([`CarriedPoint::amplitude_stderr_m`]).
-fn amplitude_stderr_m(
-    window: &crate::experiment::host_test::HostRun,
-    freq_hz: f64,
-) -> Result<(f64, bool), SceneError> {
-    let accel = &window.trace.channel(ACCEL_CHANNEL)?.samples;
-    let rate_hz = window.trace.sample_rate_hz;
-    let per_period = rate_hz / freq_hz;
-    let omega2 = (TAU * freq_hz).powi(2);
-    // Each period's window a whole period long or a sample more (as the
-    // power input's balanced periods take them), inside the record.
-    let window = per_period.ceil() as usize;
-    let amplitudes = (0..)
-        .map(|k| (k as f64 * per_period).round() as usize)
-        .take_while(|s| s + window <= accel.len())
-        .map(|s| {
-            sine_component(&accel[s..s + window], rate_hz, freq_hz)
-                .map(|a| a.norm() / omega2)
-                .map_err(SignalsError::from)
-        })
-        .collect::<Result<Vec<f64>, SignalsError>>()?;
-    let series = crate::stats::mean_stderr_ar2(&amplitudes);
-    if series.dof > 1.0 && series.stderr_or_nan().is_finite() {
-        return Ok((series.stderr_or_nan(), false));
-    }
-    let n = amplitudes.len() as f64;
-    let spread = match n > 1.0 {
-        true => (amplitudes
-            .iter()
-            .map(|a| (a - series.mean).powi(2))
-            .sum::<f64>()
-            / (n - 1.0))
-            .sqrt(),
-        false => f64::NAN,
-    };
-    Ok((spread, true))
 }
 
 impl CarriedSineResult {
@@ -269,8 +206,8 @@ impl CarriedSineResult {
                 let (a_up, a_down) = (up.point.amplitude_m, down.point.amplitude_m);
                 let rel = a_down / a_up - 1.0;
                 let stderr = (a_down / a_up)
-                    * ((up.amplitude_stderr_m / a_up).powi(2)
-                        + (down.amplitude_stderr_m / a_down).powi(2))
+                    * ((up.point.amplitude_stderr_m / a_up).powi(2)
+                        + (down.point.amplitude_stderr_m / a_down).powi(2))
                     .sqrt();
                 Some(BranchPair {
                     freq_hz: up.point.freq_hz,
@@ -280,7 +217,8 @@ impl CarriedSineResult {
                     down_gamma: down.point.gamma,
                     down_over_up_minus_1: rel,
                     stderr,
-                    from_spread: up.amplitude_error_is_spread || down.amplitude_error_is_spread,
+                    from_spread: up.point.amplitude_error_is_spread
+                        || down.point.amplitude_error_is_spread,
                     apart: stderr.is_finite() && rel.abs() > BRANCHES_APART_SIGMA * stderr,
                 })
             })
@@ -307,8 +245,8 @@ impl CarriedSineResult {
                 p.receptance_re,
                 p.receptance_im,
                 p.amplitude_m,
-                c.amplitude_stderr_m,
-                c.amplitude_error_is_spread,
+                p.amplitude_stderr_m,
+                p.amplitude_error_is_spread,
                 p.gamma,
                 p.damper_power_w,
                 p.damper_power_stderr_w,
@@ -384,6 +322,7 @@ mod tests {
     use crate::host::{HostSpec, Payload, Point, receptance};
     use crate::rig::{RigFile, RigSpec};
     use realfft::num_complex::Complex64;
+    use std::f64::consts::TAU;
 
     fn dashpot_test() -> HostTest {
         HostTest {
