@@ -1,7 +1,8 @@
 //! The host structure from Python (thesis Section 2.3.1, 9.4): a test of
 //! the damper on a host, `vlab.host_run` (`vlab host run`), its free decay
 //! measured, `vlab.host_decay` (`vlab host decay`), its frequency response,
-//! `vlab.host_frf` (`vlab host frf`), and the response predicted from a
+//! `vlab.host_frf` (`vlab host frf`, in `host_frf.rs`), and the response
+//! predicted from a
 //! sweep's map, `vlab.host_predict` (`vlab host predict`).
 
 use std::path::PathBuf;
@@ -14,10 +15,8 @@ use pyo3::types::PyDict;
 use vlab::experiment::damper::Progress;
 use vlab::experiment::ensemble::check_beds;
 use vlab::experiment::host_test::decay::{DecayError, DecayEstimate, DecayOutcome};
-use vlab::experiment::host_test::frf::{FrfPoint, SteppedSine};
-use vlab::experiment::host_test::frf_outcome::{FrfMaps, RandomFrfOutcome, SteppedSineOutcome};
 use vlab::experiment::host_test::{Damper, HostRun, HostTest, run_host_test};
-use vlab::host::{DissipationMap, Excitation, PeriodicRandom};
+use vlab::host::{DissipationMap, Excitation};
 use vlab::rig::RigSpec;
 use vlab::scene::Scene;
 
@@ -26,7 +25,7 @@ use crate::scene::{orientation_of, scene_of};
 use vlab::host::HostSpec;
 use vlab::rig::RigFile;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
-use vlab::study::host_prediction::{HostPrediction, check_frequencies, check_request};
+use vlab::study::host_prediction::{HostPrediction, check_request};
 use vlab::study::sweep::SweepFile;
 
 /// A host's predicted response ([`HostPrediction`]).
@@ -153,7 +152,7 @@ pub(crate) fn host_predict(
 /// `vlab host`'s flags of the same names give them; a refusal names the
 /// keyword.
 #[allow(clippy::too_many_arguments)]
-fn host_test_of(
+pub(crate) fn host_test_of(
     excitation: Excitation,
     duration_s: f64,
     host: &str,
@@ -179,7 +178,7 @@ fn host_test_of(
 
 /// Runs `test` on a pool of `threads` with the GIL released, `progress`
 /// called as `shake`'s is; the bed run alone takes every thread.
-fn run_on_pool(
+pub(crate) fn run_on_pool(
     py: Python<'_>,
     scene: &Scene,
     test: &HostTest,
@@ -503,194 +502,5 @@ pub(crate) fn host_decay(
         outcome,
         map,
         g_mps2: scene.simulation.gravity_mps2,
-    })
-}
-
-/// An error of a periodic random test as Python raises it: the library's
-/// refusals as `ValueError`, the run's own as it raised them.
-struct RandomError(PyErr);
-
-impl From<vlab::scene::SceneError> for RandomError {
-    fn from(e: vlab::scene::SceneError) -> Self {
-        RandomError(PyRuntimeError::new_err(e.to_string()))
-    }
-}
-
-impl From<vlab::validation::InvalidParameter> for RandomError {
-    fn from(e: vlab::validation::InvalidParameter) -> Self {
-        RandomError(value_error(e))
-    }
-}
-
-/// A finished frequency response: a stepped sine's or a periodic random
-/// force's.
-enum FrfKind {
-    SteppedSine(Box<SteppedSineOutcome>),
-    Random(Box<RandomFrfOutcome>),
-}
-
-/// A finished frequency response ([`SteppedSineOutcome`] or
-/// [`RandomFrfOutcome`]).
-#[pyclass(name = "HostFrf", module = "vlab._vlab", frozen)]
-pub(crate) struct HostFrf {
-    outcome: FrfKind,
-}
-
-#[pymethods]
-impl HostFrf {
-    /// "stepped sine" or "periodic random".
-    #[getter]
-    fn kind(&self) -> &'static str {
-        match self.outcome {
-            FrfKind::SteppedSine(_) => "stepped sine",
-            FrfKind::Random(_) => "periodic random",
-        }
-    }
-
-    /// What frf.csv holds (text).
-    #[getter]
-    fn csv(&self) -> String {
-        match &self.outcome {
-            FrfKind::SteppedSine(o) => o.csv(),
-            FrfKind::Random(o) => o.csv(),
-        }
-    }
-
-    /// What frf.json holds (JSON text) for a stepped sine; `None` for a
-    /// periodic random force, which writes none.
-    #[getter]
-    fn summary_json(&self) -> Option<String> {
-        match &self.outcome {
-            FrfKind::SteppedSine(o) => serde_json::to_string(&o.summary()).ok(),
-            FrfKind::Random(_) => None,
-        }
-    }
-
-    /// Writes what `vlab host frf --out` writes into folder `out`.
-    fn write(&self, out: PathBuf) -> PyResult<()> {
-        write_into(&out, |dir| match &self.outcome {
-            FrfKind::SteppedSine(o) => o.write(dir),
-            FrfKind::Random(o) => o.write(dir),
-        })
-    }
-}
-
-/// The host's frequency response with the damper, as `vlab host frf` does
-/// with the flags of the same names: a stepped sine at `freqs_hz` (Hz) of
-/// `force_n` (the receptance, the host without particles and with their
-/// mass as a solid, the damper's power; `map`, a sweep.csv, adds the
-/// map-based prediction), or with `random` (LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED)
-/// a periodic random force over `duration_s` (H1, H2, coherence). Refusals
-/// name the keyword before any work (`ValueError`).
-#[pyfunction]
-#[pyo3(signature = (
-    freqs_hz = None,
-    *,
-    force_n = 5.0,
-    settle_cycles = 30,
-    record_cycles = 20,
-    beds = 1,
-    random = None,
-    duration_s = 8.0,
-    map = None,
-    host = vlab::host::DEFAULT_HOST.to_string(),
-    damper = "particles".to_string(),
-    scene = None,
-    seed = None,
-    orientation = None,
-    rig = vlab::rig::DEFAULT_RIG.to_string(),
-    noise_seed = None,
-    cache = true,
-    threads = None,
-    progress = None,
-))]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn host_frf(
-    py: Python<'_>,
-    freqs_hz: Option<Vec<f64>>,
-    force_n: f64,
-    settle_cycles: u32,
-    record_cycles: u32,
-    beds: u32,
-    random: Option<String>,
-    duration_s: f64,
-    map: Option<PathBuf>,
-    host: String,
-    damper: String,
-    scene: Option<PathBuf>,
-    seed: Option<u64>,
-    orientation: Option<&str>,
-    rig: String,
-    noise_seed: Option<u64>,
-    cache: bool,
-    threads: Option<usize>,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<HostFrf> {
-    let release = Excitation::Release { x0_m: 1e-3 };
-    let (scene, test) = host_test_of(
-        release,
-        duration_s,
-        &host,
-        &damper,
-        scene,
-        seed,
-        orientation,
-        &rig,
-        noise_seed,
-    )?;
-    if let Some(key) = random {
-        let force = PeriodicRandom::parse(&key).map_err(|e| value_error(e.renamed("random")))?;
-        RandomFrfOutcome::check_duration(duration_s, force).map_err(value_error)?;
-        let outcome = RandomFrfOutcome::run(test, force, |t: &HostTest| {
-            run_on_pool(py, &scene, t, cache, threads, progress).map_err(RandomError)
-        })
-        .map_err(|e| e.0)?;
-        return Ok(HostFrf {
-            outcome: FrfKind::Random(Box::new(outcome)),
-        });
-    }
-    let Some(freqs_hz) = freqs_hz else {
-        return Err(PyValueError::new_err(
-            "give freqs_hz (a stepped sine) or random (a periodic random force)",
-        ));
-    };
-    check_frequencies(&freqs_hz).map_err(|e| value_error(e.renamed("freqs_hz")))?;
-    let plan = SteppedSine {
-        freqs_hz,
-        force_n,
-        settle_cycles,
-        record_cycles,
-        beds,
-    };
-    plan.validate().map_err(value_error)?;
-    let maps = match map {
-        Some(path) => {
-            let in_map = |e: &dyn std::fmt::Display| {
-                PyValueError::new_err(format!("map = {}: {e}", path.display()))
-            };
-            let file = SweepFile::read(&path).map_err(|e| in_map(&e))?;
-            let o = Some(scene.enclosure.orientation);
-            let of = |source| dissipation_map(&file, o, None, source).map_err(|e| in_map(&e));
-            Some((of(MapSource::Dem)?, of(MapSource::Yang)?))
-        }
-        None => None,
-    };
-    let source = bed_source(py, cache)?;
-    let pool = thread_pool(threads)?;
-    let callback = Callback::new(progress);
-    let total = plan.freqs_hz.len();
-    let done_count = std::sync::atomic::AtomicUsize::new(0);
-    let done = |_: &FrfPoint| {
-        let n = done_count.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        callback.call(("frequency", n, total));
-    };
-    let outcome = py.detach(|| {
-        let maps = maps.as_ref().map(|(dem, yang)| FrfMaps { dem, yang });
-        pool.install(|| SteppedSineOutcome::run(&scene, &source, &test, &plan, maps, &done))
-    });
-    callback.finish()?;
-    let outcome = outcome.map_err(|e| PyRuntimeError::new_err(format!("the stepped sine: {e}")))?;
-    Ok(HostFrf {
-        outcome: FrfKind::SteppedSine(Box::new(outcome)),
     })
 }

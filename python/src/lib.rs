@@ -16,6 +16,7 @@ mod calibrate;
 mod common;
 mod drop;
 mod host;
+mod host_frf;
 mod records;
 mod scene;
 mod shake;
@@ -32,8 +33,8 @@ fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(host::host_predict, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_run, m)?)?;
     m.add_function(wrap_pyfunction!(host::host_decay, m)?)?;
-    m.add_function(wrap_pyfunction!(host::host_frf, m)?)?;
-    m.add_class::<host::HostFrf>()?;
+    m.add_function(wrap_pyfunction!(host_frf::host_frf, m)?)?;
+    m.add_class::<host_frf::HostFrf>()?;
     m.add_class::<host::HostRunResult>()?;
     m.add_class::<host::HostDecay>()?;
     m.add_function(wrap_pyfunction!(scene::scene_json, m)?)?;

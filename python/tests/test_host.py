@@ -163,9 +163,57 @@ def test_a_periodic_random_force_gives_h1_and_h2():
     assert np.allclose(h1, exact, rtol=1e-2)
 
 
+def test_up_and_down_is_the_commands_and_one_answer_on_a_linear_host(cli, tmp_path):
+    frf = vlab.host_frf([39, 40, 41], force_n=2.0, up_down=True, **STEPPED)
+    assert frf.kind == "stepped sine up and down"
+    c = frf.columns
+    assert c["branch"] == ["up", "up", "up", "down", "down"]
+    assert list(c["freq_hz"]) == [39.0, 40.0, 41.0, 40.0, 39.0]
+    # A linear host has one answer: the branches agree to 1 % (10 settling
+    # cycles at zeta 0.063 leave e^-4 of the step's transient: 0.22 %).
+    assert abs(c["amplitude_m"][0] / c["amplitude_m"][4] - 1) < 1e-2
+    assert all(not p["apart"] for p in frf.summary["pairs"])
+    frf.write(tmp_path / "py")
+    subprocess.run([cli, "--quiet", "host", "frf", "--freq", "39,40,41", "--force-n", "2",
+                    "--up-down", "--damper", "dashpot:15", "--rig", "ideal", "--settle-cycles",
+                    "10", "--record-cycles", "8", "--no-cache", "--out", str(tmp_path / "cli")],
+                   check=True, capture_output=True)
+    for name in ["updown.csv", "updown.svg"]:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+
+
+def test_a_swept_sine_and_the_random_forces_read_the_modes_receptance():
+    m, wn = 0.5, 2 * math.pi * 40.0
+    common = dict(damper="dashpot:15", rig="ideal", cache=False)
+
+    def exact(f):
+        w = 2 * math.pi * f
+        return 1 / np.abs(m * wn**2 - m * w**2 + 1j * (2 * 0.003 * m * wn + 15.0) * w)
+
+    swept = vlab.host_frf(swept="30:50:2", force_n=2.0, duration_s=3.0, **common)
+    assert swept.kind == "swept sine" and swept.summary["tail_fraction"] < 0.01
+    c = swept.columns
+    band = (c["freq_hz"] >= 32) & (c["freq_hz"] <= 48)
+    assert np.allclose(c["magnitude_m_per_n"][band], exact(c["freq_hz"][band]), rtol=3e-3)
+    burst = vlab.host_frf(burst="20:60:1:2:0.5:4", duration_s=10.0, **common)
+    assert burst.kind == "burst random"
+    noise = vlab.host_frf(noise="20:60:1:4", block_s=4.0, duration_s=24.0, **common)
+    assert noise.kind.startswith("true random")
+    for frf, rtol in [(burst, 0.015), (noise, 0.05)]:
+        c = frf.columns
+        band = (c["freq_hz"] >= 30) & (c["freq_hz"] <= 50)
+        h1 = np.hypot(c["h1_re_m_per_n"], c["h1_im_m_per_n"])[band]
+        assert np.allclose(h1, exact(c["freq_hz"][band]), rtol=rtol), frf.kind
+
+
 @pytest.mark.parametrize(
     "args, said",
     [
+        (dict(freqs_hz=[40], swept="30:50:2"), ["freqs_hz and swept", "give one"]),
+        (dict(noise="20:60:1:4", block_s=0.1), ["block_s = 0.1 s", "4 cycles"]),
+        (dict(burst="20:60:1:2:1.5:4"), ["burst on_fraction"]),
+        (dict(swept="30:50:2", duration_s=2.0), ["duration_s", "longer than the sweep"]),
+        (dict(freqs_hz=[39, 40], up_down=True, beds=2), ["beds = 2", "one bed"]),
         (dict(freqs_hz=[40, 39]), ["freqs_hz", "ascending"]),
         (dict(freqs_hz=None), ["freqs_hz", "random"]),
         (dict(freqs_hz=[40], force_n=-1), ["force_n"]),

@@ -571,13 +571,17 @@ def host_decay(**options):
 class HostFrf:
     """A finished frequency response of the host with the damper: a stepped
     sine's (the receptance at each frequency beside the host without
-    particles, with their mass as a solid and, with a map, the model's) or a
-    periodic random force's (H1, H2, coherence)."""
+    particles, with their mass as a solid and, with a map, the model's), a
+    stepped sine's up and back down in one run (each step's receptance and
+    branch), a swept sine's (the receptance over its band) or a random
+    force's, periodic, true or burst (H1, H2, coherence)."""
 
     def __init__(self, inner):
         self._inner = inner
 
-    kind = property(lambda self: self._inner.kind, doc='"stepped sine" or "periodic random".')
+    kind = property(lambda self: self._inner.kind,
+                    doc='"stepped sine", "stepped sine up and down", "swept sine", "periodic random", '
+                        '"true random (Hann, 50 % overlap)" or "burst random".')
 
     @property
     def columns(self):
@@ -586,8 +590,8 @@ class HostFrf:
 
     @property
     def summary(self):
-        """What frf.json holds, as a dict (a stepped sine's; None for a
-        periodic random force)."""
+        """What frf.json (updown.json) holds, as a dict; None for a random
+        force, which writes none."""
         text = self._inner.summary_json
         return None if text is None else json.loads(text)
 
@@ -601,9 +605,14 @@ def host_frf(freqs_hz=None, **options):
     measures it: a stepped sine at each of `freqs_hz` (Hz, ascending) of
     `force_n` (N, default 5), `settle_cycles` (30) and `record_cycles` (20)
     at each, `beds` at each; `map` (a sweep.csv) adds the map-based model's
-    prediction. Or, with `random` ("LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED"), a
-    periodic random force over `duration_s` (default 8): H1, H2, coherence.
-    Returns a HostFrf. The other keywords are `host_run`'s; `progress` is
+    prediction; `up_down=True` runs the frequencies in one run, up and back
+    down, the state carried from step to step. Or a swept sine (`swept`,
+    "START_HZ:END_HZ:SWEEP_S" at `force_n`, then silence until
+    `duration_s`), or a random force over `duration_s` (default 8): `random`
+    ("LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:SEED", periodic), `noise`
+    ("LOW_HZ:HIGH_HZ:RMS_N:SEED", true random in Hann blocks of `block_s`)
+    or `burst` ("LOW_HZ:HIGH_HZ:RMS_N:PERIOD_S:ON_FRACTION:SEED"): H1, H2,
+    coherence. Returns a HostFrf. The other keywords are `host_run`'s; `progress` is
     called with ("frequency", done, frequencies) for a stepped sine.
     """
     if isinstance(freqs_hz, (int, float)):
@@ -613,7 +622,8 @@ def host_frf(freqs_hz=None, **options):
     for key in ("scene", "map"):
         if options.get(key) is not None:
             options[key] = str(options[key])
-    kind = "sweep" if options.get("random") is None else "shake"
+    runs_once = any(options.get(k) for k in ("random", "noise", "burst", "swept", "up_down"))
+    kind = "shake" if runs_once else "sweep"
     run = lambda **o: _vlab.host_frf(freqs_hz, **o)
     return HostFrf(_run_with_progress(run, options, kind))
 
