@@ -1,7 +1,8 @@
 //! `vlab host`: the damper on a host structure (thesis Section 2.3.1, 9.4 i
 //! and v). `run` records any excitation; `decay` and `frf` measure the host
 //! the classical ways and hold each estimate against the DEM's dissipation;
-//! `predict` answers from a sweep's map in milliseconds. The work is
+//! `predict` answers from a sweep's map in milliseconds; `modal` fits the
+//! modes of a measured FRF. The work is
 //! [`vlab::experiment::host_test`]'s and [`vlab::host`]'s; this is the
 //! command line.
 
@@ -23,6 +24,7 @@ use super::progress::ProgressLine;
 
 mod decay;
 mod frf;
+mod modal;
 mod predict;
 mod updown;
 
@@ -46,6 +48,10 @@ enum HostCommand {
     /// The host's steady response predicted from a sweep's dissipation map
     /// (describing function and harmonic balance), in milliseconds.
     Predict(predict::PredictArgs),
+    /// Modal parameters (natural frequency, damping ratio, loss factor,
+    /// modal constant, each +- one sigma) of the modes in a frf.csv, by a
+    /// least-squares fit of a sum of modes.
+    Modal(modal::ModalArgs),
 }
 
 /// What every test of a damper on a host needs.
@@ -132,6 +138,7 @@ pub fn run(a: HostArgs, quiet: bool) -> Result<()> {
         HostCommand::Decay(d) => decay::run(d, quiet),
         HostCommand::Frf(f) => frf::run(f, quiet),
         HostCommand::Predict(p) => predict::run(p),
+        HostCommand::Modal(m) => modal::run(m),
     }
 }
 

@@ -47,6 +47,11 @@
 //!   `a cos ωt + b sin ωt + c` over the longest whole number of periods;
 //!   the complex amplitude is `a − i b = A e^(iφ)` for `A cos(ωt + φ)`. One
 //!   stepped-sine FRF point is `H(f) = Y / X` of two such amplitudes.
+//! - [`fit_modes`] — **modal fit of a multi-mode receptance**: peaks picked
+//!   by prominence, one mode's inverse line fit for each start, then
+//!   Levenberg–Marquardt of `H = Σ_r A_r / (ω_r² − ω² + 2iζ_r ω_r ω)` (plus
+//!   residual terms) over the band, with one-sigma errors from the fit's
+//!   covariance (Ewins, *Modal Testing*; module `modal_fit`).
 //! - [`power_input_w`] — **power-input method**: mean power delivered by a
 //!   periodic force, `P = ⟨F v⟩ = Σ_k ½ Re(F_k conj(V_k))`, with the velocity
 //!   harmonics `V_k = A_k / (i ω_k)` from the measured acceleration. In steady
@@ -67,6 +72,7 @@ use realfft::num_complex::Complex64;
 mod decrement;
 mod envelope;
 mod half_power;
+mod modal_fit;
 mod sine;
 #[cfg(test)]
 mod tests;
@@ -75,6 +81,7 @@ mod welch;
 pub use decrement::*;
 pub use envelope::*;
 pub use half_power::*;
+pub use modal_fit::*;
 pub use sine::*;
 pub use welch::*;
 
@@ -188,6 +195,27 @@ pub enum StructuralError {
         min_freq_hz: f64,
         /// Highest frequency given, Hz.
         max_freq_hz: f64,
+    },
+    /// A modal fit was asked for more modes than the FRF has peaks.
+    #[error(
+        "modal fit: {asked} mode(s) asked for but |H| has {found} peak(s) (local maxima) within \
+         freq_hz = [{min_freq_hz}, {max_freq_hz}] Hz: ask for fewer modes or widen the band"
+    )]
+    TooFewResonances {
+        /// Modes asked for.
+        asked: usize,
+        /// Local maxima of the magnitude.
+        found: usize,
+        /// Lowest frequency given, Hz.
+        min_freq_hz: f64,
+        /// Highest frequency given, Hz.
+        max_freq_hz: f64,
+    },
+    /// A modal fit could not be solved.
+    #[error("modal fit: {reason}")]
+    ModalFitFailed {
+        /// What went wrong, and what to try.
+        reason: String,
     },
     /// The FFT library refused a buffer (cannot happen with the buffers built
     /// here; kept as an error rather than a panic).
