@@ -20,6 +20,8 @@
 //! Sherman–Morrison formula: the model the map-based damper
 //! ([`super::map_model`]) closes with its amplitude-dependent `s`.
 
+use std::f64::consts::TAU;
+
 use realfft::num_complex::Complex64;
 use serde::Serialize;
 
@@ -317,6 +319,32 @@ pub fn sine_steady_state(
         .map(|q| q.im)
         .chain(q.iter().map(|q| w * q.re))
         .collect()
+}
+
+/// The state `[q; q']` at t = 0 of `spec` with `payload` in the steady
+/// response to a sum of lines `F_k sin(ω_k t + φ_k)` at the drive point
+/// (a multi-sine, a periodic random force): by superposition, each line's
+/// `q(t) = Im(Q_k e^{i(ω_k t + φ_k)})` ([`sine_steady_state`]'s `Q`) summed
+/// at t = 0, `payload_at(ω)` the payload each line sees.
+pub fn lines_steady_state(
+    spec: &HostSpec,
+    payload_at: &dyn Fn(f64) -> Payload,
+    lines: &[super::excitation::Line],
+) -> Vec<f64> {
+    let n = spec.modes.len();
+    let mut state = vec![0.0; 2 * n];
+    for l in lines {
+        let w = TAU * l.freq_hz;
+        // The line's state at phase 0 is [Im Q; w Re Q]: turn Q by phi.
+        let at_zero = sine_steady_state(spec, payload_at(w), w, l.force_n);
+        let turn = Complex64::from_polar(1.0, l.phase_rad);
+        for r in 0..n {
+            let q = Complex64::new(at_zero[n + r] / w, at_zero[r]) * turn;
+            state[r] += q.im;
+            state[n + r] += w * q.re;
+        }
+    }
+    state
 }
 
 /// Which point of the host.

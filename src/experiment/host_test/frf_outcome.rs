@@ -456,6 +456,9 @@ impl RandomFrfOutcome {
             RandomForce::Periodic(f) => f.excitation()?,
             RandomForce::Noise { noise, .. } => noise.excitation(test.duration_s)?,
         };
+        // A periodic force on a linear damper starts at its steady state
+        // (`run_host_test`); a noise has none.
+        test.start_steady = matches!(force, RandomForce::Periodic(_));
         let run = run_test(&test)?;
         let (block_s, window, overlap, skip_s) = force.blocks();
         let frf = random_frf(&run, &test.rig, skip_s, block_s, overlap, window)?;
