@@ -575,37 +575,34 @@ fn levenberg_marquardt(data: &FrfData, layout: Layout, mut p: Vec<f64>) -> Resul
     let mut normal = normal_equations(data, layout, &p);
     let mut lambda = 1e-3;
     for iteration in 1..=MAX_ITERATIONS {
-        let Some(step) = damped_step(&normal, lambda) else {
-            lambda *= 10.0;
-            if lambda > MAX_LAMBDA {
-                return Ok(Refined {
-                    params: p,
-                    normal,
-                    iterations: iteration,
-                });
+        // A step is taken when it lowers the cost; otherwise (or when the
+        // damped system has none) the damping grows, until no step however
+        // short helps: the minimum to rounding.
+        let mut taken = false;
+        if let Some(step) = damped_step(&normal, lambda) {
+            let trial: Vec<f64> = p.iter().zip(&step).map(|(a, b)| a + b).collect();
+            let trial_cost = if physical(&trial, layout) {
+                cost(data, layout, &trial)
+            } else {
+                f64::INFINITY
+            };
+            if trial_cost <= normal.cost {
+                let small = scaled_step_sq(&normal, &step)
+                    <= STEP_TOLERANCE_REL * STEP_TOLERANCE_REL * data.len() as f64;
+                p = trial;
+                normal = normal_equations(data, layout, &p);
+                lambda = (lambda * 0.1).max(1e-12);
+                taken = true;
+                if small || normal.cost == 0.0 {
+                    return Ok(Refined {
+                        params: p,
+                        normal,
+                        iterations: iteration,
+                    });
+                }
             }
-            continue;
-        };
-        let trial: Vec<f64> = p.iter().zip(&step).map(|(a, b)| a + b).collect();
-        let trial_cost = if physical(&trial, layout) {
-            cost(data, layout, &trial)
-        } else {
-            f64::INFINITY
-        };
-        if trial_cost <= normal.cost {
-            let small = scaled_step_sq(&normal, &step)
-                <= STEP_TOLERANCE_REL * STEP_TOLERANCE_REL * data.len() as f64;
-            p = trial;
-            normal = normal_equations(data, layout, &p);
-            lambda = (lambda * 0.1).max(1e-12);
-            if small || normal.cost == 0.0 {
-                return Ok(Refined {
-                    params: p,
-                    normal,
-                    iterations: iteration,
-                });
-            }
-        } else {
+        }
+        if !taken {
             lambda *= 10.0;
             if lambda > MAX_LAMBDA {
                 return Ok(Refined {
