@@ -460,3 +460,41 @@ fn a_linear_host_reads_one_receptance_at_every_force() {
         }
     }
 }
+
+/// A reader that stops reading ends the command quietly: with its
+/// standard output closed before it prints (`vlab ... | head` does this),
+/// the stepped sine exits by the closed pipe's signal, not with a panic
+/// and a backtrace from its first line of output.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_the_command_without_a_panic() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::{Command, Stdio};
+    let dir = Scratch::new("host-cli-pipe");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vlab"))
+        .args([
+            "--quiet",
+            "host",
+            "frf",
+            "--damper",
+            "dashpot:10",
+            "--freq",
+            "39:41:1",
+            "--force-n",
+            "2",
+            "--out",
+            "p",
+        ])
+        .current_dir(&dir.0)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run vlab");
+    // The stepped sine takes a tenth of a second before its first line:
+    // the pipe is closed long before.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait");
+    let err = stderr(&out);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(out.status.signal(), Some(13), "{:?}: {err}", out.status);
+}
