@@ -138,7 +138,7 @@ fn wrong_host_input_is_refused_and_leaves_nothing() {
                 "--out",
                 "out",
             ],
-            "--block-s = 0.1 s: must hold 4 cycles of the band's lowest frequency (20 Hz)",
+            "--block-s = 0.1 s: must be at least 0.2 s: 4 cycles of the band's lowest frequency (20 Hz)",
         ),
         (
             &[

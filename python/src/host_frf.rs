@@ -133,20 +133,11 @@ fn random_force(
         let force = PeriodicRandom::parse(&key).map_err(|e| named("random", e))?;
         return Ok(Some(force.into()));
     }
-    if let Some(key) = noise {
-        let noise = RandomNoise::parse(&format!("noise:{key}")).map_err(|e| named("noise", e))?;
-        if !(block_s.is_finite() && block_s * noise.low_hz >= 4.0) {
-            return Err(PyValueError::new_err(format!(
-                "block_s = {block_s} s: must hold 4 cycles of the band's lowest frequency, at least {} s",
-                4.0 / noise.low_hz
-            )));
-        }
-        return Ok(Some(RandomForce::Noise { noise, block_s }));
-    }
-    if let Some(key) = burst {
-        let noise = RandomNoise::parse(&format!("burst:{key}")).map_err(|e| named("burst", e))?;
-        let block_s = noise.burst.map_or(0.0, |b| b.0);
-        return Ok(Some(RandomForce::Noise { noise, block_s }));
+    let key_of = |kind: &str, key: Option<String>| key.map(|k| (kind.to_string(), k));
+    if let Some((kind, key)) = key_of("noise", noise).or(key_of("burst", burst)) {
+        let noise = RandomNoise::parse(&format!("{kind}:{key}")).map_err(|e| named(&kind, e))?;
+        let force = RandomForce::noise(noise, block_s).map_err(value_error)?;
+        return Ok(Some(force));
     }
     Ok(None)
 }

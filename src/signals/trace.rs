@@ -179,42 +179,26 @@ impl Trace {
     /// axis) to the end, with the time axis moved so that `t_s` becomes 0.
     pub fn from_time(&self, t_s: f64) -> Trace {
         let fs = self.sample_rate_hz;
-        // Within a millionth of a sample of t_s counts as at it.
-        let skip = ((t_s - self.start_time_s) * fs - 1e-6).ceil().max(0.0) as usize;
-        let skip = skip.min(self.len());
+        let skip = self.first_at(t_s);
         let mut start = self.start_time_s + skip as f64 / fs - t_s;
         if (start * fs).abs() < 1e-6 {
             start = 0.0;
         }
-        Trace {
-            sample_rate_hz: fs,
-            start_time_s: start,
-            channels: self
-                .channels
-                .iter()
-                .map(|c| Channel {
-                    name: c.name.clone(),
-                    unit: c.unit.clone(),
-                    samples: c.samples[skip..].to_vec(),
-                })
-                .collect(),
-            metadata: self.metadata.clone(),
-        }
+        self.samples(skip, self.len(), start)
     }
 
-    /// The samples from the first at or after `from_s` to the last before
-    /// `to_s` (on its own time axis, which the window keeps).
-    pub fn window(&self, from_s: f64, to_s: f64) -> Trace {
-        let fs = self.sample_rate_hz;
-        // Within a millionth of a sample of an end counts as at it.
-        let index = |t_s: f64| {
-            (((t_s - self.start_time_s) * fs - 1e-6).ceil().max(0.0) as usize).min(self.len())
-        };
-        let (first, end) = (index(from_s), index(to_s));
-        let end = end.max(first);
+    /// The index of the first sample at or after `t_s` (the length past the
+    /// end); within a millionth of a sample of `t_s` counts as at it.
+    fn first_at(&self, t_s: f64) -> usize {
+        let k = ((t_s - self.start_time_s) * self.sample_rate_hz - 1e-6).ceil();
+        (k.max(0.0) as usize).min(self.len())
+    }
+
+    /// Samples `first..end` of every channel, the first at `start_time_s`.
+    fn samples(&self, first: usize, end: usize, start_time_s: f64) -> Trace {
         Trace {
-            sample_rate_hz: fs,
-            start_time_s: self.start_time_s + first as f64 / fs,
+            sample_rate_hz: self.sample_rate_hz,
+            start_time_s,
             channels: self
                 .channels
                 .iter()
@@ -226,6 +210,14 @@ impl Trace {
                 .collect(),
             metadata: self.metadata.clone(),
         }
+    }
+
+    /// The samples from the first at or after `from_s` to the last before
+    /// `to_s` (on its own time axis, which the window keeps).
+    pub fn window(&self, from_s: f64, to_s: f64) -> Trace {
+        let (first, end) = (self.first_at(from_s), self.first_at(to_s));
+        let start_time_s = self.start_time_s + first as f64 / self.sample_rate_hz;
+        self.samples(first, end.max(first), start_time_s)
     }
 
     /// Re-checks the invariants: rate positive and finite, start time finite,

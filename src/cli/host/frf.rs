@@ -475,20 +475,12 @@ fn random_force(a: &FrfArgs) -> Result<Option<(RandomForce, String)>> {
         (RandomForce::from(force), key.clone())
     } else if let Some(key) = &a.noise {
         let noise = RandomNoise::parse(&format!("noise:{key}")).map_err(|e| named("--noise", e))?;
-        if !(a.block_s.is_finite() && a.block_s > 0.0 && a.block_s * noise.low_hz >= 4.0) {
-            anyhow::bail!(
-                "--block-s = {} s: must hold 4 cycles of the band's lowest frequency ({} Hz), at least {} s",
-                a.block_s,
-                noise.low_hz,
-                4.0 / noise.low_hz
-            );
-        }
-        let block_s = a.block_s;
-        (RandomForce::Noise { noise, block_s }, key.clone())
+        let force = RandomForce::noise(noise, a.block_s)
+            .map_err(|e| anyhow::Error::from(e.renamed("--block-s")))?;
+        (force, key.clone())
     } else if let Some(key) = &a.burst {
         let noise = RandomNoise::parse(&format!("burst:{key}")).map_err(|e| named("--burst", e))?;
-        let block_s = noise.burst.map_or(0.0, |b| b.0);
-        (RandomForce::Noise { noise, block_s }, key.clone())
+        (RandomForce::noise(noise, a.block_s)?, key.clone())
     } else {
         return Ok(None);
     };

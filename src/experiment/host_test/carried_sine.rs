@@ -319,22 +319,10 @@ impl CarriedSineResult {
 mod tests {
     use super::*;
     use crate::experiment::host_test::Damper;
-    use crate::host::{HostSpec, Payload, Point, receptance};
-    use crate::rig::{RigFile, RigSpec};
+    use crate::experiment::host_test::frf::tests::test_of;
+    use crate::host::{Payload, Point, receptance};
     use realfft::num_complex::Complex64;
     use std::f64::consts::TAU;
-
-    fn dashpot_test() -> HostTest {
-        HostTest {
-            host: HostSpec::builtin("plate-40hz").expect("built in"),
-            damper: Damper::Dashpot { n_s_per_m: 10.0 },
-            excitation: Excitation::Release { x0_m: 1e-3 },
-            duration_s: 1.0,
-            start_steady: false,
-            rig: RigSpec::builtin("thesis-shaker").expect("built in"),
-            noise_seed: 5,
-        }
-    }
 
     /// A linear host has one steady answer: up and down, every step of one
     /// run reads the exact receptance of the single mode with its dashpot
@@ -345,7 +333,7 @@ mod tests {
     /// % away at 1 Hz steps).
     #[test]
     fn a_linear_host_reads_its_exact_receptance_up_and_down_without_hysteresis() {
-        let test = dashpot_test();
+        let test = test_of(Damper::Dashpot { n_s_per_m: 10.0 }, "plate-40hz");
         let plan = CarriedSine {
             freqs_hz: vec![38.0, 39.0, 40.0, 41.0, 42.0],
             force_n: 2.0,

@@ -783,14 +783,15 @@ pub fn swept_frf(run: &HostRun, rig: &RigSpec) -> Result<SweptFrf, SceneError> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::experiment::host_test::Damper;
     use crate::host::{HostSpec, Payload};
     use crate::host::{Point, receptance};
     use crate::rig::{RigFile, RigSpec};
 
-    fn test_of(damper: Damper, host: &str) -> HostTest {
+    /// `damper` on built-in `host`, through the thesis rig, noise seed 5.
+    pub(crate) fn test_of(damper: Damper, host: &str) -> HostTest {
         HostTest {
             host: HostSpec::builtin(host).expect("built in"),
             damper,

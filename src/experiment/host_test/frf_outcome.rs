@@ -392,6 +392,31 @@ impl From<PeriodicRandom> for RandomForce {
 }
 
 impl RandomForce {
+    /// A true random force analysed in blocks of `block_s`, which must hold
+    /// 4 cycles of the band's lowest frequency (its lines are `1 / block_s`
+    /// apart), or a burst, whose blocks are its periods (`block_s` unused).
+    pub fn noise(noise: RandomNoise, block_s: f64) -> Result<Self, InvalidParameter> {
+        if let Some((period_s, _)) = noise.burst {
+            return Ok(RandomForce::Noise {
+                noise,
+                block_s: period_s,
+            });
+        }
+        let least_s = 4.0 / noise.low_hz;
+        if !(block_s.is_finite() && block_s >= least_s) {
+            return Err(InvalidParameter::new(
+                "block_s",
+                block_s,
+                "s",
+                format!(
+                    "at least {least_s} s: 4 cycles of the band's lowest frequency ({} Hz)",
+                    noise.low_hz
+                ),
+            ));
+        }
+        Ok(RandomForce::Noise { noise, block_s })
+    }
+
     /// The force's band (Hz).
     pub fn band_hz(&self) -> (f64, f64) {
         match self {

@@ -284,7 +284,9 @@ impl HostRecord {
 impl HostRun {
     /// The part of the run in `[from_s, to_s)`: its record and trace cut
     /// there, its steps and wall time in proportion, its warnings whole (a
-    /// channel that clipped anywhere is not trusted anywhere).
+    /// channel that clipped anywhere is not trusted anywhere); the energy
+    /// books stay the whole run's and the bed's balance is left out (the
+    /// window's own energies are the record's cumulative columns).
     pub fn window(&self, from_s: f64, to_s: f64) -> HostRun {
         let record = self.record.window(from_s, to_s);
         let whole_s = self.steps as f64 * self.dt_s;
