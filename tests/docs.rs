@@ -125,20 +125,50 @@ fn only_a_sweep_of_conditions_is_shortened() {
     }
 }
 
+/// The README's commands, then the tutorial's, in one scratch folder: a
+/// tutorial line the README ran already (the main job, step 5) is not run
+/// again (its files are there as the reader's run leaves them). The main
+/// job is the suite's longest command; run twice it was a third of the
+/// docs' tests.
 #[test]
-fn tutorial_commands_run() {
-    let commands = vlab_commands(&read("docs/tutorial.md"));
+fn readme_and_tutorial_commands_run() {
+    let readme_text = read("README.md");
+    let readme = vlab_commands(&readme_text);
     assert!(
-        commands.len() >= 10,
-        "found only {} commands",
-        commands.len()
+        readme.len() >= 4,
+        "found only {} README commands: {readme:?}",
+        readme.len()
     );
-    let dir = run_in_order("tutorial", "tutorial", &commands);
+    let tutorial = vlab_commands(&read("docs/tutorial.md"));
+    assert!(
+        tutorial.len() >= 10,
+        "found only {} tutorial commands",
+        tutorial.len()
+    );
+    let main_job = "vlab shake --freq 40 --gamma 20";
+    for (page, commands) in [("README", &readme), ("tutorial", &tutorial)] {
+        assert!(
+            commands.iter().any(|c| c == main_job),
+            "the {page} no longer runs the main job as `{main_job}`"
+        );
+    }
+    let mut commands = readme.clone();
+    commands.extend(tutorial.iter().filter(|c| !readme.contains(c)).cloned());
+    let dir = run_in_order("readme-tutorial", "README or tutorial", &commands);
+    // The sample output's run wrote where the README says it did.
+    assert!(
+        readme_text.contains("wrote signals/thesis-40Hz-G20"),
+        "README's sample output no longer names its folder"
+    );
+    assert!(
+        dir.path("signals/thesis-40Hz-G20/summary.json").is_file(),
+        "the README's shake wrote no signals/thesis-40Hz-G20/summary.json"
+    );
     // Step 7's claim: the mis-calibrated rig reads off, the right one does not.
     let read = |p: &str| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(dir.path(p)).expect(p)).expect("json")
     };
-    let good = read("run/summary.json")["measured"]["error_vs_dem_rel"]
+    let good = read("signals/thesis-40Hz-G20/summary.json")["measured"]["error_vs_dem_rel"]
         .as_f64()
         .expect("error");
     let wrong = read("wrong/summary.json")["measured"]["error_vs_dem_rel"]
@@ -459,7 +489,7 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
         "about ½ × {m_enc} kg × {a_peak:.0} m/s² × {v_peak:.2} m/s ≈ {:.0} var",
         0.5 * m_enc * a_peak * v_peak
     ));
-    let run = json_file(dir, "run/summary.json");
+    let run = json_file(dir, "signals/thesis-40Hz-G20/summary.json");
     let dem_j = num(&run["dem"]["energy_per_cycle_j"]);
     quote(format!(
         "is worth about {:.0} % of the damper's dissipation",
@@ -533,7 +563,10 @@ fn tutorial_numbers_are_the_runs(dir: &Scratch) {
     ));
 
     // 6. Analyse the record yourself.
-    let raw = json_output(dir, &["analyze", "run/trace.csv", "--json"]);
+    let raw = json_output(
+        dir,
+        &["analyze", "signals/thesis-40Hz-G20/trace.csv", "--json"],
+    );
     let low = -100.0 * (num(&raw["energy_per_cycle_j"]) / dem_j - 1.0);
     quote(format!(
         "Without the calibration the same record reads {low:.1} % low"
@@ -816,27 +849,6 @@ fn host_chapter_commands_run() {
         wrong.is_empty(),
         "docs/host.md no longer says what its commands give; it should say:\n{}",
         wrong.join("\n")
-    );
-}
-
-#[test]
-fn readme_commands_run() {
-    let text = read("README.md");
-    let commands = vlab_commands(&text);
-    assert!(
-        commands.len() >= 4,
-        "found only {} commands: {commands:?}",
-        commands.len()
-    );
-    let dir = run_in_order("readme", "README", &commands);
-    // The sample output's run wrote where the README says it did.
-    assert!(
-        text.contains("wrote signals/thesis-40Hz-G20"),
-        "README's sample output no longer names its folder"
-    );
-    assert!(
-        dir.path("signals/thesis-40Hz-G20/summary.json").is_file(),
-        "the README's shake wrote no signals/thesis-40Hz-G20/summary.json"
     );
 }
 

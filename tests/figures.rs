@@ -7,7 +7,7 @@
 //! The redraws here take a second in all. The figures the pages' own
 //! commands draw as they run are compared in `tests/docs.rs`, which runs
 //! those commands anyway: the maps (`the_maps_figures_are_what_their_command_draws`),
-//! the snapshots (`tutorial_commands_run`) and the host's decays and
+//! the snapshots (`readme_and_tutorial_commands_run`) and the host's decays and
 //! dashpot receptance (`host_chapter_commands_run`).
 
 #![cfg(all(feature = "cli", feature = "plot"))]
@@ -47,11 +47,11 @@ const REDRAWN: &[(&str, &str)] = &[
     ),
     (
         "docs/figures/snapshots.png",
-        "docs.rs: tutorial_commands_run",
+        "docs.rs: readme_and_tutorial_commands_run",
     ),
     (
         "docs/figures/snapshots.svg",
-        "docs.rs: tutorial_commands_run",
+        "docs.rs: readme_and_tutorial_commands_run",
     ),
     (
         "docs/figures/host-dashpot-loss-factor.svg",
