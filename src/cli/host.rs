@@ -22,6 +22,7 @@ use super::args;
 use super::cache_cmd::NoCacheArg;
 use super::progress::ProgressLine;
 
+mod base;
 mod decay;
 mod frf;
 mod modal;
@@ -48,6 +49,11 @@ enum HostCommand {
     /// The host's steady response predicted from a sweep's dissipation map
     /// (describing function and harmonic balance), in milliseconds.
     Predict(predict::PredictArgs),
+    /// Base excitation: the host on the rig's shaker table, a stepped sine
+    /// of the table's acceleration; the transmissibility (damper over
+    /// table), the exact one for a linear payload, and the power the table
+    /// put in (Yang's method) against what was dissipated.
+    Base(base::BaseArgs),
     /// Modal parameters (natural frequency, damping ratio, loss factor,
     /// modal constant, each +- one sigma) of the modes in a frf.csv, by a
     /// least-squares fit of a sum of modes.
@@ -63,7 +69,7 @@ pub struct HostTestArgs {
     pub host: String,
     /// What the enclosure holds: particles (the DEM), empty, solid (the
     /// particles' mass as a rigid solid) or dashpot:N_S_PER_M (a linear
-    /// viscous damper to ground).
+    /// viscous damper to ground; on a table, to the table).
     #[arg(long, value_name = "KIND", default_value = "particles", value_parser = parse_damper)]
     pub damper: Damper,
     #[command(flatten)]
@@ -137,6 +143,7 @@ pub fn run(a: HostArgs, quiet: bool) -> Result<()> {
         HostCommand::Run(r) => run_record(r, quiet),
         HostCommand::Decay(d) => decay::run(d, quiet),
         HostCommand::Frf(f) => frf::run(f, quiet),
+        HostCommand::Base(b) => base::run(b, quiet),
         HostCommand::Predict(p) => predict::run(p),
         HostCommand::Modal(m) => modal::run(m),
     }

@@ -80,9 +80,25 @@ pub struct HostDynamics {
 impl HostDynamics {
     /// The host `spec` carrying `payload`, at rest.
     pub fn new(spec: &HostSpec, payload: Payload) -> Self {
+        let phi_e: Vec<f64> = spec.modes.iter().map(|m| m.shape_at_drive).collect();
+        Self::with_drive(spec, payload, phi_e)
+    }
+
+    /// The host `spec` carrying `payload` on a shaker's table, at rest in
+    /// the table's frame ([`super::base`]): the excitation is the inertial
+    /// load, `−M a_b` with `M` [`super::base::base_mass_kg`], so
+    /// [`Self::advance`] takes `−a_b` as its excitation and the drive
+    /// vector is `M` (the drive point's "displacement" is then `M z`, and
+    /// the excitation's work the inertial load's, in the table's frame).
+    /// `spec` must pass [`super::base::check_on_base`].
+    pub fn on_base(spec: &HostSpec, payload: Payload) -> Self {
+        let m = super::base::base_mass_kg(spec, payload);
+        Self::with_drive(spec, payload, vec![m; spec.modes.len()])
+    }
+
+    fn with_drive(spec: &HostSpec, payload: Payload, phi_e: Vec<f64>) -> Self {
         let n = spec.modes.len();
         let phi_d: Vec<f64> = spec.modes.iter().map(|m| m.shape_at_damper).collect();
-        let phi_e: Vec<f64> = spec.modes.iter().map(|m| m.shape_at_drive).collect();
         let stiffness: Vec<f64> = spec.modes.iter().map(|m| m.stiffness()).collect();
         let host_damping: Vec<f64> = spec.modes.iter().map(|m| m.damping_n_s_per_m()).collect();
         let mut mass = DenseMatrix::zeros(n);

@@ -412,6 +412,18 @@ impl Excitation {
             .collect()
     }
 
+    /// A sine's frequency (Hz) and amplitude, or a stepped sine's first;
+    /// `None` for the other excitations.
+    pub fn first_sine(&self) -> Option<(f64, f64)> {
+        match self {
+            Excitation::Sine { freq_hz, force_n } => Some((*freq_hz, *force_n)),
+            Excitation::Stepped {
+                freqs_hz, force_n, ..
+            } => freqs_hz.first().map(|f| (*f, *force_n)),
+            _ => None,
+        }
+    }
+
     /// The displacement at the damper the host starts from, m.
     pub fn initial_displacement_m(&self) -> f64 {
         match self {

@@ -9,7 +9,9 @@
 //!   over a step, energies booked apart, and the receptance;
 //! - [`excitation`]: sine, swept sine, multi-sine, periodic random, hammer,
 //!   release, each a documented key;
-//! - [`motion`]: the host as an [`crate::rig::EnclosureMotion`];
+//! - [`motion`]: the host as an [`crate::rig::EnclosureMotion`], driven by
+//!   a force at its drive point or standing on a shaker's table ([`base`]:
+//!   base excitation and the transmissibility);
 //! - [`map_model`]: the damper as an amplitude- and frequency-dependent
 //!   equivalent dashpot from a sweep (describing function), closed on the
 //!   host by harmonic balance.
@@ -18,6 +20,7 @@
 //! imports `rig` (the drive abstraction, the file loader) but not `dem`.
 //! SI units throughout.
 
+pub mod base;
 pub mod dynamics;
 pub mod excitation;
 pub mod map_model;

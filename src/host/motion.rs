@@ -8,7 +8,13 @@
 //! particles' force on the host is their force on the enclosure less the one
 //! of the bed at rest (its weight, which the host carried before the test:
 //! displacements are from the loaded rest position).
+//!
+//! On a shaker's table ([`HostMotion::on_base`], [`super::base`]) the
+//! excitation is the table's acceleration (m/s²), the host's modal state is
+//! its deflection from the table, and the enclosure moves with the table
+//! plus that deflection.
 
+use super::base::{Table, base_mass_kg};
 use super::dynamics::{HostDynamics, HostEnergy, Payload};
 use super::excitation::Excitation;
 use super::spec::HostSpec;
@@ -24,6 +30,16 @@ pub struct HostMotion {
     last_excitation_n: f64,
     last_damper_force_n: f64,
     kinematics: Kinematics,
+    /// On a table: the table, the mass it shakes (kg) and the damper
+    /// force's work on the table's motion, `Σ F_d Δy` (J).
+    base: Option<OnBase>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct OnBase {
+    table: Table,
+    mass_kg: f64,
+    damper_work_on_table_j: f64,
 }
 
 impl HostMotion {
@@ -50,6 +66,82 @@ impl HostMotion {
             last_excitation_n: 0.0,
             last_damper_force_n: 0.0,
             kinematics: Kinematics::default(),
+            base: None,
+        }
+    }
+
+    /// `spec` carrying `payload` on a shaker's table whose acceleration
+    /// (m/s²) `excitation` gives, from rest in the table's frame; a sine's
+    /// (a stepped sine's first) table starts at the velocity that makes it
+    /// swing about its start ([`Table::for_sine`]). `spec` must pass
+    /// [`super::base::check_on_base`].
+    pub fn on_base(
+        spec: &HostSpec,
+        payload: Payload,
+        excitation: Excitation,
+        resting_force_n: f64,
+    ) -> Self {
+        let table = match excitation.first_sine() {
+            Some((freq_hz, accel_mps2)) => {
+                Table::for_sine(accel_mps2, std::f64::consts::TAU * freq_hz)
+            }
+            None => Table::default(),
+        };
+        let dynamics = HostDynamics::on_base(spec, payload);
+        HostMotion {
+            start_m: dynamics.damper_displacement_m(),
+            dynamics,
+            excitation,
+            resting_force_n,
+            last_excitation_n: 0.0,
+            last_damper_force_n: 0.0,
+            kinematics: Kinematics::default(),
+            base: Some(OnBase {
+                table,
+                mass_kg: base_mass_kg(spec, payload),
+                damper_work_on_table_j: 0.0,
+            }),
+        }
+    }
+
+    /// Whether the host stands on a table (base excitation).
+    pub fn is_on_base(&self) -> bool {
+        self.base.is_some()
+    }
+
+    /// The table's velocity, m/s (0 for a force drive).
+    pub fn table_velocity_mps(&self) -> f64 {
+        self.base.map_or(0.0, |b| b.table.velocity_mps)
+    }
+
+    /// The damper force's work on the table's motion so far, `Σ F_d Δy`
+    /// (J, 0 for a force drive): what the bed's walls' work differs by
+    /// from the host's books, which are in the table's frame.
+    pub fn damper_work_on_table_j(&self) -> f64 {
+        self.base.map_or(0.0, |b| b.damper_work_on_table_j)
+    }
+
+    /// The damper's displacement from its start, m: on a table the
+    /// table's displacement plus the host's deflection.
+    pub fn damper_displacement_m(&self) -> f64 {
+        self.kinematics.displacement_m + self.start_m
+    }
+
+    /// The force at the drive point (N): the excitation's for a force
+    /// drive; on a table, the force the table puts through its transducer,
+    /// `M (a_b + z'') − F_d` (Newton on the host as a whole).
+    pub fn drive_force_n(&self) -> f64 {
+        match self.base {
+            None => self.last_excitation_n,
+            Some(b) => b.mass_kg * self.kinematics.acceleration_mps2 - self.last_damper_force_n,
+        }
+    }
+
+    /// The drive point's velocity (m/s): the table's on a table.
+    pub fn drive_velocity_mps(&self) -> f64 {
+        match self.base {
+            None => self.dynamics.drive_velocity_mps(),
+            Some(b) => b.table.velocity_mps,
         }
     }
 
@@ -65,7 +157,8 @@ impl HostMotion {
         &self.dynamics
     }
 
-    /// The excitation force held over the last step, N.
+    /// The excitation held over the last step: a force (N), or on a table
+    /// the table's acceleration (m/s²).
     pub fn excitation_n(&self) -> f64 {
         self.last_excitation_n
     }
@@ -91,13 +184,27 @@ impl EnclosureMotion for HostMotion {
         // The force held over the step is the excitation's at mid-step.
         let f_e = self.excitation.force_n(t_s - 0.5 * dt_s);
         let f_d = particle_force_n - self.resting_force_n;
-        self.dynamics.advance(dt_s, f_d, f_e);
         self.last_excitation_n = f_e;
         self.last_damper_force_n = f_d;
+        let Some(base) = self.base.as_mut() else {
+            self.dynamics.advance(dt_s, f_d, f_e);
+            self.kinematics = Kinematics {
+                displacement_m: self.dynamics.damper_displacement_m() - self.start_m,
+                velocity_mps: self.dynamics.damper_velocity_mps(),
+                acceleration_mps2: self.dynamics.damper_acceleration_mps2(),
+            };
+            return self.kinematics;
+        };
+        // On a table: f_e is the table's acceleration, the load −M a_b.
+        self.dynamics.advance(dt_s, f_d, -f_e);
+        let y0 = base.table.displacement_m;
+        base.table.advance(dt_s, f_e);
+        base.damper_work_on_table_j += f_d * (base.table.displacement_m - y0);
         self.kinematics = Kinematics {
-            displacement_m: self.dynamics.damper_displacement_m() - self.start_m,
-            velocity_mps: self.dynamics.damper_velocity_mps(),
-            acceleration_mps2: self.dynamics.damper_acceleration_mps2(),
+            displacement_m: base.table.displacement_m + self.dynamics.damper_displacement_m()
+                - self.start_m,
+            velocity_mps: base.table.velocity_mps + self.dynamics.damper_velocity_mps(),
+            acceleration_mps2: f_e + self.dynamics.damper_acceleration_mps2(),
         };
         self.kinematics
     }

@@ -663,6 +663,7 @@ mod tests {
             start_steady: false,
             rig: RigSpec::builtin("thesis-shaker").expect("built in"),
             noise_seed: 3,
+            on_base: false,
         };
         let run =
             run_host_test(&Scene::thesis(), &BedSource::Settle, &test, &mut |_| {}).expect("runs");

@@ -776,6 +776,7 @@ mod tests {
             start_steady: true,
             rig: RigSpec::builtin("thesis-shaker").expect("built in"),
             noise_seed: 5,
+            on_base: false,
         }
     }
 
