@@ -845,6 +845,27 @@ fn host_chapter_commands_run() {
         bf
     ));
 
+    // 6. On the shaker's table: the worst step against the exact answer,
+    // rounded up to the page's digit.
+    let table = json_file(&dir, "host/base-dashpot/transmissibility.json");
+    let points = table["points"].as_array().expect("points");
+    let worst = |f: &dyn Fn(&serde_json::Value) -> f64| {
+        points.iter().map(f).fold(0.0_f64, |m, v| m.max(v.abs()))
+    };
+    let t_off = worst(&|p| {
+        let exact = num(&p["exact_re"]).hypot(num(&p["exact_im"]));
+        num(&p["magnitude"]) / exact - 1.0
+    });
+    let power_off = worst(&|p| num(&p["power_in_w"]) / num(&p["true_dissipated_w"]) - 1.0);
+    quote(format!(
+        "accelerometers read it within {:.3} % at every step both ways",
+        (t_off * 1e5).ceil() / 1e3
+    ));
+    quote(format!(
+        "reads the dissipation within {:.1} %",
+        (power_off * 1e3).ceil() / 10.0
+    ));
+
     assert!(
         wrong.is_empty(),
         "docs/host.md no longer says what its commands give; it should say:\n{}",

@@ -121,14 +121,15 @@ fn report(r: &TableSineResult, test: &HostTest) {
                 format!("{:7.4}", re.hypot(im))
             });
         println!(
-            "  {:6}  {:7.2}  {:9.4} +- {:8.4}  {exact}  {:5.2}  {:10.5}  {:10.5}",
+            "  {:6}  {:7.2}  {:9.4} +- {:8.4}  {exact}  {:5.2}  {:10.5}  {:10.5}{}",
             p.branch.as_str(),
             p.freq_hz,
             p.magnitude,
             p.magnitude_stderr,
             p.gamma,
             p.power_in_w,
-            p.true_dissipated_w
+            p.true_dissipated_w,
+            if p.steady { "" } else { "  not steady" }
         );
     }
     for w in &r.warnings {

@@ -103,6 +103,14 @@ pub struct TablePoint {
     pub true_dissipated_w: f64,
     /// Of it, the bed's (its ledger), W.
     pub true_damper_w: f64,
+    /// The rate the host's stored energy (in the table's frame) changed
+    /// over the step, W.
+    pub host_storage_w: f64,
+    /// The host's stored energy (in the table's frame) changed over the
+    /// step by less than 5 % of the power in: steady, so the power in is
+    /// the dissipation. Where it is not, the power in also fills or drains
+    /// the host (and the bed), and the two differ by that.
+    pub steady: bool,
 }
 
 impl TablePoint {
@@ -198,6 +206,7 @@ fn measure(
         _ => f64::NAN,
     };
     let true_damper_w = rate(&r.damper_dissipated_j);
+    let storage_w = rate(&r.host_energy_j);
     Ok(TablePoint {
         branch,
         freq_hz,
@@ -215,11 +224,17 @@ fn measure(
             + rate(&r.dashpot_dissipated_j)
             + true_damper_w,
         true_damper_w,
+        host_storage_w: storage_w,
+        steady: storage_w.abs() <= STEADY_STORAGE_FRACTION * power_in_w.abs(),
     })
 }
 
+/// Largest change of the host's stored energy over a step, as a fraction of
+/// the power in, for the step to count as steady.
+const STEADY_STORAGE_FRACTION: f64 = 0.05;
+
 /// The header of `transmissibility.csv`.
-pub const TRANSMISSIBILITY_CSV_HEADER: &str = "step,branch,freq_hz,transmissibility_re,transmissibility_im,magnitude,magnitude_stderr,magnitude_error_is_spread,exact_magnitude,gamma,table_accel_mps2,power_in_w,true_dissipated_w,true_damper_w";
+pub const TRANSMISSIBILITY_CSV_HEADER: &str = "step,branch,freq_hz,transmissibility_re,transmissibility_im,magnitude,magnitude_stderr,magnitude_error_is_spread,exact_magnitude,gamma,table_accel_mps2,power_in_w,true_dissipated_w,true_damper_w,host_storage_w,steady";
 
 impl TableSineResult {
     /// `transmissibility.csv`: a row per step, in the order driven (the
@@ -234,7 +249,7 @@ impl TableSineResult {
                     Complex64::new(re, im).norm().to_string()
                 });
             csv.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 k + 1,
                 p.branch.as_str(),
                 p.freq_hz,
@@ -248,7 +263,9 @@ impl TableSineResult {
                 p.table_accel_mps2,
                 p.power_in_w,
                 p.true_dissipated_w,
-                p.true_damper_w
+                p.true_damper_w,
+                p.host_storage_w,
+                p.steady
             ));
         }
         csv
@@ -367,6 +384,7 @@ mod tests {
                 p.freq_hz
             );
             assert!((p.table_accel_mps2 / 10.0 - 1.0).abs() < 0.01);
+            assert!(p.steady, "{} Hz: storage {} W", p.freq_hz, p.host_storage_w);
         }
     }
 
