@@ -186,17 +186,55 @@ pub(crate) fn run_on_pool(
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<HostRun> {
-    let source = bed_source(py, cache)?;
-    let pool = thread_pool(threads)?;
-    let mut scene = scene.clone();
-    scene.simulation.step_threads = pool.current_num_threads();
-    let callback = Callback::new(progress);
-    let run = py.detach(|| {
-        let mut tell = |p: Progress| callback.call((p.phase, p.fraction, p.cycle));
-        pool.install(|| run_host_test(&scene, &source, test, &mut tell))
-    });
-    callback.finish()?;
-    run.map_err(|e| PyRuntimeError::new_err(format!("running the damper on its host: {e}")))
+    let pool = PoolRun {
+        cache,
+        threads,
+        progress,
+    };
+    pool.run(
+        py,
+        scene,
+        "running the damper on its host",
+        |scene, source, tell| run_host_test(scene, source, test, tell),
+    )
+}
+
+/// How a run of one bed takes the pool: the bed cache or not, the threads,
+/// and the progress callback.
+pub(crate) struct PoolRun {
+    pub cache: bool,
+    pub threads: Option<usize>,
+    pub progress: Option<Py<PyAny>>,
+}
+
+impl PoolRun {
+    /// Runs `work` on a pool of the threads with the GIL released, the bed
+    /// run alone taking every thread, `progress` called with (phase,
+    /// fraction, cycle); a failure raised as `RuntimeError` after `what`.
+    pub(crate) fn run<T: Send>(
+        self,
+        py: Python<'_>,
+        scene: &Scene,
+        what: &str,
+        work: impl FnOnce(
+            &Scene,
+            &vlab::experiment::bed::cache::BedSource,
+            &mut dyn FnMut(Progress),
+        ) -> Result<T, vlab::scene::SceneError>
+        + Send,
+    ) -> PyResult<T> {
+        let source = bed_source(py, self.cache)?;
+        let pool = thread_pool(self.threads)?;
+        let mut scene = scene.clone();
+        scene.simulation.step_threads = pool.current_num_threads();
+        let callback = Callback::new(self.progress);
+        let run = py.detach(|| {
+            let mut tell = |p: Progress| callback.call((p.phase, p.fraction, p.cycle));
+            pool.install(|| work(&scene, &source, &mut tell))
+        });
+        callback.finish()?;
+        run.map_err(|e| PyRuntimeError::new_err(format!("{what}: {e}")))
+    }
 }
 
 /// A finished host test: the lab's record, the truth and the energy books.

@@ -7,7 +7,6 @@ use std::path::PathBuf;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
-use vlab::experiment::damper::Progress;
 use vlab::experiment::host_test::HostTest;
 use vlab::experiment::host_test::carried_sine::{CarriedSine, CarriedSineResult, run_carried_sine};
 use vlab::experiment::host_test::frf::{FrfPoint, SteppedSine};
@@ -20,7 +19,7 @@ use vlab::study::host_prediction::check_frequencies;
 use vlab::study::sweep::SweepFile;
 
 use crate::common::{Callback, bed_source, thread_pool, value_error, write_into};
-use crate::host::{host_test_of, run_on_pool};
+use crate::host::{PoolRun, host_test_of, run_on_pool};
 
 /// An error of a random or swept test as Python raises it: the library's
 /// refusals as `ValueError`, the run's own as it raised them.
@@ -317,18 +316,17 @@ fn up_and_down(
     carried
         .validate()
         .map_err(|e| value_error(e.renamed("freqs_hz")))?;
-    let source = bed_source(py, cache)?;
-    let pool = thread_pool(threads)?;
-    let mut scene = scene.clone();
-    scene.simulation.step_threads = pool.current_num_threads();
-    let callback = Callback::new(progress);
-    let result = py.detach(|| {
-        let mut tell = |p: Progress| callback.call((p.phase, p.fraction, p.cycle));
-        pool.install(|| run_carried_sine(&scene, &source, &test, &carried, &mut tell))
-    });
-    callback.finish()?;
-    let result = result
-        .map_err(|e| PyRuntimeError::new_err(format!("the stepped sine up and down: {e}")))?;
+    let pool = PoolRun {
+        cache,
+        threads,
+        progress,
+    };
+    let result = pool.run(
+        py,
+        scene,
+        "the stepped sine up and down",
+        |scene, source, tell| run_carried_sine(scene, source, &test, &carried, tell),
+    )?;
     Ok(HostFrf {
         outcome: FrfKind::UpDown(Box::new((result, test))),
     })

@@ -16,6 +16,7 @@ mod calibrate;
 mod common;
 mod drop;
 mod host;
+mod host_base;
 mod host_frf;
 mod records;
 mod scene;
@@ -35,6 +36,8 @@ fn _vlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(host::host_decay, m)?)?;
     m.add_function(wrap_pyfunction!(host_frf::host_frf, m)?)?;
     m.add_class::<host_frf::HostFrf>()?;
+    m.add_function(wrap_pyfunction!(host_base::host_base, m)?)?;
+    m.add_class::<host_base::HostBase>()?;
     m.add_class::<host::HostRunResult>()?;
     m.add_class::<host::HostDecay>()?;
     m.add_function(wrap_pyfunction!(scene::scene_json, m)?)?;

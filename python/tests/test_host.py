@@ -230,3 +230,42 @@ def test_a_bad_frf_value_is_refused_with_its_keyword(args, said):
         vlab.host_frf(**call)
     for part in said:
         assert part in str(refused.value), str(refused.value)
+
+
+def test_the_host_on_the_table_is_the_commands_and_its_exact_transmissibility(cli, tmp_path):
+    freqs = [36, 40, 44]
+    base = vlab.host_base(freqs, accel_mps2=10.0, damper="dashpot:20", settle_cycles=20,
+                          record_cycles=10, down=True, cache=False)
+    c = base.columns
+    assert c["branch"] == ["up", "up", "up", "down", "down"]
+    # The mass on its spring and dashpot to the table, computed here.
+    m, k = 0.5, 0.5 * (2 * math.pi * 40.0) ** 2
+    ct = 2 * 0.003 * math.sqrt(k * m) + 20.0
+    w = 2 * math.pi * c["freq_hz"]
+    exact = np.abs((k + 1j * w * ct) / (k - w**2 * m + 1j * w * ct))
+    assert np.max(np.abs(c["magnitude"] / exact - 1)) < 5e-4
+    assert np.max(np.abs(c["power_in_w"] / c["true_dissipated_w"] - 1)) < 5e-3
+    base.write(tmp_path / "py")
+    subprocess.run([cli, "--quiet", "host", "base", "--freq", "36,40,44", "--accel-mps2", "10",
+                    "--damper", "dashpot:20", "--settle-cycles", "20", "--record-cycles", "10",
+                    "--down", "--no-cache", "--out", str(tmp_path / "cli")],
+                   check=True, capture_output=True)
+    for name in ["transmissibility.csv", "transmissibility.svg"]:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+
+
+@pytest.mark.parametrize(
+    "args, said",
+    [
+        (dict(host="beam-2mode"), ["participation factors"]),
+        (dict(accel_mps2=0.0), ["accel_mps2", "m/s^2"]),
+        (dict(record_cycles=1), ["record_cycles"]),
+    ],
+)
+def test_a_bad_table_value_is_refused_with_its_keyword(args, said):
+    call = dict(damper="dashpot:20", cache=False)
+    call.update(args)
+    with pytest.raises(ValueError) as refused:
+        vlab.host_base([40], **call)
+    for part in said:
+        assert part in str(refused.value), str(refused.value)

@@ -45,9 +45,11 @@ __all__ = [
     "host_run",
     "host_decay",
     "host_frf",
+    "host_base",
     "HostRun",
     "HostDecay",
     "HostFrf",
+    "HostBase",
     "calibrate",
     "Calibration",
     "scene",
@@ -626,6 +628,43 @@ def host_frf(freqs_hz=None, **options):
     kind = "shake" if runs_once else "sweep"
     run = lambda **o: _vlab.host_frf(freqs_hz, **o)
     return HostFrf(_run_with_progress(run, options, kind))
+
+
+class HostBase:
+    """A finished test of the host on the shaker's table: each step's
+    transmissibility (the damper's acceleration over the table's), the
+    exact one for a linear payload, the power the table put in against what
+    was dissipated, and whether the step was steady."""
+
+    def __init__(self, inner):
+        self._inner = inner
+
+    @property
+    def columns(self):
+        """What transmissibility.csv holds: numpy arrays named with their
+        units (the branch and the flags as lists)."""
+        return _csv_columns(self._inner.csv)
+
+    def write(self, out):
+        """Writes what `vlab host base --out` writes into folder `out`."""
+        self._inner.write(str(out))
+
+
+def host_base(freqs_hz, **options):
+    """The host on the rig's shaker table, as `vlab host base` measures it:
+    a stepped sine of the table's acceleration `accel_mps2` (m/s^2, default
+    10) at each of `freqs_hz` (Hz, ascending), `settle_cycles` (30) and
+    `record_cycles` (20) at each, in one run; `down=True` comes back down.
+    The host must have one mode (a mass on its spring and dashpot to the
+    table). Returns a HostBase. The other keywords are `host_run`'s.
+    """
+    if isinstance(freqs_hz, (int, float)):
+        freqs_hz = [freqs_hz]
+    freqs_hz = [float(f) for f in freqs_hz]
+    if options.get("scene") is not None:
+        options["scene"] = str(options["scene"])
+    run = lambda **o: _vlab.host_base(freqs_hz, **o)
+    return HostBase(_run_with_progress(run, options, "shake"))
 
 
 def scene(path=None):

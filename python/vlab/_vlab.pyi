@@ -284,3 +284,27 @@ def host_frf(
     threads: Optional[int] = None,
     progress: Optional[Callable[..., object]] = None,
 ) -> HostFrf: ...
+
+class HostBase:
+    @property
+    def csv(self) -> str: ...
+    def write(self, out: Union[str, PathLike[str]]) -> None: ...
+
+def host_base(
+    freqs_hz: list[float],
+    *,
+    accel_mps2: float = 10.0,
+    settle_cycles: int = 30,
+    record_cycles: int = 20,
+    down: bool = False,
+    host: str = "plate-40hz",
+    damper: str = "particles",
+    scene: Union[str, PathLike[str], None] = None,
+    seed: Optional[int] = None,
+    orientation: Optional[str] = None,
+    rig: str = "thesis-shaker",
+    noise_seed: Optional[int] = None,
+    cache: bool = True,
+    threads: Optional[int] = None,
+    progress: Optional[Callable[[str, float, int], object]] = None,
+) -> HostBase: ...
