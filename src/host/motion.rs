@@ -87,31 +87,15 @@ impl HostMotion {
             }
             None => Table::default(),
         };
-        let dynamics = HostDynamics::on_base(spec, payload);
-        HostMotion {
-            start_m: dynamics.damper_displacement_m(),
-            dynamics,
-            excitation,
-            resting_force_n,
-            last_excitation_n: 0.0,
-            last_damper_force_n: 0.0,
-            kinematics: Kinematics::default(),
-            base: Some(OnBase {
-                table,
-                mass_kg: base_mass_kg(spec, payload),
-                damper_work_on_table_j: 0.0,
-            }),
-        }
-    }
-
-    /// Whether the host stands on a table (base excitation).
-    pub fn is_on_base(&self) -> bool {
-        self.base.is_some()
-    }
-
-    /// The table's velocity, m/s (0 for a force drive).
-    pub fn table_velocity_mps(&self) -> f64 {
-        self.base.map_or(0.0, |b| b.table.velocity_mps)
+        let mut motion = HostMotion::new(spec, payload, excitation, resting_force_n);
+        motion.dynamics = HostDynamics::on_base(spec, payload);
+        motion.start_m = motion.dynamics.damper_displacement_m();
+        motion.base = Some(OnBase {
+            table,
+            mass_kg: base_mass_kg(spec, payload),
+            damper_work_on_table_j: 0.0,
+        });
+        motion
     }
 
     /// The damper force's work on the table's motion so far, `Σ F_d Δy`

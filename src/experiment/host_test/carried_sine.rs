@@ -21,7 +21,7 @@ use serde::Serialize;
 use crate::experiment::bed::cache::BedSource;
 use crate::experiment::damper::Progress;
 use crate::experiment::host_test::frf::{FrfPoint, measure_point};
-use crate::experiment::host_test::{HostTest, run_host_test};
+use crate::experiment::host_test::{HostRun, HostTest, run_host_test};
 use crate::host::Excitation;
 use crate::host::excitation::check_frequencies;
 use crate::scene::{Scene, SceneError};
@@ -160,33 +160,70 @@ pub fn run_carried_sine(
     plan: &CarriedSine,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<CarriedSineResult, SceneError> {
-    plan.validate()?;
-    let excitation = plan.excitation();
-    let steps = excitation.steps();
-    let t = HostTest {
-        duration_s: steps.last().map_or(0.0, |s| s.2),
-        excitation,
-        start_steady: true,
-        ..test.clone()
-    };
-    let run = run_host_test(scene, beds, &t, progress)?;
     let g = scene.simulation.gravity_mps2;
-    let points = steps
-        .iter()
-        .zip(plan.order())
-        .map(|(&(freq_hz, start_s, end_s), (_, branch))| {
-            let from_s = start_s + f64::from(plan.settle_cycles) / freq_hz;
-            let window = run.window(from_s, end_s);
-            let point = measure_point(&window, &t, freq_hz, from_s, g)?;
-            Ok(CarriedPoint { branch, point })
+    let (points, run) = plan.run_steps(scene, beds, test, progress, |window, t, step| {
+        let point = measure_point(window, t, step.freq_hz, step.from_s, g)?;
+        Ok(CarriedPoint {
+            branch: step.branch,
+            point,
         })
-        .collect::<Result<Vec<_>, SceneError>>()?;
+    })?;
     Ok(CarriedSineResult {
         plan: plan.clone(),
         points,
         steps: run.steps,
         wall_time_s: run.wall_time_s,
     })
+}
+
+/// One step of a carried sine as its measurement sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct Step {
+    pub freq_hz: f64,
+    pub branch: Branch,
+    /// Where its recorded cycles start, s.
+    pub from_s: f64,
+}
+
+impl CarriedSine {
+    /// Runs the plan on `test`'s host and damper (its excitation replaced,
+    /// the run started at the first frequency's steady guess; on a table
+    /// if `test` is), one bed of `scene`, and gives `measure` each step's
+    /// recorded cycles (the run cut to them), in the order driven, with
+    /// the whole run.
+    pub fn run_steps<P>(
+        &self,
+        scene: &Scene,
+        beds: &BedSource,
+        test: &HostTest,
+        progress: &mut dyn FnMut(Progress),
+        measure: impl Fn(&HostRun, &HostTest, Step) -> Result<P, SceneError>,
+    ) -> Result<(Vec<P>, HostRun), SceneError> {
+        self.validate()?;
+        let excitation = self.excitation();
+        let steps = excitation.steps();
+        let t = HostTest {
+            duration_s: steps.last().map_or(0.0, |s| s.2),
+            excitation,
+            start_steady: true,
+            ..test.clone()
+        };
+        let run = run_host_test(scene, beds, &t, progress)?;
+        let points = steps
+            .iter()
+            .zip(self.order())
+            .map(|(&(freq_hz, start_s, end_s), (_, branch))| {
+                let from_s = start_s + f64::from(self.settle_cycles) / freq_hz;
+                let step = Step {
+                    freq_hz,
+                    branch,
+                    from_s,
+                };
+                measure(&run.window(from_s, end_s), &t, step)
+            })
+            .collect::<Result<Vec<_>, SceneError>>()?;
+        Ok((points, run))
+    }
 }
 
 impl CarriedSineResult {

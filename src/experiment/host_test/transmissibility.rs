@@ -21,9 +21,7 @@ use crate::experiment::bed::cache::BedSource;
 use crate::experiment::damper::Progress;
 use crate::experiment::host_test::carried_sine::{Branch, CarriedSine};
 use crate::experiment::host_test::frf::receptance_error_rel;
-use crate::experiment::host_test::{
-    DAMPER_ACCEL_CHANNEL, Damper, HostRun, HostTest, run_host_test,
-};
+use crate::experiment::host_test::{DAMPER_ACCEL_CHANNEL, Damper, HostRun, HostTest};
 use crate::host::base::transmissibility;
 use crate::rig::{ACCEL_CHANNEL, FORCE_CHANNEL};
 use crate::scene::{Scene, SceneError};
@@ -141,26 +139,16 @@ pub fn run_table_sine(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<TableSineResult, SceneError> {
     plan.validate()?;
-    let carried = plan.steps();
-    let excitation = carried.excitation();
-    let steps = excitation.steps();
-    let t = HostTest {
-        duration_s: steps.last().map_or(0.0, |s| s.2),
-        excitation,
-        start_steady: true,
+    let g = scene.simulation.gravity_mps2;
+    let on_table = HostTest {
         on_base: true,
         ..test.clone()
     };
-    let run = run_host_test(scene, beds, &t, progress)?;
-    let g = scene.simulation.gravity_mps2;
-    let points = steps
-        .iter()
-        .zip(carried.order())
-        .map(|(&(freq_hz, start_s, end_s), (_, branch))| {
-            let from_s = start_s + f64::from(plan.settle_cycles) / freq_hz;
-            measure(&run.window(from_s, end_s), &t, freq_hz, branch, g)
-        })
-        .collect::<Result<Vec<_>, SceneError>>()?;
+    let (points, run) =
+        plan.steps()
+            .run_steps(scene, beds, &on_table, progress, |window, t, step| {
+                measure(window, t, step.freq_hz, step.branch, g)
+            })?;
     Ok(TableSineResult {
         plan: plan.clone(),
         points,
