@@ -84,19 +84,11 @@ impl HostDynamics {
         Self::with_drive(spec, payload, phi_e)
     }
 
-    /// The host `spec` carrying `payload` on a shaker's table, at rest in
-    /// the table's frame ([`super::base`]): the excitation is the inertial
-    /// load, `−M a_b` with `M` [`super::base::base_mass_kg`], so
-    /// [`Self::advance`] takes `−a_b` as its excitation and the drive
-    /// vector is `M` (the drive point's "displacement" is then `M z`, and
-    /// the excitation's work the inertial load's, in the table's frame).
-    /// `spec` must pass [`super::base::check_on_base`].
-    pub fn on_base(spec: &HostSpec, payload: Payload) -> Self {
-        let m = super::base::base_mass_kg(spec, payload);
-        Self::with_drive(spec, payload, vec![m; spec.modes.len()])
-    }
-
-    fn with_drive(spec: &HostSpec, payload: Payload, phi_e: Vec<f64>) -> Self {
+    /// The host `spec` carrying `payload` with the drive vector `phi_e`
+    /// (one value a mode) in place of the shape values at the drive: on a
+    /// shaker's table ([`super::base`]) the table's mass `M` for the
+    /// inertial load `−M a_b`.
+    pub fn with_drive(spec: &HostSpec, payload: Payload, phi_e: Vec<f64>) -> Self {
         let n = spec.modes.len();
         let phi_d: Vec<f64> = spec.modes.iter().map(|m| m.shape_at_damper).collect();
         let stiffness: Vec<f64> = spec.modes.iter().map(|m| m.stiffness()).collect();

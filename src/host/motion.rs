@@ -88,7 +88,8 @@ impl HostMotion {
             None => Table::default(),
         };
         let mut motion = HostMotion::new(spec, payload, excitation, resting_force_n);
-        motion.dynamics = HostDynamics::on_base(spec, payload);
+        let mass_kg = base_mass_kg(spec, payload);
+        motion.dynamics = HostDynamics::with_drive(spec, payload, vec![mass_kg; spec.modes.len()]);
         motion.start_m = motion.dynamics.damper_displacement_m();
         motion.base = Some(OnBase {
             table,
