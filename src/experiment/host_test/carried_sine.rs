@@ -21,7 +21,7 @@ use serde::Serialize;
 use crate::experiment::bed::cache::BedSource;
 use crate::experiment::damper::Progress;
 use crate::experiment::host_test::frf::{FrfPoint, measure_point};
-use crate::experiment::host_test::{HostRun, HostTest, run_host_test};
+use crate::experiment::host_test::{HostRun, HostTest, run_host_test, write_text};
 use crate::host::Excitation;
 use crate::host::excitation::check_frequencies;
 use crate::scene::{Scene, SceneError};
@@ -312,11 +312,7 @@ impl CarriedSineResult {
     /// (the receptance's magnitude on both branches) into `dir`, which must
     /// exist, each atomically.
     pub fn write(&self, dir: &std::path::Path, test: &HostTest) -> Result<(), SceneError> {
-        let text = |name: &str, t: std::io::Result<String>| {
-            let path = dir.join(name);
-            t.and_then(|t| crate::atomic_write::write_bytes_atomic(&path, t.as_bytes()))
-                .map_err(|source| SceneError::Write { path, source })
-        };
+        let text = |name: &str, t| write_text(dir, name, t);
         text("updown.csv", Ok(self.csv()))?;
         let json = serde_json::to_string_pretty(&self.summary(test)).map_err(std::io::Error::other);
         text("updown.json", json)?;

@@ -221,6 +221,18 @@ pub fn particles_guess(particle_mass_kg: f64, omega_rad_s: f64) -> Payload {
     }
 }
 
+/// Writes `text` (or its error) into `dir/name` atomically: the CSV and
+/// JSON files of the carried sines.
+pub(crate) fn write_text(
+    dir: &std::path::Path,
+    name: &str,
+    text: std::io::Result<String>,
+) -> Result<(), SceneError> {
+    let path = dir.join(name);
+    text.and_then(|t| crate::atomic_write::write_bytes_atomic(&path, t.as_bytes()))
+        .map_err(|source| SceneError::Write { path, source })
+}
+
 /// The trace channel of the damper's accelerometer on a table test (the
 /// rig's own `acceleration` is the table's there).
 pub const DAMPER_ACCEL_CHANNEL: &str = "damper_acceleration";

@@ -21,7 +21,7 @@ use crate::experiment::bed::cache::BedSource;
 use crate::experiment::damper::Progress;
 use crate::experiment::host_test::carried_sine::{Branch, CarriedSine};
 use crate::experiment::host_test::frf::receptance_error_rel;
-use crate::experiment::host_test::{DAMPER_ACCEL_CHANNEL, Damper, HostRun, HostTest};
+use crate::experiment::host_test::{DAMPER_ACCEL_CHANNEL, Damper, HostRun, HostTest, write_text};
 use crate::host::base::transmissibility;
 use crate::rig::{ACCEL_CHANNEL, FORCE_CHANNEL};
 use crate::scene::{Scene, SceneError};
@@ -264,11 +264,7 @@ impl TableSineResult {
     /// `transmissibility.svg` (|T| against frequency, each branch, the
     /// exact line for a linear payload) into `dir`, each atomically.
     pub fn write(&self, dir: &std::path::Path, test: &HostTest) -> Result<(), SceneError> {
-        let text = |name: &str, t: std::io::Result<String>| {
-            let path = dir.join(name);
-            t.and_then(|t| crate::atomic_write::write_bytes_atomic(&path, t.as_bytes()))
-                .map_err(|source| SceneError::Write { path, source })
-        };
+        let text = |name: &str, t| write_text(dir, name, t);
         text("transmissibility.csv", Ok(self.csv()))?;
         let summary = serde_json::json!({
             "host": test.host,
