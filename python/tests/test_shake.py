@@ -1,6 +1,6 @@
 """The Python package against the library and the physics it runs.
 
-Run by `cargo test --workspace` (python/tests/package.rs stages the package
+Run by `cargo test --workspace` (python/tests/suite/package.rs stages the package
 built by that cargo run and runs pytest on this file); by hand after
 `pip install ./python`: `python -m pytest python/tests`.
 """
@@ -115,7 +115,7 @@ def test_the_binding_runs_what_the_library_runs(short):
     # and passes its energy per cycle, every bit of it.
     expected = os.environ.get("VLAB_EXPECTED_ENERGY_J")
     if expected is None:
-        pytest.skip("VLAB_EXPECTED_ENERGY_J is set by python/tests/package.rs")
+        pytest.skip("VLAB_EXPECTED_ENERGY_J is set by python/tests/suite/package.rs")
     assert short.energy_per_cycle_j[0] == float(expected)
 
 
@@ -138,7 +138,7 @@ def test_the_binding_gives_the_commands_bits(short, tmp_path):
     # every figure, warning and count (timings aside), and the same record.
     cli = os.environ.get("VLAB")
     if cli is None:
-        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/suite/package.rs")
     out = tmp_path / "cli"
     flags = ["--freq", "40", "--gamma", "20", "--seed", "3", "--beds", "1"]
     flags += ["--cycles", "8", "--steady-cycles", "4", "--rig", "ideal"]
@@ -208,7 +208,7 @@ def test_analyze_reads_a_record_as_the_command_does():
     assert r["energy_per_cycle_j"] == pytest.approx(r["power_w"] / 40.0, rel=1e-12)
     cli = os.environ.get("VLAB")
     if cli is None:
-        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/suite/package.rs")
     run = subprocess.run(
         [cli, "analyze", trace, "--calibration", calibration, "--json"],
         capture_output=True,
@@ -254,7 +254,7 @@ def test_cor_reads_a_drop_record_as_the_command_does():
     assert round(r["cor_mean"], 5) == 0.90899 and len(r["cor_per_triple"]) == 5
     cli = os.environ.get("VLAB")
     if cli is None:
-        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/suite/package.rs")
     run = subprocess.run([cli, "cor", record, "--json"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert json.loads(run.stdout) == r
@@ -292,7 +292,7 @@ def test_drop_gives_the_commands_figures_and_files(tmp_path):
     assert (tmp_path / "py" / "drop.json").exists()
     cli = os.environ.get("VLAB")
     if cli is None:
-        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/suite/package.rs")
     out = tmp_path / "cli"
     flags = ["--particle", "acrylic-printed", "--heights", "0.01,0.02", "--out", str(out)]
     run = subprocess.run([cli, "drop", *flags, "--json"], capture_output=True, text=True)
@@ -329,7 +329,7 @@ REFERENCE_MAP = os.path.join(
 
 def test_a_host_prediction_is_the_commands_to_the_bit(tmp_path):
     # The reference map reaches Gamma 30 at 36-44 Hz: 8 N on plate-40hz
-    # drives 39 Hz to Gamma 32.7, above it (tests/host_cli.rs says the same
+    # drives 39 Hz to Gamma 32.7, above it (tests/suite/host_cli.rs says the same
     # of the command).
     p = vlab.host_predict(REFERENCE_MAP, [36, 39, 40], 8.0)
     cols = p.columns
@@ -342,7 +342,7 @@ def test_a_host_prediction_is_the_commands_to_the_bit(tmp_path):
     p.write(tmp_path / "py")
     cli = os.environ.get("VLAB")
     if cli is None:
-        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/suite/package.rs")
     out = tmp_path / "cli"
     flags = ["--map", REFERENCE_MAP, "--freq", "36,39,40", "--force-n", "8", "--out", str(out)]
     run = subprocess.run([cli, "host", "predict", *flags], capture_output=True, text=True)
@@ -396,7 +396,7 @@ def test_a_scene_is_what_the_command_reads(path):
         assert f["particles"]["shape"] == "toroid" and f["particles"]["body"]["sub_spheres"] > 1
     cli = os.environ.get("VLAB")
     if cli is None:
-        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/suite/package.rs")
     flags = ["scene", "--json"] + ([] if path is None else ["--scene", path])
     run = subprocess.run([cli, *flags], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
@@ -420,7 +420,7 @@ def test_a_calibration_is_the_commands_to_the_bit(tmp_path):
     c.write(tmp_path / "py.json")
     cli = os.environ.get("VLAB")
     if cli is None:
-        pytest.skip("VLAB, the vlab binary, is set by python/tests/package.rs")
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/suite/package.rs")
     flags = ["--freq", "40,160", "--gammas", "5,10", "--out", str(tmp_path / "cli.json"), "--json"]
     run = subprocess.run([cli, "calibrate", *flags], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr

@@ -310,7 +310,7 @@ struct ColumnDamper {
 /// the 17 DEM amplitudes lay outside the map's range by up to 2.7 %
 /// (41.5 Hz); 3 % covers them. Checked on runs not used to set it, the
 /// same plate at 3 N and 8 N and the beam at 5 N
-/// (`tests/map_model_coverage.rs`).
+/// (`tests/suite/map_model_coverage.rs`).
 pub const MODEL_FLOOR_REL: f64 = 0.03;
 
 /// One steady response the model predicts.

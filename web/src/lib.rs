@@ -6,7 +6,7 @@
 //!
 //! The same library code as the command line runs here, on one thread: a
 //! lab with the same frequency, Γ, orientation, seed, cycles and rig gives
-//! the numbers `vlab shake` gives (tests/browser_lab.rs checks it in a real
+//! the numbers `vlab shake` gives (tests/suite/browser_lab.rs checks it in a real
 //! browser). [`run_lab`] is the whole lab as a plain function; the
 //! WebAssembly exports at the end of this file only move JSON between it
 //! and the page's worker (web/site/lab-worker.js).

@@ -503,7 +503,7 @@ mod tests {
     /// first version waited for every helper to finish every phase; a
     /// helper that read the epoch when it started, not 0, missed its first
     /// phase and hung here.) Every interleaving of the sleep and the wake
-    /// is the model test's (`tests/team_wake_model.rs`).
+    /// is the model test's (`tests/suite/team_wake_model.rs`).
     #[test]
     fn no_phase_is_lost_however_the_gaps_fall() {
         let (teams, phases) = (rounds(300, 3), rounds(1500, 8));

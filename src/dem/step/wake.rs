@@ -10,7 +10,7 @@
 //! helper's look at the epoch sees the new one. The caller reads the
 //! sleepers with a read-modify-write, which reads the latest count whatever
 //! the orderings: the argument holds with acquire and release alone, which
-//! is what the model test (`tests/team_wake_model.rs`, every interleaving
+//! is what the model test (`tests/suite/team_wake_model.rs`, every interleaving
 //! of a caller and a sleeping helper under `loom`) checks. That test
 //! includes this file as it is, with `loom`'s primitives in place of std's
 //! (the `sync` module beside it), so this file uses nothing else of vlab.

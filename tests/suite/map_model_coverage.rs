@@ -1,0 +1,157 @@
+//! Does the map-based model's claimed range hold the coupled DEM where it
+//! was not set? The range (`amplitude_low_m` to `amplitude_high_m` of
+//! `vlab host predict`) is the map's own (its efficiency anywhere between
+//! neighbouring points, each ± its error) widened by the model's floor,
+//! `vlab::host::map_model::MODEL_FLOOR_REL`, which was set on one run
+//! only: the thesis damper on plate-40hz at 5 N
+//! (`signals/reference/host-frf/`). Here the kept coupled-DEM runs at 3 N
+//! and 8 N on the same plate and at 5 N on the beam, which it never saw,
+//! are held to it.
+//!
+//! A range is not a one-sigma error: it should hold nearly every point.
+//! The criterion is 90 % of the points the model answers (a point the
+//! DEM drove beyond the map's Γ, where the model warns that it guesses, is
+//! a refusal with its reason, not an answer). Measured when written
+//! (2026-11-28): 3 N 16 of 17 (37 Hz lies 0.5 % below the range), 8 N 15
+//! of 16 answered (42 Hz, where the DEM bounces at Γ 18.5 and the model
+//! settles at Γ 16.7, lies 5.6 % above it; 39 Hz, Γ 40.3, refused); the
+//! beam at 5 N 7 of 9 (at its sharp resonance the DEM lies 6.3 % below the
+//! range at 40 Hz and 6.4 % above it at 40.5 Hz, where it had not
+//! settled): 38 of 42 in all, 90.5 %, at the criterion's edge. Before the
+//! range took the points'
+//! neighbours the model's ± was its points' errors alone (0.1-0.4 % on the
+//! flat top) and held 2 of the 17 points at 5 N.
+
+#![cfg(all(feature = "cli", feature = "plot"))]
+
+use crate::common;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use common::{Scratch, stderr, vlab};
+
+/// Columns of a CSV (comment lines skipped) by name, each row's values.
+fn columns(path: &Path) -> BTreeMap<String, Vec<String>> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<String> = lines
+        .next()
+        .expect("a header")
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let mut out: BTreeMap<String, Vec<String>> =
+        header.iter().map(|h| (h.clone(), Vec::new())).collect();
+    for line in lines {
+        for (h, v) in header.iter().zip(line.split(',')) {
+            out.get_mut(h).expect("a column").push(v.to_string());
+        }
+    }
+    out
+}
+
+fn floats(c: &BTreeMap<String, Vec<String>>, name: &str) -> Vec<f64> {
+    c[name]
+        .iter()
+        .map(|v| v.parse().unwrap_or_else(|_| panic!("{name}: {v}")))
+        .collect()
+}
+
+/// The points of a kept coupled-DEM run the prediction of the same
+/// stepped sine holds, and those it answers: (held, answered, misses).
+fn coverage(dir: &Scratch, kept: &str, host: &str, force_n: &str) -> (usize, usize, Vec<String>) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dem = columns(&root.join(kept));
+    let freqs = floats(&dem, "freq_hz");
+    let list: Vec<String> = freqs.iter().map(f64::to_string).collect();
+    let out = format!("predict-{host}-{force_n}");
+    let run = vlab(
+        &dir.0,
+        &[
+            "--quiet",
+            "host",
+            "predict",
+            "--host",
+            host,
+            "--map",
+            &root
+                .join("signals/reference/host-map/sweep.csv")
+                .to_string_lossy(),
+            "--freq",
+            &list.join(","),
+            "--force-n",
+            force_n,
+            "--out",
+            &out,
+        ],
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let predicted = columns(&dir.path(&format!("{out}/predict.csv")));
+    let (low, high) = (
+        floats(&predicted, "amplitude_low_m"),
+        floats(&predicted, "amplitude_high_m"),
+    );
+    assert_eq!(floats(&predicted, "freq_hz"), freqs, "{kept}");
+    let (amplitude, gamma) = (floats(&dem, "amplitude_m"), floats(&dem, "gamma"));
+    let (mut held, mut answered, mut misses) = (0, 0, Vec::new());
+    for k in 0..freqs.len() {
+        // The map's top is Gamma 30 at every frequency: beyond it the
+        // command warns that the model guesses.
+        if gamma[k] > 30.0 {
+            continue;
+        }
+        answered += 1;
+        if (low[k]..=high[k]).contains(&amplitude[k]) {
+            held += 1;
+        } else {
+            misses.push(format!(
+                "{} Hz: DEM {:.4} mm outside {:.4}..{:.4} mm",
+                freqs[k],
+                amplitude[k] * 1e3,
+                low[k] * 1e3,
+                high[k] * 1e3
+            ));
+        }
+    }
+    (held, answered, misses)
+}
+
+#[test]
+fn the_claimed_range_holds_the_coupled_dem_where_it_was_set_and_beyond() {
+    let dir = Scratch::new("map-model-coverage");
+    // Where the floor was set: every point.
+    let (held, answered, misses) = coverage(
+        &dir,
+        "signals/reference/host-frf/frf.csv",
+        "plate-40hz",
+        "5",
+    );
+    assert_eq!((held, answered), (17, 17), "{misses:?}");
+    // Out of sample.
+    let mut total = (0, 0);
+    for (kept, host, force) in [
+        (
+            "signals/reference/host-frf-levels/force-3N/frf.csv",
+            "plate-40hz",
+            "3",
+        ),
+        (
+            "signals/reference/host-frf-levels/force-8N/frf.csv",
+            "plate-40hz",
+            "8",
+        ),
+        ("signals/reference/host-frf-beam/frf.csv", "beam-2mode", "5"),
+    ] {
+        let (held, answered, misses) = coverage(&dir, kept, host, force);
+        eprintln!("{kept}: {held} of {answered} held; {misses:?}");
+        assert!(answered >= 8, "{kept}: {answered} points answered");
+        total = (total.0 + held, total.1 + answered);
+    }
+    assert!(
+        total.0 as f64 >= 0.9 * total.1 as f64,
+        "{} of {} out-of-sample points held",
+        total.0,
+        total.1
+    );
+}
