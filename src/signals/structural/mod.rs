@@ -39,7 +39,8 @@
 //!   `G_yx = conj(G_xy)`, `γ² = |G_xy|² / (G_xx G_yy)`. H1 is unbiased by
 //!   noise on the output, H2 by noise on the input; `H1 / H2 = γ²`.
 //!   [`Frf::magnitude_stderr_rel`] is Bendat & Piersol's random error of
-//!   `|H|`: `sqrt(1 − γ²) / (|γ| sqrt(2 n_d))`.
+//!   `|H|`: `sqrt(1 − γ²) / (|γ| sqrt(2 (n_d − 1)))` (their `n_d` less the
+//!   block the fitted `H` takes from the coherence's estimate).
 //! - [`half_power`] — **half-power bandwidth**: peak `f_peak` of a receptance
 //!   magnitude, the −3 dB (`1/√2`) crossings `f_low`, `f_high` either side,
 //!   `η = (f_high − f_low) / f_peak`.

@@ -732,14 +732,14 @@ fn welch_frf_rectangular_on_bin_multisine_is_exact() {
 
 #[test]
 fn magnitude_stderr_rel_follows_bendat_piersol() {
-    // γ² = 0.5, n_d = 8: sqrt(0.5) / (sqrt(0.5) sqrt(16)) = 0.25 (1e-15);
-    // γ² = 1: 0; out of range: NaN.
+    // γ² = 0.5, n_d = 9: sqrt(0.5) / (sqrt(0.5) sqrt(2 * 8)) = 0.25 (1e-15);
+    // γ² = 1: 0; out of range, or one block: NaN.
     let frf = Frf {
         freq_hz: vec![0.0, 1.0],
         h1: vec![Complex64::new(1.0, 0.0); 2],
         h2: vec![Complex64::new(1.0, 0.0); 2],
         coherence: vec![0.5, 1.0],
-        blocks: 8,
+        blocks: 9,
     };
     assert!(
         (frf.magnitude_stderr_rel(0) - 0.25).abs() < 1e-15,
@@ -748,6 +748,8 @@ fn magnitude_stderr_rel_follows_bendat_piersol() {
     );
     assert_eq!(frf.magnitude_stderr_rel(1), 0.0);
     assert!(frf.magnitude_stderr_rel(2).is_nan());
+    let one_block = Frf { blocks: 1, ..frf };
+    assert!(one_block.magnitude_stderr_rel(0).is_nan());
 }
 
 // -----------------------------------------------------------------------

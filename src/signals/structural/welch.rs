@@ -47,16 +47,29 @@ pub struct Frf {
 }
 
 impl Frf {
-    /// Bendat & Piersol's normalised random error of `|H|` at bin `k`:
-    /// `sqrt(1 − γ²) / (|γ| sqrt(2 n_d))` (one standard deviation, relative).
+    /// Bendat & Piersol's normalised random error of `|H|` at bin `k`,
+    /// `sqrt(1 − γ²) / (|γ| sqrt(2 n))` (one standard deviation, relative),
+    /// with `n = n_d − 1`, not their `n_d`: the coherence is estimated from
+    /// the same `n_d` blocks, and the power it leaves unexplained (`1 − γ²`)
+    /// has lost one block's degrees of freedom to the fitted `H`, so with
+    /// `n_d` the error reads `sqrt((n_d − 1)/n_d)` low on average. On the
+    /// dashpot host's periodic random test (5 periods) it did: an rms z of
+    /// 1.4 over six channel-noise seeds. Even so the error of a few blocks
+    /// is itself uncertain (the z-scores follow Student's t with `2 (n_d −
+    /// 1)` degrees of freedom, rms `sqrt(ν / (ν − 2))`: 1.15 at 5 blocks).
     /// The formula assumes independent blocks; with overlap (50 % Hann)
-    /// the blocks are partly correlated and the true error is somewhat
-    /// larger. Infinite where `γ² = 0`; NaN if `k` is out of range.
+    /// they are partly correlated. Infinite where `γ² = 0`; NaN with one
+    /// block (nothing to estimate it from: a swept sine's) or if `k` is out
+    /// of range.
     pub fn magnitude_stderr_rel(&self, k: usize) -> f64 {
         let Some(&gamma2) = self.coherence.get(k) else {
             return f64::NAN;
         };
-        (1.0 - gamma2).max(0.0).sqrt() / (gamma2.sqrt() * (2.0 * self.blocks as f64).sqrt())
+        if self.blocks < 2 {
+            return f64::NAN;
+        }
+        let independent = (self.blocks - 1) as f64;
+        (1.0 - gamma2).max(0.0).sqrt() / (gamma2.sqrt() * (2.0 * independent).sqrt())
     }
 }
 
