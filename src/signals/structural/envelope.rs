@@ -69,6 +69,26 @@ pub(super) fn filter_spectrum(
     Ok(out.into_iter().map(|v| v * scale).collect())
 }
 
+/// `y`, a record through a first-order high-pass (AC coupling) of corner
+/// `corner_hz` that started from rest, with that coupling undone: the
+/// input `x = y + w_c ∫ y dt` (trapezoids, the integral nil at the first
+/// sample). A decaying signal reads high through the coupling (its gain at
+/// `s = −σ + jω` is about `1 + σ w_c / ω²`, and its transient adds to it):
+/// the thesis rig's 0.2 Hz corner put a 40 Hz decay's crests 0.05-0.07 %
+/// high. `corner_hz = 0` gives `y` back.
+pub fn undo_high_pass(y: &[f64], sample_rate_hz: f64, corner_hz: f64) -> Vec<f64> {
+    let w_dt = std::f64::consts::TAU * corner_hz / sample_rate_hz;
+    let mut integral = 0.0;
+    let mut out = Vec::with_capacity(y.len());
+    for (k, &v) in y.iter().enumerate() {
+        if k > 0 {
+            integral += 0.5 * (y[k - 1] + v);
+        }
+        out.push(v + w_dt * integral);
+    }
+    out
+}
+
 /// `x` band-passed to `[low_hz, high_hz]` without phase shift: its FFT with
 /// every bin outside the band set to zero, transformed back (the record's
 /// mean goes with the zero bin). What a lab does before a logarithmic
