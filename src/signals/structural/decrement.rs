@@ -167,7 +167,7 @@ pub(super) fn peak_height_stderr(
 /// multiples of it (an ADC's record moves by whole codes); 0 otherwise (not
 /// quantised, or filtered after quantising), or when it is below a
 /// millionth of the record's range.
-pub(super) fn quantisation_step(x: &[f64]) -> f64 {
+pub fn quantisation_step(x: &[f64]) -> f64 {
     let range = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     let moves: Vec<f64> = x
         .windows(2)
@@ -233,7 +233,32 @@ pub(super) fn quantisation_step(x: &[f64]) -> f64 {
 /// Errors: `sample_rate_hz` not positive, fewer than 3 samples, a non-finite
 /// sample, or fewer than 2 peaks in successive cycles.
 pub fn log_decrement(x: &[f64], sample_rate_hz: f64) -> Result<Vec<DecayPoint>> {
+    log_decrement_quantised(x, sample_rate_hz, quantisation_step(x))
+}
+
+/// [`log_decrement`] of a record digitised with step `step` (in the unit of
+/// `x`; 0 for none) and filtered since, so that its samples no longer sit
+/// on the codes [`quantisation_step`] looks for: the crests still carry the
+/// converter's error. (`vlab host decay` undoes the accelerometer's AC
+/// coupling before the decrement; read from the undone record, the step
+/// was lost, and below Γ 2 the dashpot host's points scattered three times
+/// their `+-` over six noise seeds, against half of it with the step.)
+///
+/// Errors: as [`log_decrement`], and `step` negative or not finite.
+pub fn log_decrement_quantised(
+    x: &[f64],
+    sample_rate_hz: f64,
+    step: f64,
+) -> Result<Vec<DecayPoint>> {
     check_sample_rate(sample_rate_hz)?;
+    if !(step.is_finite() && step >= 0.0) {
+        return Err(invalid(
+            "step",
+            step,
+            "(unit of x)",
+            "must be finite and at least 0 (0: not quantised)",
+        ));
+    }
     check_min_len("x", x, 3, "log_decrement")?;
     check_finite("x", x)?;
     let largest = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -248,7 +273,7 @@ pub fn log_decrement(x: &[f64], sample_rate_hz: f64) -> Result<Vec<DecayPoint>> 
     // stretches. A small crest sits on one code for the whole window, and
     // whatever the fit averages keeps up to half a code of error; a large
     // one crosses hundreds and the error is white, in the residuals.
-    let q = quantisation_step(x);
+    let q = step;
     // (lobe number, time s, peak value, its error) of the peaks above the
     // floor.
     let peaks: Vec<(usize, f64, f64, f64)> = lobes

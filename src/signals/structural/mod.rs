@@ -167,7 +167,8 @@ pub enum StructuralError {
     #[error(
         "x spans {cycles:.3} cycles (phase advance of its analytic signal): envelope_decay with \
          cycles_per_fit = {cycles_per_fit} cycles needs more than {need} cycles \
-         (cycles_per_fit dropped at each end for end effects, plus one fit window)"
+         (cycles_per_fit dropped at each end for end effects, and START_CYCLES_DROPPED \
+         more at the start, plus one fit window)"
     )]
     TooFewCycles {
         /// Cycles in the record.

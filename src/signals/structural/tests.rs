@@ -187,6 +187,52 @@ fn rms(v: &[f64]) -> f64 {
 }
 
 #[test]
+fn the_envelopes_error_is_its_scatter_over_many_noise_seeds() {
+    // Out of sample for `envelope_noise_variance` (its factor was found at
+    // zeta 0.05, white noise 1e-3, seeds 1-200): a decay at zeta 0.02 with
+    // white noise 3e-3, seeds 1001-1200. Window by window, the loss
+    // factors' standard deviation over the seeds against the rms of their
+    // `+-` within 0.8-1.3 (without the analytic signal's second term the
+    // ratio was 1.5-1.7), and each window's mean within three standard
+    // errors of the mean plus 0.1 % of 2 zeta (the cut's end effect).
+    let zeta = 0.02;
+    let decay = ViscousDecay::new(zeta);
+    let mut by_window: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+    for seed in 1001..=1200 {
+        let mut x = decay.samples(0.05);
+        add_noise(&mut x, 3e-3, seed);
+        let points = envelope_decay(&x, FS_DECAY_HZ, 2.0).unwrap();
+        by_window.resize(by_window.len().max(points.len()), (Vec::new(), Vec::new()));
+        for (k, p) in points.iter().enumerate() {
+            by_window[k].0.push(p.loss_factor);
+            by_window[k].1.push(p.loss_factor_stderr);
+        }
+    }
+    let full: Vec<_> = by_window.iter().filter(|(e, _)| e.len() == 200).collect();
+    assert!(full.len() >= 5, "{} windows in every seed", full.len());
+    for (k, (etas, errors)) in full.iter().enumerate() {
+        let n = etas.len() as f64;
+        let mean = etas.iter().sum::<f64>() / n;
+        let sd = (etas.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let rms_err = (errors.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+        println!(
+            "window {k}: mean {mean:.6} (2 zeta {:.3}), sd {sd:.2e}, rms +- {rms_err:.2e}, ratio {:.2}",
+            2.0 * zeta,
+            sd / rms_err
+        );
+        assert!(
+            (0.8..=1.3).contains(&(sd / rms_err)),
+            "window {k}: sd {sd:.2e} against +- {rms_err:.2e}"
+        );
+        assert!(
+            (mean - 2.0 * zeta).abs() < 3.0 * sd / n.sqrt() + 1e-3 * 2.0 * zeta,
+            "window {k}: mean {mean} against {}",
+            2.0 * zeta
+        );
+    }
+}
+
+#[test]
 fn decay_points_errors_match_their_scatter_over_noise_seeds() {
     // A decay at ζ 0.05 from 1 to 0.02 with white noise of 1e-3 (the
     // rig's accelerometer floor is 0.01 m/s² on crests of 1-200 m/s²),
@@ -205,7 +251,7 @@ fn decay_points_errors_match_their_scatter_over_noise_seeds() {
         env.len(),
         env.iter().sum::<f64>() / env.len() as f64
     );
-    assert!(log.len() >= 80 && env.len() >= 30);
+    assert!(log.len() >= 80 && env.len() >= 24);
     for (name, z) in [("log decrement", &log), ("envelope", &env)] {
         assert!(
             (0.6..=1.6).contains(&rms(z)),
@@ -1057,6 +1103,10 @@ fn every_validation_error_names_parameter_and_unit() {
     );
     assert_err(log_decrement(&with_nan, fs), &["x[7] = NaN", "finite"]);
     assert_err(
+        log_decrement_quantised(&tone, fs, -0.5),
+        &["step = -0.5", "at least 0"],
+    );
+    assert_err(
         log_decrement(&[0.0; 100], fs),
         &["0 positive peak(s)", "at least 2 peaks"],
     );
@@ -1086,7 +1136,7 @@ fn every_validation_error_names_parameter_and_unit() {
     );
     assert_err(
         envelope_decay(short, fs, 2.0),
-        &["x spans", "cycles_per_fit = 2 cycles", "6 cycles"],
+        &["x spans", "cycles_per_fit = 2 cycles", "7 cycles"],
     );
 
     assert_err(
