@@ -486,7 +486,8 @@ impl RandomFrfOutcome {
         test.start_steady = matches!(force, RandomForce::Periodic(_));
         let run = run_test(&test)?;
         let (block_s, window, overlap, skip_s) = force.blocks();
-        let frf = random_frf(&run, &test.rig, skip_s, block_s, overlap, window)?;
+        let periodic = matches!(force, RandomForce::Periodic(_));
+        let frf = random_frf(&run, &test.rig, skip_s, block_s, overlap, window, periodic)?;
         Ok(RandomFrfOutcome {
             test,
             force,
