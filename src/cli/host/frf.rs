@@ -498,9 +498,16 @@ fn random(
     out: &Path,
     quiet: bool,
 ) -> Result<()> {
+    // The run's own warnings are printed as it ends; the analysis's after.
+    let mut printed = 0;
     let outcome = RandomFrfOutcome::run(test, force, |t| {
-        super::run_test(scene, t, a.common.cache, quiet)
+        let run = super::run_test(scene, t, a.common.cache, quiet);
+        printed = run.as_ref().map_or(0, |r| r.warnings.len());
+        run
     })?;
+    for w in &outcome.run.warnings[printed..] {
+        eprintln!("host: warning: {}", w.text);
+    }
     outcome
         .write(out)
         .with_context(|| format!("writing into {}", out.display()))?;

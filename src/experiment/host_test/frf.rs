@@ -37,6 +37,7 @@ use crate::signals::structural::{
 };
 use crate::stats::{ensemble_mean, ensemble_mean_floored, windows_part};
 use crate::validation::{Bound, InvalidParameter, count_in, in_range};
+use crate::warning::RunWarning;
 
 /// Where the bed-to-bed part of the power-input estimate was measured: the
 /// built-in thesis damper (any seed) on a built-in host, driven with a
@@ -748,6 +749,40 @@ pub fn random_frf(
     Ok(frf)
 }
 
+/// Below this many codes of channel noise the converter's rounding is too
+/// little dithered for a periodic test's `+-`
+/// ([`Frf::repeated_quantisation_rel`]): it held at 0.17 of a code (the
+/// thesis accelerometer on 16 bits: the variances' ratio 0.94) and was 2.4
+/// times too small at 0.04 (14 bits).
+pub const DITHER_CODES: f64 = 0.15;
+
+/// One sentence per channel of a periodic random test's record whose noise
+/// is less than [`DITHER_CODES`] of a code: there the rounding that every
+/// period repeats is not white, and `|H1|`'s `+-` does not hold it.
+pub fn undithered_codes_warnings(run: &HostRun, rig: &RigSpec) -> Vec<RunWarning> {
+    [
+        (FORCE_CHANNEL, rig.force_channel()),
+        (ACCEL_CHANNEL, rig.accel_channel()),
+    ]
+    .into_iter()
+    .filter_map(|(name, params)| {
+        let step = quantisation_step(&run.trace.channel(name).ok()?.samples);
+        let codes = params.noise_rms / step;
+        (step > 0.0 && codes < DITHER_CODES).then(|| {
+            format!(
+                "{name}: the channel's noise is {codes:.3} of an ADC code, too little to dither \
+                 the codes: a periodic force repeats their rounding every period, and what \
+                 does not spread white over the block (it gathers at the response's \
+                 harmonics) is not in |H1|'s +- (its variance was 2.4 times the +-'s at 0.04 \
+                 of a code); a digitiser of more bits, or a true random force (--noise), \
+                 reads it"
+            )
+            .into()
+        })
+    })
+    .collect()
+}
+
 /// An accelerance (acceleration over force) turned into the receptance:
 /// over `−ω²`, `rig`'s channels taken out (their phase and magnitude) as
 /// the stepped sine takes them out.
@@ -1130,6 +1165,25 @@ pub(crate) mod tests {
                 )
             })
             .collect()
+    }
+
+    #[test]
+    fn a_periodic_test_on_barely_dithered_codes_says_so() {
+        // The thesis accelerometer's noise is 0.17 of a code at 16 bits
+        // (no warning) and 0.04 at 14 (a warning naming the channel).
+        for (bits, warned) in [(16, false), (14, true)] {
+            let mut test = test_of(Damper::Dashpot { n_s_per_m: 10.0 }, "plate-40hz");
+            test.excitation = Excitation::parse("random:20:60:1:1:7").expect("valid");
+            test.duration_s = 1.0;
+            test.rig.daq.bits = bits;
+            let run = run_host_test(&Scene::thesis(), &BedSource::Settle, &test, &mut |_| {})
+                .expect("runs");
+            let warnings = undithered_codes_warnings(&run, &test.rig);
+            let accel = warnings
+                .iter()
+                .any(|w| w.text.starts_with(ACCEL_CHANNEL) && w.text.contains("of an ADC code"));
+            assert_eq!(accel, warned, "{bits} bits: {warnings:?}");
+        }
     }
 
     #[test]

@@ -11,6 +11,7 @@ use crate::atomic_write::write_bytes_atomic;
 use crate::experiment::bed::cache::BedSource;
 use crate::experiment::host_test::frf::{
     SteppedSine, SteppedSineResult, SweptFrf, random_frf, run_stepped_sine, swept_frf,
+    undithered_codes_warnings,
 };
 use crate::experiment::host_test::frf_figure::{FrfMagnitudes, STEPPED_SINE_CSV_HEADER};
 use crate::experiment::host_test::{Damper, HostRun, HostTest};
@@ -484,10 +485,14 @@ impl RandomFrfOutcome {
         // A periodic force on a linear damper starts at its steady state
         // (`run_host_test`); a noise has none.
         test.start_steady = matches!(force, RandomForce::Periodic(_));
-        let run = run_test(&test)?;
+        let mut run = run_test(&test)?;
         let (block_s, window, overlap, skip_s) = force.blocks();
         let periodic = matches!(force, RandomForce::Periodic(_));
         let frf = random_frf(&run, &test.rig, skip_s, block_s, overlap, window, periodic)?;
+        if periodic {
+            let warnings = undithered_codes_warnings(&run, &test.rig);
+            run.warnings.extend(warnings);
+        }
         Ok(RandomFrfOutcome {
             test,
             force,
