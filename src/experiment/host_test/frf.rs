@@ -864,15 +864,7 @@ pub(crate) mod tests {
         // dissipated (the truth), at every point.
         let test = test_of(Damper::Dashpot { n_s_per_m: 10.0 }, "plate-40hz");
         let freqs: Vec<f64> = (0..=48).map(|k| 34.0 + 0.25 * f64::from(k)).collect();
-        let plan = SteppedSine {
-            freqs_hz: freqs,
-            force_n: 2.0,
-            settle_cycles: 0,
-            record_cycles: 20,
-            beds: 1,
-        };
-        let result = run_stepped_sine(&Scene::thesis(), &BedSource::Settle, &test, &plan, &|_| {})
-            .expect("runs");
+        let result = dashpot_steps(&test, freqs);
         let m = test.host.modes[0];
         let zeta = m.damping_ratio + 10.0 / (2.0 * (m.stiffness() * m.modal_mass_kg).sqrt());
         let payload = Payload {
@@ -996,15 +988,7 @@ pub(crate) mod tests {
         // late). Measured after: 0.0012 % at most.
         let mut test = test_of(Damper::Dashpot { n_s_per_m: 10.0 }, "plate-40hz");
         test.rig = RigSpec::builtin("ideal").expect("built in");
-        let plan = SteppedSine {
-            freqs_hz: vec![5.0, 10.0, 20.0, 30.0],
-            force_n: 2.0,
-            settle_cycles: 0,
-            record_cycles: 20,
-            beds: 1,
-        };
-        let result = run_stepped_sine(&Scene::thesis(), &BedSource::Settle, &test, &plan, &|_| {})
-            .expect("runs");
+        let result = dashpot_steps(&test, vec![5.0, 10.0, 20.0, 30.0]);
         for p in &result.points {
             assert!(
                 (p.power_input_w / p.true_input_w - 1.0).abs() < 1e-4,
@@ -1148,6 +1132,19 @@ pub(crate) mod tests {
             bed_to_bed(&scene, &test, &plan, 44.0),
             BedToBed::NotMeasured
         );
+    }
+
+    /// A stepped sine of `test` at `freqs_hz`, 2 N, from the steady state
+    /// (no settling), 20 cycles recorded, one bed.
+    fn dashpot_steps(test: &HostTest, freqs_hz: Vec<f64>) -> SteppedSineResult {
+        let plan = SteppedSine {
+            freqs_hz,
+            force_n: 2.0,
+            settle_cycles: 0,
+            record_cycles: 20,
+            beds: 1,
+        };
+        run_stepped_sine(&Scene::thesis(), &BedSource::Settle, test, &plan, &|_| {}).expect("runs")
     }
 
     /// The analytical receptance, drive to damper, of `host` with the 10 N
