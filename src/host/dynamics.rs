@@ -72,8 +72,6 @@ pub struct HostDynamics {
     step: Option<(f64, DenseMatrix, Vec<f64>)>,
     /// `[q; q']`.
     z: Vec<f64>,
-    /// The forces held over the last step.
-    held_n: [f64; 2],
     energy: HostEnergy,
 }
 
@@ -137,7 +135,6 @@ impl HostDynamics {
             b,
             step: None,
             z: vec![0.0; 2 * n],
-            held_n: [0.0; 2],
             energy: HostEnergy::default(),
         }
     }
@@ -184,7 +181,6 @@ impl HostDynamics {
             *zi += gamma[2 * i] * damper_force_n + gamma[2 * i + 1] * excitation_n;
         }
         self.z = z;
-        self.held_n = [damper_force_n, excitation_n];
         let (p_host1, p_dash1) = self.damping_powers_w();
         let (xd1, xe1) = (self.damper_displacement_m(), self.drive_displacement_m());
         let e = &mut self.energy;
