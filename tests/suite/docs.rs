@@ -772,6 +772,26 @@ fn host_chapter_commands_run() {
         (coherence * 1000.0).floor() / 1000.0
     ));
 
+    // 5. The linear dashpot beside the damper's true random: its line at
+    // 40 Hz (H1, H2 in mm/N, coherence).
+    let line_40 = std::fs::read_to_string(dir.path("host/noise-dashpot2/frf.csv"))
+        .expect("frf.csv")
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .filter_map(|v| v.parse::<f64>().ok())
+                .collect::<Vec<f64>>()
+        })
+        .find(|c| c.len() >= 6 && c[0] == 40.0)
+        .expect("a line at 40 Hz");
+    quote(format!(
+        "reads H1 {:.2}, H2 {:.2} and a coherence of {:.3} there",
+        line_40[1].hypot(line_40[2]) * 1e3,
+        line_40[3].hypot(line_40[4]) * 1e3,
+        line_40[5]
+    ));
+
     // 3. and 4. The granular damper on both hosts.
     let sums = |name: &str| {
         let a = json_file(&dir, name)["analysis"].clone();
