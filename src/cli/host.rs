@@ -229,6 +229,20 @@ pub fn write_records(dir: &Path, run: &HostRun) -> Result<()> {
 #[derive(Debug, Clone, PartialEq)]
 pub struct FreqList(pub Vec<f64>);
 
+/// The sweep files of `--map` as one map's rows
+/// ([`vlab::study::dissipation_map::read_map_files`]: the first file, each
+/// later one replacing the conditions it holds), and their label.
+pub fn read_maps(paths: &[PathBuf]) -> Result<(vlab::study::sweep::SweepFile, String)> {
+    let label = paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" + ");
+    let file = vlab::study::dissipation_map::read_map_files(paths)
+        .with_context(|| format!("--map {label}"))?;
+    Ok((file, label))
+}
+
 /// `FROM:TO:STEP` (both ends included) or a comma-separated list, in Hz,
 /// each positive and at most 5 kHz, ascending, at most 1000.
 pub fn parse_freqs(s: &str) -> Result<FreqList, String> {

@@ -5,12 +5,13 @@
 //! sweep's own gravity, for one fill ratio and orientation.
 
 use std::f64::consts::TAU;
+use std::path::PathBuf;
 
 use crate::host::{DissipationMap, MapPoint};
 use crate::scene::Orientation;
 use crate::validation::InvalidParameter;
 
-use super::sweep::{RowStatus, SweepFile, summarise};
+use super::sweep::{RowStatus, SweepError, SweepFile, SweepRow, summarise};
 
 /// Which efficiency of a sweep a map holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -101,4 +102,138 @@ pub fn dissipation_map(
         })
         .collect();
     DissipationMap::new(&points, mass, g)
+}
+
+/// The sweep files at `paths` as one map's rows: the first file's, with
+/// every condition (fill ratio, orientation, frequency, Γ) that a later
+/// file holds taken from that file instead (all its seeds, and only its:
+/// a refinement that reruns a condition with more seeds does not count the
+/// first seed twice), and the lists of conditions joined. So a coarse map
+/// is refined where it is too coarse, at a bouncing bed's onset, by a sweep
+/// over a finer Γ grid and several seeds there, without sweeping the whole
+/// map again. Every file must have been swept with the first's protocol
+/// (scene, rig, shaker and vlab version: [`super::sweep::SweepHeader`]'s
+/// `protocol_id`), or its efficiencies would not be comparable.
+pub fn read_map_files(paths: &[PathBuf]) -> Result<SweepFile, SweepError> {
+    let Some((first_path, rest)) = paths.split_first() else {
+        return Err(SweepError::Merge("no map file given".into()));
+    };
+    let mut map = SweepFile::read(first_path)?;
+    for path in rest {
+        let finer = SweepFile::read(path)?;
+        if finer.header.protocol_id != map.header.protocol_id {
+            return Err(SweepError::Merge(format!(
+                "{} was swept with another protocol than {} (protocol_id {} against {}: the scene, \
+                 rig, shaker or vlab version differ), so their efficiencies are not comparable",
+                path.display(),
+                first_path.display(),
+                finer.header.protocol_id,
+                map.header.protocol_id
+            )));
+        }
+        let place = |r: &SweepRow| {
+            let c = &r.condition;
+            (
+                c.fill_ratio.to_bits(),
+                c.orientation,
+                c.freq_hz.to_bits(),
+                c.gamma.to_bits(),
+            )
+        };
+        let replaced: Vec<_> = finer.rows.iter().map(place).collect();
+        map.rows.retain(|r| !replaced.contains(&place(r)));
+        map.rows.extend(finer.rows.iter().cloned());
+        let (to, from) = (&mut map.header.grid, &finer.header.grid);
+        join_values(&mut to.freqs_hz, &from.freqs_hz);
+        join_values(&mut to.gammas, &from.gammas);
+        join_values(&mut to.fill_ratios, &from.fill_ratios);
+        for s in &from.seeds {
+            if !to.seeds.contains(s) {
+                to.seeds.push(*s);
+            }
+        }
+        to.seeds.sort_unstable();
+        for o in &from.orientations {
+            if !to.orientations.contains(o) {
+                to.orientations.push(*o);
+            }
+        }
+    }
+    map.sort_canonical();
+    Ok(map)
+}
+
+/// `to` with the values of `from` it lacks, ascending.
+fn join_values(to: &mut Vec<f64>, from: &[f64]) {
+    for v in from {
+        if !to.iter().any(|t| t.to_bits() == v.to_bits()) {
+            to.push(*v);
+        }
+    }
+    to.sort_by(f64::total_cmp);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kept(name: &str) -> PathBuf {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("signals/reference")
+            .join(name)
+    }
+
+    #[test]
+    fn a_finer_sweep_replaces_the_conditions_it_holds() {
+        // The plate's map (one seed, Γ 14 and 17 at 40 Hz, the bed's onset
+        // between) refined by a sweep of Γ 14-17 at 40 Hz over seeds 1-3:
+        // at Γ 14 and 17 the three seeds replace the map's one (seed 1,
+        // which both files hold, counted once); Γ 15 and 16 join; the other
+        // frequencies keep their rows.
+        let coarse = kept("host-map/sweep.csv");
+        let finer = kept("host-map-onset/sweep-40hz.csv");
+        let base = SweepFile::read(&coarse).expect("reads");
+        let map = read_map_files(&[coarse.clone(), finer.clone()]).expect("refines");
+        let rows_at = |file: &SweepFile, f: f64, g: f64| {
+            file.rows
+                .iter()
+                .filter(|r| r.condition.freq_hz == f && r.condition.gamma == g)
+                .count()
+        };
+        for g in [14.0, 15.0, 16.0, 17.0] {
+            assert_eq!(rows_at(&map, 40.0, g), 3, "40 Hz, Γ {g}");
+        }
+        assert_eq!(rows_at(&base, 40.0, 14.0), 1);
+        for f in [34.0, 37.0, 43.0, 46.0] {
+            for g in [1.5, 14.0, 30.0] {
+                assert_eq!(rows_at(&map, f, g), rows_at(&base, f, g), "{f} Hz, Γ {g}");
+            }
+        }
+        assert_eq!(map.rows.len(), base.rows.len() - 2 + 12);
+        // The map's point is the three seeds' mean.
+        let finer_file = SweepFile::read(&finer).expect("reads");
+        let mean = finer_file
+            .rows
+            .iter()
+            .filter(|r| r.condition.gamma == 16.0)
+            .map(|r| r.efficiency)
+            .sum::<f64>()
+            / 3.0;
+        let m = dissipation_map(&map, None, None, MapSource::Dem).expect("a map");
+        let column = &m.columns[m.freqs_hz.iter().position(|f| *f == 40.0).expect("40 Hz")];
+        let point = column.iter().find(|p| p.gamma == 16.0).expect("Γ 16");
+        assert!(
+            (point.efficiency - mean).abs() < 1e-12,
+            "{point:?} against {mean}"
+        );
+        assert_eq!(column.len(), 12);
+        // A sweep of another protocol is refused, naming both files.
+        let other = kept("sweep-steady/sweep.csv");
+        let err = read_map_files(&[coarse, other]).expect_err("another protocol");
+        let text = err.to_string();
+        assert!(
+            text.contains("another protocol") && text.contains("sweep-steady"),
+            "{text}"
+        );
+    }
 }

@@ -18,7 +18,6 @@ use vlab::experiment::host_test::decay::{
 };
 use vlab::host::Excitation;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
-use vlab::study::sweep::SweepFile;
 
 use super::{HostTestArgs, damper_slug, run_test};
 use crate::cli::args;
@@ -39,8 +38,11 @@ pub struct DecayArgs {
     duration_s: f64,
     /// A sweep (its sweep.csv) whose Yang-measured efficiency gives the
     /// structure-independent energy per cycle at each point's frequency and Γ.
+    /// Given again (`--map COARSE --map FINE`), a later sweep replaces the
+    /// conditions it holds: a map refined at the onset by a finer Γ grid
+    /// and more seeds there, from a sweep of the same scene and rig.
     #[arg(long, value_name = "FILE")]
-    map: Option<PathBuf>,
+    map: Vec<PathBuf>,
     /// Independent beds, one decay each (seeds derived from --seed as
     /// `vlab shake --beds` derives them; the particle damper only): each
     /// cycle's loss factor is then also given as their mean with the error
@@ -65,15 +67,14 @@ pub fn run(a: DecayArgs, quiet: bool) -> Result<()> {
         Damper::Particles => a.beds,
         _ => 1,
     };
-    let map = match &a.map {
-        Some(path) => {
-            let file =
-                SweepFile::read(path).with_context(|| format!("--map {}", path.display()))?;
+    let map = match a.map.is_empty() {
+        false => {
+            let (file, label) = super::read_maps(&a.map)?;
             let o = Some(scene.enclosure.orientation);
             let map = dissipation_map(&file, o, None, MapSource::Yang);
-            Some(map.with_context(|| format!("--map {}", path.display()))?)
+            Some(map.with_context(|| format!("--map {label}"))?)
         }
-        None => None,
+        true => None,
     };
     let out = a.out.clone().unwrap_or_else(|| {
         let name = format!("host-decay-{}-{}", test.host.name, damper_slug(test.damper));

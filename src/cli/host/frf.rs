@@ -21,7 +21,6 @@ use vlab::host::DissipationMap;
 use vlab::host::{Excitation, PeriodicRandom, RandomNoise};
 use vlab::scene::Scene;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
-use vlab::study::sweep::SweepFile;
 
 use super::{FreqList, HostTestArgs, damper_slug};
 use crate::cli::args;
@@ -90,8 +89,11 @@ pub struct FrfArgs {
     duration_s: f64,
     /// A sweep (its sweep.csv): the map-based model's prediction of the same
     /// stepped sine, drawn beside the measurement.
+    /// Given again (`--map COARSE --map FINE`), a later sweep replaces the
+    /// conditions it holds: a map refined at the onset by a finer Γ grid
+    /// and more seeds there, from a sweep of the same scene and rig.
     #[arg(long, value_name = "FILE")]
-    map: Option<PathBuf>,
+    map: Vec<PathBuf>,
     /// Output folder [default: signals/host-frf-<host>-<damper>].
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -218,13 +220,13 @@ fn report_levels(levels: &ForceLevels<'_>) {
 /// The map of `--map`: the DEM's efficiency for the model, Yang's for the
 /// structure-independent figure at each point's frequency and Γ.
 fn maps(a: &FrfArgs, scene: &Scene) -> Result<Option<(DissipationMap, DissipationMap)>> {
-    let Some(path) = &a.map else {
+    if a.map.is_empty() {
         return Ok(None);
-    };
-    let file = SweepFile::read(path).with_context(|| format!("--map {}", path.display()))?;
+    }
+    let (file, label) = super::read_maps(&a.map)?;
     let of = |source| {
         dissipation_map(&file, Some(scene.enclosure.orientation), None, source)
-            .with_context(|| format!("--map {}", path.display()))
+            .with_context(|| format!("--map {label}"))
     };
     Ok(Some((of(MapSource::Dem)?, of(MapSource::Yang)?)))
 }

@@ -12,15 +12,17 @@ use vlab::rig::RigFile;
 use vlab::scene::Orientation;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
 use vlab::study::host_prediction::HostPrediction;
-use vlab::study::sweep::SweepFile;
 
 use super::FreqList;
 
 #[derive(Debug, Clone, Args)]
 pub struct PredictArgs {
     /// The sweep whose efficiency map models the damper (its sweep.csv).
-    #[arg(long, value_name = "FILE")]
-    map: PathBuf,
+    /// Given again (`--map COARSE --map FINE`), a later sweep replaces the
+    /// conditions it holds: a map refined at the onset by a finer Γ grid
+    /// and more seeds there, from a sweep of the same scene and rig.
+    #[arg(long, value_name = "FILE", required = true)]
+    map: Vec<PathBuf>,
     /// The host: a built-in name (plate-40hz, beam-2mode) or a host file.
     #[arg(long, value_name = "NAME|FILE", default_value = DEFAULT_HOST)]
     host: String,
@@ -42,17 +44,16 @@ pub struct PredictArgs {
 }
 
 pub fn run(a: PredictArgs) -> Result<()> {
-    let file = SweepFile::read(&a.map).with_context(|| format!("--map {}", a.map.display()))?;
+    let (file, label) = super::read_maps(&a.map)?;
     let source = if a.yang {
         MapSource::Yang
     } else {
         MapSource::Dem
     };
     let map = dissipation_map(&file, a.orientation, None, source)
-        .with_context(|| format!("--map {}", a.map.display()))?;
+        .with_context(|| format!("--map {label}"))?;
     let host =
         HostSpec::from_name_or_path(&a.host).with_context(|| format!("--host {}", a.host))?;
-    let label = a.map.display().to_string();
     let p = HostPrediction::run(&map, label, source, host, &a.freqs.0, a.force_n);
     println!(
         "{} with the damper of {} ({} kg of particles, {} map points{}), {} N at the drive: {} frequencies in {:.1} ms",
