@@ -2,6 +2,7 @@
 //! that a failure leaves as it was, errors as Python exceptions, the bed
 //! cache, the thread pool and a progress callback.
 
+use std::path::PathBuf;
 use std::sync::Mutex;
 
 use numpy::PyArray1;
@@ -13,6 +14,8 @@ use vlab::experiment::bed::cache::{BedCache, BedSource};
 use vlab::rig::ShakerKind;
 use vlab::scene::SceneError;
 use vlab::signals::Trace;
+use vlab::study::dissipation_map::read_map_files;
+use vlab::study::sweep::SweepFile;
 
 /// A figure and its one-sigma error (`None` where it is not known).
 pub(crate) type Figure = (f64, Option<f64>);
@@ -129,4 +132,30 @@ pub(crate) fn channel_array<'py>(
         ))
     })?;
     Ok(PyArray1::from_slice(py, &c.samples))
+}
+
+/// A `map` keyword: one sweep.csv, or a list of them, the first refined by
+/// the later ones as `--map` given again refines it
+/// ([`vlab::study::dissipation_map::read_map_files`]).
+#[derive(FromPyObject)]
+pub(crate) enum MapFiles {
+    One(PathBuf),
+    Many(Vec<PathBuf>),
+}
+
+/// The sweep file(s) of a `map` keyword as one map's rows, and their label
+/// (joined by `+`); a refusal names the keyword.
+pub(crate) fn read_map(map: MapFiles) -> PyResult<(SweepFile, String)> {
+    let paths = match map {
+        MapFiles::One(p) => vec![p],
+        MapFiles::Many(ps) => ps,
+    };
+    let label = paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" + ");
+    let file =
+        read_map_files(&paths).map_err(|e| PyValueError::new_err(format!("map = {label}: {e}")))?;
+    Ok((file, label))
 }

@@ -20,13 +20,14 @@ use vlab::host::{DissipationMap, Excitation};
 use vlab::rig::RigSpec;
 use vlab::scene::Scene;
 
-use crate::common::{Callback, bed_source, channel_array, thread_pool, value_error, write_into};
+use crate::common::{
+    Callback, MapFiles, bed_source, channel_array, read_map, thread_pool, value_error, write_into,
+};
 use crate::scene::{orientation_of, scene_of};
 use vlab::host::HostSpec;
 use vlab::rig::RigFile;
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
 use vlab::study::host_prediction::{HostPrediction, check_request};
-use vlab::study::sweep::SweepFile;
 
 /// A host's predicted response ([`HostPrediction`]).
 #[pyclass(module = "vlab._vlab", frozen)]
@@ -123,7 +124,7 @@ impl HostPredict {
 #[pyfunction]
 #[pyo3(signature = (map, freqs_hz, force_n, *, host = vlab::host::DEFAULT_HOST.to_string(), orientation = None, yang = false))]
 pub(crate) fn host_predict(
-    map: PathBuf,
+    map: MapFiles,
     freqs_hz: Vec<f64>,
     force_n: f64,
     host: String,
@@ -132,9 +133,8 @@ pub(crate) fn host_predict(
 ) -> PyResult<HostPredict> {
     check_request(&freqs_hz, force_n).map_err(value_error)?;
     let orientation = orientation.map(orientation_of).transpose()?;
-    let in_map =
-        |e: &dyn std::fmt::Display| PyValueError::new_err(format!("map = {}: {e}", map.display()));
-    let file = SweepFile::read(&map).map_err(|e| in_map(&e))?;
+    let (file, label) = read_map(map)?;
+    let in_map = |e: &dyn std::fmt::Display| PyValueError::new_err(format!("map = {label}: {e}"));
     let source = if yang {
         MapSource::Yang
     } else {
@@ -143,7 +143,6 @@ pub(crate) fn host_predict(
     let dissipation = dissipation_map(&file, orientation, None, source).map_err(|e| in_map(&e))?;
     let spec = HostSpec::from_name_or_path(&host)
         .map_err(|e| PyValueError::new_err(format!("host = {host:?}: {e}")))?;
-    let label = map.display().to_string();
     let prediction = HostPrediction::run(&dissipation, label, source, spec, &freqs_hz, force_n);
     Ok(HostPredict { prediction })
 }
@@ -469,7 +468,7 @@ pub(crate) fn host_decay(
     hammer_n_s: Option<f64>,
     duration_s: f64,
     beds: u32,
-    map: Option<PathBuf>,
+    map: Option<MapFiles>,
     host: String,
     damper: String,
     scene: Option<PathBuf>,
@@ -509,11 +508,10 @@ pub(crate) fn host_decay(
         1
     };
     let map = match map {
-        Some(path) => {
-            let in_map = |e: &dyn std::fmt::Display| {
-                PyValueError::new_err(format!("map = {}: {e}", path.display()))
-            };
-            let file = SweepFile::read(&path).map_err(|e| in_map(&e))?;
+        Some(files) => {
+            let (file, label) = read_map(files)?;
+            let in_map =
+                |e: &dyn std::fmt::Display| PyValueError::new_err(format!("map = {label}: {e}"));
             let o = Some(scene.enclosure.orientation);
             Some(dissipation_map(&file, o, None, MapSource::Yang).map_err(|e| in_map(&e))?)
         }

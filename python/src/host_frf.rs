@@ -16,9 +16,10 @@ use vlab::experiment::host_test::frf_outcome::{
 use vlab::host::{Excitation, PeriodicRandom, RandomNoise};
 use vlab::study::dissipation_map::{MapSource, dissipation_map};
 use vlab::study::host_prediction::check_frequencies;
-use vlab::study::sweep::SweepFile;
 
-use crate::common::{Callback, bed_source, thread_pool, value_error, write_into};
+use crate::common::{
+    Callback, MapFiles, bed_source, read_map, thread_pool, value_error, write_into,
+};
 use crate::host::{PoolRun, host_test_of, run_on_pool};
 
 /// An error of a random or swept test as Python raises it: the library's
@@ -195,7 +196,7 @@ pub(crate) fn host_frf(
     block_s: f64,
     burst: Option<String>,
     duration_s: f64,
-    map: Option<PathBuf>,
+    map: Option<MapFiles>,
     host: String,
     damper: String,
     scene: Option<PathBuf>,
@@ -259,11 +260,10 @@ pub(crate) fn host_frf(
         return up_and_down(py, &scene, test, &plan, cache, threads, progress);
     }
     let maps = match map {
-        Some(path) => {
-            let in_map = |e: &dyn std::fmt::Display| {
-                PyValueError::new_err(format!("map = {}: {e}", path.display()))
-            };
-            let file = SweepFile::read(&path).map_err(|e| in_map(&e))?;
+        Some(files) => {
+            let (file, label) = read_map(files)?;
+            let in_map =
+                |e: &dyn std::fmt::Display| PyValueError::new_err(format!("map = {label}: {e}"));
             let o = Some(scene.enclosure.orientation);
             let of = |source| dissipation_map(&file, o, None, source).map_err(|e| in_map(&e));
             Some((of(MapSource::Dem)?, of(MapSource::Yang)?))

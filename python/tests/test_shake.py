@@ -376,6 +376,30 @@ def test_a_bad_prediction_request_is_refused_with_its_name(args, kwargs, said):
         assert word in str(e.value), (word, str(e.value))
 
 
+ONSET_40HZ = os.path.join(
+    os.path.dirname(__file__), "..", "..", "signals", "reference", "host-map-onset", "sweep-40hz.csv"
+)
+
+
+def test_a_map_refined_by_a_list_is_the_commands_to_the_bit(tmp_path):
+    # The plate's map refined at 40 Hz (Gamma 14-17, three seeds): the
+    # range narrows where the onset was three Gamma wide, and the files are
+    # the command's with --map given twice.
+    coarse = vlab.host_predict(REFERENCE_MAP, [38.5, 39.0], 5.0).columns
+    fine = vlab.host_predict([REFERENCE_MAP, ONSET_40HZ], [38.5, 39.0], 5.0)
+    width = lambda c: c["amplitude_high_m"] - c["amplitude_low_m"]
+    assert np.all(width(fine.columns) < width(coarse)), (width(fine.columns), width(coarse))
+    fine.write(tmp_path / "py")
+    cli = os.environ.get("VLAB")
+    if cli is None:
+        pytest.skip("VLAB, the vlab binary, is set by python/tests/suite/package.rs")
+    out = tmp_path / "cli"
+    flags = ["--map", REFERENCE_MAP, "--map", ONSET_40HZ, "--freq", "38.5,39", "--force-n", "5"]
+    run = subprocess.run([cli, "host", "predict", *flags, "--out", str(out)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert (out / "predict.csv").read_bytes() == (tmp_path / "py" / "predict.csv").read_bytes()
+
+
 def test_a_missing_map_is_refused_with_its_name(tmp_path):
     with pytest.raises(ValueError, match="map = "):
         vlab.host_predict(tmp_path / "none.csv", [40], 1.0)

@@ -424,12 +424,22 @@ class HostPrediction:
         return repr(self._inner)
 
 
+def _map_files(map):
+    """A `map` keyword as the library takes it: a path, or a list of paths
+    (the first refined by the later ones)."""
+    if isinstance(map, (list, tuple)):
+        return [str(m) for m in map]
+    return str(map)
+
+
 def host_predict(map, freqs_hz, force_n, **options):
     """The host's steady response to a stepped sine of `force_n` (N) at each
     of `freqs_hz` (Hz, ascending), predicted in milliseconds from the
     dissipation map of the sweep `map` (its sweep.csv) by describing function
     and harmonic balance, as `vlab host predict` does; returns a
-    HostPrediction.
+    HostPrediction. `map` may be a list of sweep files: the first refined by
+    the later ones (each replaces the conditions it holds, as `--map` given
+    again), e.g. the map with sweeps of a finer Γ grid at the onset.
 
     Keyword arguments are the command's flags: `host` (a built-in name,
     plate-40hz or beam-2mode, or a host file), `orientation` (the sweep's,
@@ -440,7 +450,7 @@ def host_predict(map, freqs_hz, force_n, **options):
     if isinstance(freqs_hz, (int, float)):
         freqs_hz = [freqs_hz]
     return HostPrediction(
-        _vlab.host_predict(str(map), [float(f) for f in freqs_hz], float(force_n), **options)
+        _vlab.host_predict(_map_files(map), [float(f) for f in freqs_hz], float(force_n), **options)
     )
 
 
@@ -564,9 +574,10 @@ def host_decay(**options):
     decays several beds and gives their mean with the error of their
     spread. The other keywords are `host_run`'s.
     """
-    for key in ("scene", "map"):
-        if options.get(key) is not None:
-            options[key] = str(options[key])
+    if options.get("scene") is not None:
+        options["scene"] = str(options["scene"])
+    if options.get("map") is not None:
+        options["map"] = _map_files(options["map"])
     return HostDecay(_run_with_progress(_vlab.host_decay, options, "shake"))
 
 
@@ -621,9 +632,10 @@ def host_frf(freqs_hz=None, **options):
         freqs_hz = [freqs_hz]
     if freqs_hz is not None:
         freqs_hz = [float(f) for f in freqs_hz]
-    for key in ("scene", "map"):
-        if options.get(key) is not None:
-            options[key] = str(options[key])
+    if options.get("scene") is not None:
+        options["scene"] = str(options["scene"])
+    if options.get("map") is not None:
+        options["map"] = _map_files(options["map"])
     runs_once = any(options.get(k) for k in ("random", "noise", "burst", "swept", "up_down"))
     kind = "shake" if runs_once else "sweep"
     run = lambda **o: _vlab.host_frf(freqs_hz, **o)

@@ -125,7 +125,7 @@ class HostPredict:
     def write(self, out: Union[str, PathLike[str]]) -> None: ...
 
 def host_predict(
-    map: Union[str, PathLike[str]],
+    map: Union[str, PathLike[str], list[Union[str, PathLike[str]]]],
     freqs_hz: list[float],
     force_n: float,
     *,
@@ -236,7 +236,7 @@ def host_decay(
     hammer_n_s: Optional[float] = None,
     duration_s: float = 1.0,
     beds: int = 1,
-    map: Union[str, PathLike[str], None] = None,
+    map: Union[str, PathLike[str], list[Union[str, PathLike[str]]], None] = None,
     host: str = "plate-40hz",
     damper: str = "particles",
     scene: Union[str, PathLike[str], None] = None,
@@ -272,7 +272,7 @@ def host_frf(
     block_s: float = 2.0,
     burst: Optional[str] = None,
     duration_s: float = 8.0,
-    map: Union[str, PathLike[str], None] = None,
+    map: Union[str, PathLike[str], list[Union[str, PathLike[str]]], None] = None,
     host: str = "plate-40hz",
     damper: str = "particles",
     scene: Union[str, PathLike[str], None] = None,
