@@ -14,7 +14,7 @@ use vlab::experiment::bed::cache::{BedCache, BedSource};
 use vlab::rig::ShakerKind;
 use vlab::scene::SceneError;
 use vlab::signals::Trace;
-use vlab::study::dissipation_map::read_map_files;
+use vlab::study::dissipation_map::{map_files_label, read_map_files};
 use vlab::study::sweep::SweepFile;
 
 /// A figure and its one-sigma error (`None` where it is not known).
@@ -150,11 +150,7 @@ pub(crate) fn read_map(map: MapFiles) -> PyResult<(SweepFile, String)> {
         MapFiles::One(p) => vec![p],
         MapFiles::Many(ps) => ps,
     };
-    let label = paths
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect::<Vec<_>>()
-        .join(" + ");
+    let label = map_files_label(&paths);
     let file =
         read_map_files(&paths).map_err(|e| PyValueError::new_err(format!("map = {label}: {e}")))?;
     Ok((file, label))

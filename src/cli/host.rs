@@ -233,11 +233,7 @@ pub struct FreqList(pub Vec<f64>);
 /// ([`vlab::study::dissipation_map::read_map_files`]: the first file, each
 /// later one replacing the conditions it holds), and their label.
 pub fn read_maps(paths: &[PathBuf]) -> Result<(vlab::study::sweep::SweepFile, String)> {
-    let label = paths
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect::<Vec<_>>()
-        .join(" + ");
+    let label = vlab::study::dissipation_map::map_files_label(paths);
     let file = vlab::study::dissipation_map::read_map_files(paths)
         .with_context(|| format!("--map {label}"))?;
     Ok((file, label))

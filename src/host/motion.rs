@@ -116,8 +116,9 @@ impl HostMotion {
     /// The force at the drive point (N): the excitation's at the step's end
     /// for a force drive (read with the acceleration, at one instant; the
     /// mid-step force held over the step put the force half a step late
-    /// against it, and the power input 0.3 % low at 20 Hz); on a table, the force the table puts through its transducer,
-    /// `M (a_b + z'') − F_d` (Newton on the host as a whole).
+    /// against it, and the power input 0.3 % low at 20 Hz); on a table, the
+    /// force the table puts through its transducer, `M (a_b + z'') − F_d`
+    /// (Newton on the host as a whole).
     pub fn drive_force_n(&self) -> f64 {
         match self.base {
             None => self.end_excitation_n,

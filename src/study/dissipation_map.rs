@@ -144,33 +144,39 @@ pub fn read_map_files(paths: &[PathBuf]) -> Result<SweepFile, SweepError> {
         map.rows.retain(|r| !replaced.contains(&place(r)));
         map.rows.extend(finer.rows.iter().cloned());
         let (to, from) = (&mut map.header.grid, &finer.header.grid);
-        join_values(&mut to.freqs_hz, &from.freqs_hz);
-        join_values(&mut to.gammas, &from.gammas);
-        join_values(&mut to.fill_ratios, &from.fill_ratios);
-        for s in &from.seeds {
-            if !to.seeds.contains(s) {
-                to.seeds.push(*s);
-            }
+        let by_bits = |a: &f64, b: &f64| a.to_bits() == b.to_bits();
+        join(&mut to.freqs_hz, &from.freqs_hz, by_bits);
+        join(&mut to.gammas, &from.gammas, by_bits);
+        join(&mut to.fill_ratios, &from.fill_ratios, by_bits);
+        join(&mut to.seeds, &from.seeds, u64::eq);
+        join(&mut to.orientations, &from.orientations, Orientation::eq);
+        for list in [&mut to.freqs_hz, &mut to.gammas, &mut to.fill_ratios] {
+            list.sort_by(f64::total_cmp);
         }
         to.seeds.sort_unstable();
-        for o in &from.orientations {
-            if !to.orientations.contains(o) {
-                to.orientations.push(*o);
-            }
-        }
     }
     map.sort_canonical();
     Ok(map)
 }
 
-/// `to` with the values of `from` it lacks, ascending.
-fn join_values(to: &mut Vec<f64>, from: &[f64]) {
+/// The label of a map read from `paths` ([`read_map_files`]): the files
+/// joined by ` + `.
+pub fn map_files_label(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" + ")
+}
+
+/// `to` with the values of `from` it lacks (by `same`), in `from`'s order
+/// after its own.
+fn join<T: Copy>(to: &mut Vec<T>, from: &[T], same: impl Fn(&T, &T) -> bool) {
     for v in from {
-        if !to.iter().any(|t| t.to_bits() == v.to_bits()) {
+        if !to.iter().any(|t| same(t, v)) {
             to.push(*v);
         }
     }
-    to.sort_by(f64::total_cmp);
 }
 
 #[cfg(test)]

@@ -724,8 +724,9 @@ mod tests {
         // crests' energy was taken for the envelope's; the envelope's 5.4 %
         // high while its windows started at any phase of the energy's
         // ripple and took the envelope's whole energy: measured now -0.17 %
-        // and +0.20 %; the log decrement's -0.018 to +0.040 %); and the truth's own loss factor, from the energies
-        // alone, within 0.15 % of 2 zeta (measured: 0.0001 % by the log
+        // and +0.20 %; the log decrement's -0.018 to +0.040 %); and the
+        // truth's own loss factor, from the energies alone, within 0.15 % of
+        // 2 zeta (measured: 0.0001 % by the log
         // decrement's single cycles; up to 0.085 % over the envelope's two
         // while they started at any phase; read as delta / pi it stood 0.2 %
         // above, 1 / sqrt(1 - zeta^2)).

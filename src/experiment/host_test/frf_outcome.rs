@@ -532,8 +532,8 @@ impl RandomFrfOutcome {
         let width_hz = peak.f_high_hz - peak.f_low_hz;
         let spacing_hz = freqs.get(1)? - freqs.first()?;
         let bias = (1.5 * spacing_hz / width_hz).powi(2) / 3.0;
-        // Lines 0.115 B_r apart keep the bias under 1 %.
-        let block_s = (1.0 / (0.115 * width_hz)).ceil();
+        // The block whose lines, `1 / block_s` apart, leave a bias of 1 %.
+        let block_s = (1.5 / (width_hz * (3.0 * 0.01_f64).sqrt())).ceil();
         (bias > LEAKAGE_WARN_REL).then(|| {
             format!(
                 "{}: the resonance at {:.2} Hz is {width_hz:.2} Hz wide at half power and the \
