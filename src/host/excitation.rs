@@ -282,8 +282,15 @@ impl RandomNoise {
             .process(&mut spectrum, &mut samples_n)
             .map_err(|e| InvalidParameter::new("noise", n as f64, "samples", e.to_string()))?;
         if let Some((period_s, on)) = self.burst {
+            // The force is interpolated between samples, so a burst whose
+            // first sample were on would ramp up from the sample before the
+            // period began, the end of the previous block (0.8 ms early at
+            // 60 Hz x 20): the first sample of each period stays off, and
+            // the ramp starts inside the period.
+            let samples_per_period = period_s * rate_hz;
             for (k, f) in samples_n.iter_mut().enumerate() {
-                if (k as f64 / rate_hz / period_s).fract() >= on {
+                let phase = (k as f64 / samples_per_period).fract();
+                if phase >= on || phase * samples_per_period < 1.0 - 1e-9 {
                     *f = 0.0;
                 }
             }
@@ -848,6 +855,14 @@ mod tests {
         let e = burst.excitation(2.0).expect("made");
         for t in [0.2, 0.3, 0.45, 0.8, 1.4] {
             assert_eq!(e.force_n(t), 0.0, "{t} s is off");
+        }
+        // Each burst starts inside its period: the interpolation does not
+        // ramp it up over the previous period's last sample interval (it
+        // did, 0.8 ms early, before the period's first sample was kept
+        // off).
+        for m in 1..4 {
+            let t = 0.5 * f64::from(m) - 2e-4;
+            assert_eq!(e.force_n(t), 0.0, "{t} s is in the period before");
         }
         assert!((0..100).any(|k| e.force_n(f64::from(k) * 1e-3) != 0.0));
         for (key, field) in [

@@ -12,11 +12,11 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use vlab::atomic_write::OutputDir;
-use vlab::experiment::host_test::HostTest;
 use vlab::experiment::host_test::frf::{FrfPoint, SteppedSine};
 use vlab::experiment::host_test::frf_outcome::{
     ForceLevels, FrfMaps, RandomForce, RandomFrfOutcome, SteppedSineOutcome, SweptFrfOutcome,
 };
+use vlab::experiment::host_test::{HostRun, HostTest};
 use vlab::host::DissipationMap;
 use vlab::host::{Excitation, PeriodicRandom, RandomNoise};
 use vlab::scene::Scene;
@@ -412,16 +412,8 @@ fn report_point(o: &SteppedSineOutcome, k: usize) {
         };
         println!("           +- not known: {why}; more --record-cycles");
     }
-    for w in &p.warnings {
-        eprintln!("warning: {} Hz: {w}", p.freq_hz);
-    }
-    for (what, other) in [("the empty host", &o.empty), ("the solid mass", &o.solid)] {
-        for w in other.points.get(k).map_or(&[][..], |q| &q.warnings[..]) {
-            eprintln!(
-                "warning: {} Hz, {what} (the comparison, and the dB against it): {w}",
-                p.freq_hz
-            );
-        }
+    for w in o.warnings_at(k) {
+        eprintln!("warning: {w}");
     }
     if !p.steady {
         println!(
@@ -491,6 +483,29 @@ fn random_force(a: &FrfArgs) -> Result<Option<(RandomForce, String)>> {
     Ok(Some((force, key)))
 }
 
+/// The run of a host test for an outcome's `run` (the run's own warnings
+/// printed as it ends), counting in `printed` how many it printed, so that
+/// [`print_analysis_warnings`] prints only what the analysis adds.
+fn counted_run<'a>(
+    scene: &'a Scene,
+    a: &'a FrfArgs,
+    quiet: bool,
+    printed: &'a mut usize,
+) -> impl FnOnce(&HostTest) -> Result<HostRun> + 'a {
+    move |t| {
+        let run = super::run_test(scene, t, a.common.cache, quiet);
+        *printed = run.as_ref().map_or(0, |r| r.warnings.len());
+        run
+    }
+}
+
+/// The warnings the analysis added to `run`'s after its first `printed`.
+fn print_analysis_warnings(run: &HostRun, printed: usize) {
+    for w in run.warnings.get(printed..).unwrap_or_default() {
+        eprintln!("host: warning: {}", w.text);
+    }
+}
+
 /// A random test: H1, H2 and coherence over `--duration-s`.
 fn random(
     a: &FrfArgs,
@@ -500,16 +515,9 @@ fn random(
     out: &Path,
     quiet: bool,
 ) -> Result<()> {
-    // The run's own warnings are printed as it ends; the analysis's after.
     let mut printed = 0;
-    let outcome = RandomFrfOutcome::run(test, force, |t| {
-        let run = super::run_test(scene, t, a.common.cache, quiet);
-        printed = run.as_ref().map_or(0, |r| r.warnings.len());
-        run
-    })?;
-    for w in &outcome.run.warnings[printed..] {
-        eprintln!("host: warning: {}", w.text);
-    }
+    let outcome = RandomFrfOutcome::run(test, force, counted_run(scene, a, quiet, &mut printed))?;
+    print_analysis_warnings(&outcome.run, printed);
     outcome
         .write(out)
         .with_context(|| format!("writing into {}", out.display()))?;
@@ -565,9 +573,9 @@ fn swept(
     out: &Path,
     quiet: bool,
 ) -> Result<()> {
-    let o = SweptFrfOutcome::run(test, sweep, |t| {
-        super::run_test(scene, t, a.common.cache, quiet)
-    })?;
+    let mut printed = 0;
+    let o = SweptFrfOutcome::run(test, sweep, counted_run(scene, a, quiet, &mut printed))?;
+    print_analysis_warnings(&o.run, printed);
     o.write(out)
         .with_context(|| format!("writing into {}", out.display()))?;
     let (peak, at_hz, half) = o.peak();
@@ -589,12 +597,6 @@ fn swept(
             h.loss_factor, h.f_low_hz, h.f_high_hz
         ),
         Err(why) => println!("  no half-power loss factor: {why}"),
-    }
-    if o.swept.tail_fraction > 0.01 {
-        eprintln!(
-            "warning: the response at the record's end is {:.1} % of its peak: it had not died out, so the DFTs' ratio leaks (longer --duration-s)",
-            100.0 * o.swept.tail_fraction
-        );
     }
     println!(
         "  for a linear host the ratio is its receptance; a granular damper's depends on the sweep's rate and direction (compare --up-down)"

@@ -227,6 +227,21 @@ impl CarriedSine {
 }
 
 impl CarriedSineResult {
+    /// Every step's warnings, each led by its branch and frequency, a
+    /// text repeated from step to step (the bed carried on) once.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut seen = std::collections::BTreeSet::new();
+        let mut out = Vec::new();
+        for c in &self.points {
+            for w in &c.point.warnings {
+                if seen.insert(w.as_str()) {
+                    out.push(format!("{} {} Hz: {w}", c.branch.as_str(), c.point.freq_hz));
+                }
+            }
+        }
+        out
+    }
+
     /// The points of one branch, in the order driven.
     pub fn branch(&self, branch: Branch) -> impl Iterator<Item = &CarriedPoint> {
         self.points.iter().filter(move |p| p.branch == branch)

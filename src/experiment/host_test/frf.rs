@@ -832,6 +832,34 @@ pub fn swept_frf(run: &HostRun, rig: &RigSpec) -> Result<SweptFrf, SceneError> {
     })
 }
 
+/// Above this share of its peak (a swept sine's record) or of its rms (a
+/// burst's period, [`block_tail`]), the response left at the end says the
+/// record cut a response that had not died out: the DFTs' ratio is the
+/// receptance only for a response wholly inside the block (else it leaks).
+pub const TAIL_WARN_FRACTION: f64 = 0.01;
+
+/// The response left at a block's end: for each whole block of
+/// `block_len` samples from the start, the rms over its last 5 % with the
+/// channel's noise (variance `noise_var`) taken out, over the block's
+/// rms; the largest of these and its block's index (from 0). `(0, 0)`
+/// without a whole block. A peak would read the noise's largest excursion
+/// (0.14 of the peak of a 1 N burst on the dashpot host), the rms only
+/// its scatter.
+pub fn block_tail(samples: &[f64], block_len: usize, noise_var: f64) -> (f64, usize) {
+    let mean_square = |a: &[f64]| a.iter().map(|x| x * x).sum::<f64>() / a.len().max(1) as f64;
+    samples
+        .chunks_exact(block_len.max(1))
+        .map(|block| {
+            let tail = mean_square(&block[block.len() - block.len() / 20..]) - noise_var;
+            (tail.max(0.0) / mean_square(block).max(f64::MIN_POSITIVE)).sqrt()
+        })
+        .enumerate()
+        .fold(
+            (0.0, 0),
+            |worst, (k, t)| if t > worst.0 { (t, k) } else { worst },
+        )
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;

@@ -10,15 +10,16 @@ use std::path::{Path, PathBuf};
 use crate::atomic_write::write_bytes_atomic;
 use crate::experiment::bed::cache::BedSource;
 use crate::experiment::host_test::frf::{
-    SteppedSine, SteppedSineResult, SweptFrf, random_frf, run_stepped_sine, swept_frf,
-    undithered_codes_warnings,
+    SteppedSine, SteppedSineResult, SweptFrf, TAIL_WARN_FRACTION, block_tail, random_frf,
+    run_stepped_sine, swept_frf, undithered_codes_warnings,
 };
 use crate::experiment::host_test::frf_figure::{FrfMagnitudes, STEPPED_SINE_CSV_HEADER};
 use crate::experiment::host_test::{Damper, HostRun, HostTest};
 use crate::host::map_model::{DissipationMap, SteadyResponse, stepped_sine};
 use crate::host::{Excitation, PeriodicRandom, RandomNoise};
+use crate::rig::ACCEL_CHANNEL;
 use crate::scene::{Scene, SceneError};
-use crate::signals::structural::{Frf, HalfPower, Window, half_power};
+use crate::signals::structural::{Frf, HalfPower, Window, half_power, quantisation_step};
 use crate::validation::InvalidParameter;
 use crate::warning::RunWarning;
 
@@ -120,6 +121,39 @@ impl SteppedSineOutcome {
             .iter()
             .find(|(r, _)| r.freq_hz == f)
             .map(|(r, _)| r.amplitude_m / self.plan.force_n)
+    }
+
+    /// The warnings at measured point `k`, each led by its frequency: the
+    /// damper's record's, then the empty host's and the solid mass's,
+    /// whose records the comparisons (and their dB) read.
+    pub fn warnings_at(&self, k: usize) -> Vec<String> {
+        let Some(p) = self.measured.points.get(k) else {
+            return Vec::new();
+        };
+        let mut out: Vec<String> = p
+            .warnings
+            .iter()
+            .map(|w| format!("{} Hz: {w}", p.freq_hz))
+            .collect();
+        for (what, other) in [
+            ("the empty host", &self.empty),
+            ("the solid mass", &self.solid),
+        ] {
+            for w in other.points.get(k).map_or(&[][..], |q| &q.warnings[..]) {
+                out.push(format!(
+                    "{} Hz, {what} (the comparison, and the dB against it): {w}",
+                    p.freq_hz
+                ));
+            }
+        }
+        out
+    }
+
+    /// Every point's warnings ([`Self::warnings_at`]), in frequency order.
+    pub fn warnings(&self) -> Vec<String> {
+        (0..self.measured.points.len())
+            .flat_map(|k| self.warnings_at(k))
+            .collect()
     }
 
     /// The range of receptance magnitudes the prediction claims at
@@ -513,7 +547,55 @@ impl RandomFrfOutcome {
             let leakage = outcome.leakage_warning();
             outcome.run.warnings.extend(leakage);
         }
+        let tail = outcome.burst_tail_warning()?;
+        outcome.run.warnings.extend(tail);
         Ok(outcome)
+    }
+
+    /// The response left at the end of a burst's period
+    /// ([`block_tail`]), the largest over the periods, and which; `None`
+    /// for a force that is not a burst.
+    pub fn burst_tail(&self) -> Result<Option<(f64, usize)>, SceneError> {
+        let RandomForce::Noise {
+            noise:
+                RandomNoise {
+                    burst: Some((period_s, _)),
+                    ..
+                },
+            ..
+        } = self.force
+        else {
+            return Ok(None);
+        };
+        let trace = &self.run.trace;
+        let block = (period_s * trace.sample_rate_hz).round() as usize;
+        let accel = &trace.channel(ACCEL_CHANNEL)?.samples;
+        // The channel's noise and its rounding (a uniform error of one
+        // code's width, dithered or not).
+        let step = quantisation_step(accel);
+        let noise_var = self.test.rig.accel_channel().noise_rms.powi(2) + step * step / 12.0;
+        Ok(Some(block_tail(accel, block, noise_var)))
+    }
+
+    /// A sentence when a burst's response had not died out by the end of
+    /// its period ([`TAIL_WARN_FRACTION`]): a block then holds the previous
+    /// burst's ringing and loses its own, so it leaks and the coherence
+    /// reads that carry-over as well as the damper.
+    fn burst_tail_warning(&self) -> Result<Option<RunWarning>, SceneError> {
+        Ok(self
+            .burst_tail()?
+            .filter(|(tail, _)| *tail > TAIL_WARN_FRACTION)
+            .map(|(tail, k)| {
+                format!(
+                    "burst random: the response at the end of period {} is {:.1} % of the \
+                     period's peak: it had not died out while the force was off, so the blocks \
+                     leak and the coherence reads the carry-over as well as the damper; a longer \
+                     period or a smaller on-fraction (--burst) lets it die",
+                    k + 1,
+                    100.0 * tail
+                )
+                .into()
+            }))
     }
 
     /// A sentence when the lines of a windowed test are too coarse for the
@@ -704,8 +786,18 @@ impl SweptFrfOutcome {
         }
         test.excitation = sweep;
         test.start_steady = false;
-        let run = run_test(&test)?;
+        let mut run = run_test(&test)?;
         let swept = swept_frf(&run, &test.rig)?;
+        if swept.tail_fraction > TAIL_WARN_FRACTION {
+            run.warnings.push(
+                format!(
+                    "swept sine: the response at the record's end is {:.1} % of its peak: it \
+                     had not died out, so the DFTs' ratio leaks (a longer --duration-s)",
+                    100.0 * swept.tail_fraction
+                )
+                .into(),
+            );
+        }
         Ok(SweptFrfOutcome {
             test,
             run,
@@ -954,9 +1046,11 @@ mod tests {
     /// window's bias at the resonance, (1.5 x 0.25 Hz / 3.42 Hz)^2 / 3 =
     /// 0.4 %, and the random error of 19 blocks), its coherence lowest at
     /// the resonance, where the window leaks (0.989), but above 0.95.
-    /// Burst random (2 s periods, on for half, 20 s): within 1.5 % and 10
-    /// mrad (0.51 %, 4.0 mrad), coherence above 0.999: a whole response
-    /// in every block, no leakage.
+    /// Burst random (2 s periods, on for half, 20 s): within 0.3 % and 3
+    /// mrad (0.038 %, 0.6 mrad; 0.51 % and 4.0 mrad while each burst
+    /// ramped up over the previous period's last sample interval),
+    /// coherence above 0.999: a whole response in every block, no leakage,
+    /// and nothing left at a period's end.
     /// A sharp resonance read on coarse lines says so: 2 N s/m in the
     /// enclosure leaves plate-40hz a half-power width of about 0.9 Hz, and
     /// 2 s Hann blocks (lines 0.5 Hz apart) read its peak 11 % low (1.280
@@ -1009,8 +1103,45 @@ mod tests {
             20.0,
         );
         let (mag, arg, coherence) = against_exact(&o);
-        assert!(mag < 0.015 && arg < 0.01, "{mag} {arg}");
+        assert!(mag < 0.003 && arg < 0.003, "{mag} {arg}");
         assert!(coherence > 0.999, "{coherence}");
+        let (tail, _) = o.burst_tail().expect("a record").expect("a burst");
+        assert!(tail < 0.005, "{tail}");
+        assert!(
+            !o.run.warnings.iter().any(|w| w.text.contains("died")),
+            "{:?}",
+            o.run.warnings
+        );
+    }
+
+    /// A burst whose response outlasts the silence says so: on plate-40hz
+    /// with 10 N s/m (zeta 0.043) the ringing falls by e^-10.8 over the
+    /// second off, and the rms left over a period's last 5 % is the
+    /// channels' noise (measured: nothing above it); with 2 N s/m (zeta 0.011) it falls by only e^-2.8,
+    /// about 0.06 of the on-phase's amplitude, 0.12 of the period's rms
+    /// (measured 0.125), so the blocks leak and the test warns, naming the
+    /// flag.
+    #[test]
+    fn a_burst_that_has_not_died_out_is_warned() {
+        let burst = RandomNoise::parse("burst:20:60:1:2:0.5:4").expect("a key");
+        let force = RandomForce::Noise {
+            noise: burst,
+            block_s: 2.0,
+        };
+        let mut test = dashpot_test(10.0);
+        test.damper = Damper::Dashpot { n_s_per_m: 2.0 };
+        let o = run_random_test(test, force);
+        let (tail, _) = o.burst_tail().expect("a record").expect("a burst");
+        assert!((0.06..0.25).contains(&tail), "{tail}");
+        let died: Vec<&str> = o
+            .run
+            .warnings
+            .iter()
+            .map(|w| w.text.as_str())
+            .filter(|w| w.contains("had not died out"))
+            .collect();
+        assert_eq!(died.len(), 1, "{:?}", o.run.warnings);
+        assert!(died[0].contains("--burst"), "{}", died[0]);
     }
 
     #[test]
