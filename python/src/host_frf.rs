@@ -90,6 +90,20 @@ impl HostFrf {
         }
     }
 
+    /// What the test warns of, as `vlab host frf` prints it on standard
+    /// error: a channel clipped or too faint, a map outside its range, a
+    /// random test's lines too coarse for its resonance, a swept or burst
+    /// response that had not died out (texts; empty when nothing).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        match &self.outcome {
+            FrfKind::SteppedSine(o) => o.warnings(),
+            FrfKind::Random(o) => o.run.warnings.iter().map(|w| w.text.clone()).collect(),
+            FrfKind::Swept(o) => o.run.warnings.iter().map(|w| w.text.clone()).collect(),
+            FrfKind::UpDown(o) => o.0.warnings(),
+        }
+    }
+
     /// Writes what `vlab host frf --out` writes into folder `out`.
     fn write(&self, out: PathBuf) -> PyResult<()> {
         write_into(&out, |dir| match &self.outcome {

@@ -595,6 +595,10 @@ class HostFrf:
     kind = property(lambda self: self._inner.kind,
                     doc='"stepped sine", "stepped sine up and down", "swept sine", "periodic random", '
                         '"true random (Hann, 50 % overlap)" or "burst random".')
+    warnings = property(lambda self: list(self._inner.warnings),
+                        doc="What the test warns of, as `vlab host frf` prints it: a channel clipped "
+                            "or too faint, a map outside its range, lines too coarse for the "
+                            "resonance, a swept or burst response that had not died out.")
 
     @property
     def columns(self):
