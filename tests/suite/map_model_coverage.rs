@@ -17,11 +17,13 @@
 //! of 16 answered (42 Hz, where the DEM bounces at Γ 18.5 and the model
 //! settles at Γ 16.7, lies 5.6 % above it; 39 Hz, Γ 40.3, refused); the
 //! beam at 5 N 7 of 9 (at its sharp resonance the DEM lies 6.3 % below the
-//! range at 40 Hz and 6.4 % above it at 40.5 Hz, where it had not
-//! settled): 38 of 42 in all, 90.5 %, at the criterion's edge. Before the
-//! range took the points'
+//! range at 40 Hz and 6.4 % above it at 40.5 Hz, in 30 cycles not settled
+//! at either, though 40 Hz passed the 5 % steadiness check): 38 of 42 in
+//! all, 90.5 %, at the criterion's edge. Before the range took the points'
 //! neighbours the model's ± was its points' errors alone (0.1-0.4 % on the
-//! flat top) and held 2 of the 17 points at 5 N.
+//! flat top) and held 2 of the 17 points at 5 N. The same runs with three
+//! beds a frequency, the range held to the beds' mean ± its error, and the
+//! beam's resonance settled over 100 cycles, are the last test here.
 
 #![cfg(all(feature = "cli", feature = "plot"))]
 
@@ -71,6 +73,62 @@ const REFINED_MAP: &[&str] = &[
     "signals/reference/host-map-onset/sweep-43hz.csv",
 ];
 
+/// One frequency of a coupled-DEM stepped sine: the damper's amplitude,
+/// its one-sigma error (zero for one bed, whose spread is not known) and
+/// the Γ it reached.
+struct DemPoint {
+    freq_hz: f64,
+    amplitude_m: f64,
+    stderr_m: f64,
+    gamma: f64,
+}
+
+/// The points of a kept one-bed run's `frf.csv`.
+fn one_bed(kept: &str) -> Vec<DemPoint> {
+    let dem = columns(&Path::new(env!("CARGO_MANIFEST_DIR")).join(kept));
+    let (freqs, amplitude, gamma) = (
+        floats(&dem, "freq_hz"),
+        floats(&dem, "amplitude_m"),
+        floats(&dem, "gamma"),
+    );
+    (0..freqs.len())
+        .map(|k| DemPoint {
+            freq_hz: freqs[k],
+            amplitude_m: amplitude[k],
+            stderr_m: 0.0,
+            gamma: gamma[k],
+        })
+        .collect()
+}
+
+/// The points of a kept run of several beds (`--beds`), from its
+/// `frf.json`: each the beds' mean, its error their spread's.
+fn beds(kept: &str) -> Vec<DemPoint> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(kept);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{kept}: {e}"));
+    let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let number = |p: &serde_json::Value, key: &str| p[key].as_f64().expect(key);
+    json["measured"]["points"]
+        .as_array()
+        .expect("points")
+        .iter()
+        .map(|p| {
+            assert!(
+                p["bed_to_bed"]["source"] == "ensemble"
+                    && p["bed_to_bed"]["beds"].as_u64() >= Some(3),
+                "{kept}: {}",
+                p["bed_to_bed"]
+            );
+            DemPoint {
+                freq_hz: number(p, "freq_hz"),
+                amplitude_m: number(p, "amplitude_m"),
+                stderr_m: number(p, "amplitude_stderr_m"),
+                gamma: number(p, "gamma"),
+            }
+        })
+        .collect()
+}
+
 /// How a kept coupled-DEM run fares against the prediction of the same
 /// stepped sine from `map`.
 struct Coverage {
@@ -82,13 +140,19 @@ struct Coverage {
     mean_width_rel: f64,
 }
 
-/// The points of a kept coupled-DEM run the prediction of the same
-/// stepped sine holds, and those it answers.
-fn coverage(dir: &Scratch, map: &[&str], kept: &str, host: &str, force_n: &str) -> Coverage {
+/// The points of a coupled-DEM run (`label` names it) the prediction of
+/// the same stepped sine holds, and those it answers: held where the
+/// range meets the DEM's amplitude ± its error.
+fn coverage(
+    dir: &Scratch,
+    map: &[&str],
+    dem: &[DemPoint],
+    label: &str,
+    host: &str,
+    force_n: &str,
+) -> Coverage {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dem = columns(&root.join(kept));
-    let freqs = floats(&dem, "freq_hz");
-    let list: Vec<String> = freqs.iter().map(f64::to_string).collect();
+    let list: Vec<String> = dem.iter().map(|p| p.freq_hz.to_string()).collect();
     let out = format!("predict-{host}-{force_n}-{}", map.len());
     let mut args: Vec<String> = ["--quiet", "host", "predict", "--host", host]
         .map(String::from)
@@ -114,24 +178,25 @@ fn coverage(dir: &Scratch, map: &[&str], kept: &str, host: &str, force_n: &str) 
         floats(&predicted, "amplitude_low_m"),
         floats(&predicted, "amplitude_high_m"),
     );
-    assert_eq!(floats(&predicted, "freq_hz"), freqs, "{kept}");
-    let (amplitude, gamma) = (floats(&dem, "amplitude_m"), floats(&dem, "gamma"));
+    let freqs: Vec<f64> = dem.iter().map(|p| p.freq_hz).collect();
+    assert_eq!(floats(&predicted, "freq_hz"), freqs, "{label}");
     let (mut held, mut answered, mut misses, mut width) = (0, 0, Vec::new(), 0.0);
-    for k in 0..freqs.len() {
+    for (k, p) in dem.iter().enumerate() {
         // The map's top is Gamma 30 at every frequency: beyond it the
         // command warns that the model guesses.
-        if gamma[k] > 30.0 {
+        if p.gamma > 30.0 {
             continue;
         }
         answered += 1;
-        width += (high[k] - low[k]) / amplitude[k];
-        if (low[k]..=high[k]).contains(&amplitude[k]) {
+        width += (high[k] - low[k]) / p.amplitude_m;
+        if p.amplitude_m + p.stderr_m >= low[k] && p.amplitude_m - p.stderr_m <= high[k] {
             held += 1;
         } else {
             misses.push(format!(
-                "{} Hz: DEM {:.4} mm outside {:.4}..{:.4} mm",
-                freqs[k],
-                amplitude[k] * 1e3,
+                "{} Hz: DEM {:.4} +- {:.4} mm outside {:.4}..{:.4} mm",
+                p.freq_hz,
+                p.amplitude_m * 1e3,
+                p.stderr_m * 1e3,
                 low[k] * 1e3,
                 high[k] * 1e3
             ));
@@ -149,13 +214,8 @@ fn coverage(dir: &Scratch, map: &[&str], kept: &str, host: &str, force_n: &str) 
 fn the_claimed_range_holds_the_coupled_dem_where_it_was_set_and_beyond() {
     let dir = Scratch::new("map-model-coverage");
     // Where the floor was set: every point.
-    let c = coverage(
-        &dir,
-        MAP,
-        "signals/reference/host-frf/frf.csv",
-        "plate-40hz",
-        "5",
-    );
+    let kept = "signals/reference/host-frf/frf.csv";
+    let c = coverage(&dir, MAP, &one_bed(kept), kept, "plate-40hz", "5");
     assert_eq!((c.held, c.answered), (17, 17), "{:?}", c.misses);
     // Out of sample.
     let mut total = (0, 0);
@@ -172,7 +232,7 @@ fn the_claimed_range_holds_the_coupled_dem_where_it_was_set_and_beyond() {
         ),
         ("signals/reference/host-frf-beam/frf.csv", "beam-2mode", "5"),
     ] {
-        let c = coverage(&dir, MAP, kept, host, force);
+        let c = coverage(&dir, MAP, &one_bed(kept), kept, host, force);
         eprintln!("{kept}: {} of {} held; {:?}", c.held, c.answered, c.misses);
         assert!(c.answered >= 8, "{kept}: {} points answered", c.answered);
         total = (total.0 + c.held, total.1 + c.answered);
@@ -207,8 +267,9 @@ fn a_map_refined_at_the_onset_narrows_the_range() {
             false,
         ),
     ] {
-        let coarse = coverage(&dir, MAP, kept, "plate-40hz", force);
-        let fine = coverage(&dir, REFINED_MAP, kept, "plate-40hz", force);
+        let dem = one_bed(kept);
+        let coarse = coverage(&dir, MAP, &dem, kept, "plate-40hz", force);
+        let fine = coverage(&dir, REFINED_MAP, &dem, kept, "plate-40hz", force);
         eprintln!(
             "{force} N: mean range {:.1} % of the DEM's amplitude, refined {:.1} %; held {} and {} of {}",
             100.0 * coarse.mean_width_rel,
@@ -226,5 +287,70 @@ fn a_map_refined_at_the_onset_narrows_the_range() {
         if in_sample {
             assert_eq!(fine.held, fine.answered, "{force} N: {:?}", fine.misses);
         }
+    }
+}
+
+/// Three beds at every frequency (`--beds 3`) in place of one, at the
+/// forces and on the hosts above: the DEM's amplitude is the beds' mean
+/// with its error (their spread's, Student's t on two degrees of freedom),
+/// and a point is held where the model's range meets that mean ± its
+/// error. The criterion, fixed before the runs: every point at 5 N (the
+/// force the model's floor was set on, though not on these beds) and 90 %
+/// of the points out of sample, on either map. Measured (2026-11-29),
+/// the same on both maps: 5 N 17 of 17; 3 N 16 of 17 (37 Hz, Γ 3.7,
+/// 0.6627 ± 0.0010 mm, lies 0.3 % below the range: the beds agree, the
+/// model does not); 8 N 16 of 16 answered (42 Hz, missed by the one bed,
+/// is held by three); the beam 7 of 9. The beam's two misses (40 and
+/// 40.5 Hz) were records that had not settled in 30 cycles at the beam's
+/// sharp resonance: with 100 (`beam-settled/`, 39.5-40.5 Hz) the DEM at
+/// 40 Hz reads 0.4527 mm/N where it read 0.370, and all three points lie
+/// within the range, as this test asks: 39 of 42 out of sample on the 30
+/// cycles, 41 of 42 with the beam settled.
+#[test]
+fn the_claimed_range_meets_the_beds_mean_and_spread() {
+    let dir = Scratch::new("map-model-beds");
+    for (name, map) in [("coarse", MAP), ("refined", REFINED_MAP)] {
+        let kept = "signals/reference/host-frf-beds/force-5N/frf.json";
+        let c = coverage(&dir, map, &beds(kept), kept, "plate-40hz", "5");
+        eprintln!(
+            "{name} map, {kept}: {} of {} held; {:?}",
+            c.held, c.answered, c.misses
+        );
+        assert_eq!((c.held, c.answered), (17, 17), "{name}: {:?}", c.misses);
+        let mut total = (0, 0);
+        for (kept, host, force) in [
+            (
+                "signals/reference/host-frf-beds/force-3N/frf.json",
+                "plate-40hz",
+                "3",
+            ),
+            (
+                "signals/reference/host-frf-beds/force-8N/frf.json",
+                "plate-40hz",
+                "8",
+            ),
+            (
+                "signals/reference/host-frf-beds/beam/frf.json",
+                "beam-2mode",
+                "5",
+            ),
+        ] {
+            let c = coverage(&dir, map, &beds(kept), kept, host, force);
+            eprintln!(
+                "{name} map, {kept}: {} of {} held; {:?}",
+                c.held, c.answered, c.misses
+            );
+            assert!(c.answered >= 8, "{kept}: {} points answered", c.answered);
+            total = (total.0 + c.held, total.1 + c.answered);
+        }
+        assert!(
+            total.0 as f64 >= 0.9 * total.1 as f64,
+            "{name} map: {} of {} out-of-sample points held",
+            total.0,
+            total.1
+        );
+        let kept = "signals/reference/host-frf-beds/beam-settled/frf.json";
+        let c = coverage(&dir, map, &beds(kept), kept, "beam-2mode", "5");
+        assert_eq!((c.held, c.answered), (3, 3), "{name}: {:?}", c.misses);
     }
 }
