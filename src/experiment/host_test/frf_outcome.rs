@@ -588,7 +588,7 @@ impl RandomFrfOutcome {
             .map(|(tail, k)| {
                 format!(
                     "burst random: the response at the end of period {} is {:.1} % of the \
-                     period's peak: it had not died out while the force was off, so the blocks \
+                     period's rms: it had not died out while the force was off, so the blocks \
                      leak and the coherence reads the carry-over as well as the damper; a longer \
                      period or a smaller on-fraction (--burst) lets it die",
                     k + 1,
