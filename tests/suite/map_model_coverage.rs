@@ -210,6 +210,25 @@ fn coverage(
     }
 }
 
+/// The points held and answered over `runs` (kept file, host, force in
+/// N), each read by `read`, against `map`; each run must be answered at 8
+/// points at least.
+fn out_of_sample(
+    dir: &Scratch,
+    map: &[&str],
+    runs: &[(&str, &str, &str)],
+    read: fn(&str) -> Vec<DemPoint>,
+) -> (usize, usize) {
+    let mut total = (0, 0);
+    for (kept, host, force) in runs {
+        let c = coverage(dir, map, &read(kept), kept, host, force);
+        eprintln!("{kept}: {} of {} held; {:?}", c.held, c.answered, c.misses);
+        assert!(c.answered >= 8, "{kept}: {} points answered", c.answered);
+        total = (total.0 + c.held, total.1 + c.answered);
+    }
+    total
+}
+
 #[test]
 fn the_claimed_range_holds_the_coupled_dem_where_it_was_set_and_beyond() {
     let dir = Scratch::new("map-model-coverage");
@@ -218,8 +237,7 @@ fn the_claimed_range_holds_the_coupled_dem_where_it_was_set_and_beyond() {
     let c = coverage(&dir, MAP, &one_bed(kept), kept, "plate-40hz", "5");
     assert_eq!((c.held, c.answered), (17, 17), "{:?}", c.misses);
     // Out of sample.
-    let mut total = (0, 0);
-    for (kept, host, force) in [
+    let runs = [
         (
             "signals/reference/host-frf-levels/force-3N/frf.csv",
             "plate-40hz",
@@ -231,12 +249,8 @@ fn the_claimed_range_holds_the_coupled_dem_where_it_was_set_and_beyond() {
             "8",
         ),
         ("signals/reference/host-frf-beam/frf.csv", "beam-2mode", "5"),
-    ] {
-        let c = coverage(&dir, MAP, &one_bed(kept), kept, host, force);
-        eprintln!("{kept}: {} of {} held; {:?}", c.held, c.answered, c.misses);
-        assert!(c.answered >= 8, "{kept}: {} points answered", c.answered);
-        total = (total.0 + c.held, total.1 + c.answered);
-    }
+    ];
+    let total = out_of_sample(&dir, MAP, &runs, one_bed);
     assert!(
         total.0 as f64 >= 0.9 * total.1 as f64,
         "{} of {} out-of-sample points held",
@@ -305,7 +319,9 @@ fn a_map_refined_at_the_onset_narrows_the_range() {
 /// sharp resonance: with 100 (`beam-settled/`, 39.5-40.5 Hz) the DEM at
 /// 40 Hz reads 0.4527 mm/N where it read 0.370, and all three points lie
 /// within the range, as this test asks: 39 of 42 out of sample on the 30
-/// cycles, 41 of 42 with the beam settled.
+/// cycles, 41 of 42 with the beam settled. Settled only so far: at 100
+/// cycles the command still calls 40 Hz not steady, and from rest the beam
+/// creeps by 0.3 % a cycle at cycle 150 (docs/host.md, section 5).
 #[test]
 fn the_claimed_range_meets_the_beds_mean_and_spread() {
     let dir = Scratch::new("map-model-beds");
@@ -317,8 +333,7 @@ fn the_claimed_range_meets_the_beds_mean_and_spread() {
             c.held, c.answered, c.misses
         );
         assert_eq!((c.held, c.answered), (17, 17), "{name}: {:?}", c.misses);
-        let mut total = (0, 0);
-        for (kept, host, force) in [
+        let runs = [
             (
                 "signals/reference/host-frf-beds/force-3N/frf.json",
                 "plate-40hz",
@@ -334,15 +349,8 @@ fn the_claimed_range_meets_the_beds_mean_and_spread() {
                 "beam-2mode",
                 "5",
             ),
-        ] {
-            let c = coverage(&dir, map, &beds(kept), kept, host, force);
-            eprintln!(
-                "{name} map, {kept}: {} of {} held; {:?}",
-                c.held, c.answered, c.misses
-            );
-            assert!(c.answered >= 8, "{kept}: {} points answered", c.answered);
-            total = (total.0 + c.held, total.1 + c.answered);
-        }
+        ];
+        let total = out_of_sample(&dir, map, &runs, beds);
         assert!(
             total.0 as f64 >= 0.9 * total.1 as f64,
             "{name} map: {} of {} out-of-sample points held",

@@ -126,7 +126,7 @@ fn report(r: &CarriedSineResult, test: &HostTest) {
         .map(|c| c.point.gamma)
         .fold(0.0, f64::max);
     println!("  highest Gamma going up {top:.1}");
-    for w in r.points.first().map_or(&[][..], |c| &c.point.warnings[..]) {
+    for w in r.warnings() {
         eprintln!("warning: {w}");
     }
 }

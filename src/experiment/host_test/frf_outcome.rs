@@ -1024,6 +1024,16 @@ mod tests {
         (mag, arg, coherence)
     }
 
+    /// The warnings of `o`'s run that say `what`.
+    fn warned<'a>(o: &'a RandomFrfOutcome, what: &str) -> Vec<&'a str> {
+        o.run
+            .warnings
+            .iter()
+            .map(|w| w.text.as_str())
+            .filter(|w| w.contains(what))
+            .collect()
+    }
+
     fn run_random(force: RandomForce, duration_s: f64) -> RandomFrfOutcome {
         run_random_test(dashpot_test(duration_s), force)
     }
@@ -1067,13 +1077,7 @@ mod tests {
             block_s: 2.0,
         };
         let o = run_random_test(test, force);
-        let leak: Vec<&str> = o
-            .run
-            .warnings
-            .iter()
-            .map(|w| w.text.as_str())
-            .filter(|w| w.contains("leakage"))
-            .collect();
+        let leak = warned(&o, "leakage");
         println!("{leak:?}");
         assert_eq!(leak.len(), 1, "{:?}", o.run.warnings);
         assert!(leak[0].contains("--block-s"), "{}", leak[0]);
@@ -1107,11 +1111,7 @@ mod tests {
         assert!(coherence > 0.999, "{coherence}");
         let (tail, _) = o.burst_tail().expect("a record").expect("a burst");
         assert!(tail < 0.005, "{tail}");
-        assert!(
-            !o.run.warnings.iter().any(|w| w.text.contains("died")),
-            "{:?}",
-            o.run.warnings
-        );
+        assert!(warned(&o, "died").is_empty(), "{:?}", o.run.warnings);
     }
 
     /// A burst whose response outlasts the silence says so: on plate-40hz
@@ -1133,13 +1133,7 @@ mod tests {
         let o = run_random_test(test, force);
         let (tail, _) = o.burst_tail().expect("a record").expect("a burst");
         assert!((0.06..0.25).contains(&tail), "{tail}");
-        let died: Vec<&str> = o
-            .run
-            .warnings
-            .iter()
-            .map(|w| w.text.as_str())
-            .filter(|w| w.contains("had not died out"))
-            .collect();
+        let died = warned(&o, "had not died out");
         assert_eq!(died.len(), 1, "{:?}", o.run.warnings);
         assert!(died[0].contains("--burst"), "{}", died[0]);
     }
