@@ -415,12 +415,8 @@ fn report_point(o: &SteppedSineOutcome, k: usize) {
     for w in o.warnings_at(k) {
         eprintln!("warning: {w}");
     }
-    if !p.steady {
-        println!(
-            "           not steady: the host's stored energy moved by {:.4} W over the record ({:+.1} % of the input; booked in the balance, but the damper is not at its steady state: more --settle-cycles)",
-            p.host_storage_w,
-            100.0 * p.host_storage_w / p.power_input_w
-        );
+    for why in p.unsteady_reasons() {
+        println!("           not steady: {why}");
     }
 }
 

@@ -206,8 +206,13 @@ pub struct FrfPoint {
     /// The truth's change of the host's stored energy over the same
     /// periods per second (W).
     pub host_energy_drift_w: f64,
+    /// The amplitude at the damper over the record's second half of whole
+    /// periods against its first half's, relative to their mean
+    /// ([`amplitude_drift_rel`]; NaN under four whole periods).
+    pub amplitude_drift_rel: f64,
     /// The record is steady as the lab sees it: the host's stored energy
-    /// (`host_storage_w`) moved by at most 5 % of the input power.
+    /// (`host_storage_w`) moved by at most 5 % of the input power, and the
+    /// amplitude's two halves agree within [`STEADY_AMPLITUDE_DRIFT_REL`].
     pub steady: bool,
     pub steps: u64,
     pub wall_time_s: f64,
@@ -221,7 +226,36 @@ impl FrfPoint {
     pub fn receptance(&self) -> Complex64 {
         Complex64::new(self.receptance_re, self.receptance_im)
     }
+
+    /// Why the record is not steady, one sentence a reason (none when it
+    /// is): the host's stored energy moving against the input, the
+    /// amplitude's halves apart.
+    pub fn unsteady_reasons(&self) -> Vec<String> {
+        let mut why = Vec::new();
+        if self.host_storage_w.abs() > STEADY_STORAGE_FRACTION * self.power_input_w.abs() {
+            why.push(format!(
+                "the host's stored energy moved by {:.4} W over the record ({:+.1} % of the input; booked in the balance, but the damper is not at its steady state: more --settle-cycles)",
+                self.host_storage_w,
+                100.0 * self.host_storage_w / self.power_input_w
+            ));
+        }
+        if self.amplitude_drift_rel.abs() > STEADY_AMPLITUDE_DRIFT_REL {
+            why.push(format!(
+                "the amplitude moved by {:+.1} % from the record's first half to its second (over {:.0} %: the response is still settling; more --settle-cycles)",
+                100.0 * self.amplitude_drift_rel,
+                100.0 * STEADY_AMPLITUDE_DRIFT_REL
+            ));
+        }
+        if !self.steady && why.is_empty() {
+            why.push("a bed's record is not (see each bed)".into());
+        }
+        why
+    }
 }
+
+/// How far the host's stored energy may move over a record, per second,
+/// against the input power, and the record still be called steady.
+const STEADY_STORAGE_FRACTION: f64 = 0.05;
 
 /// A stepped sine's points and what the lab reads off them.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -397,6 +431,39 @@ pub(crate) fn receptance_error_rel(
     Ok((spread / series.mean, true))
 }
 
+/// How far a record's amplitude may move from its first half of whole
+/// periods to its second (relative to their mean) and still be called
+/// steady: a sine controller's dwell tolerance, set before looking at
+/// records (on the 5 N plate the halves of records that settled differ by
+/// up to 2.0 % where the host beats, docs/host.md section 5).
+pub const STEADY_AMPLITUDE_DRIFT_REL: f64 = 0.02;
+
+/// The amplitude of `accel_mps2` (at `rate_hz`, driven at `freq_hz`) over
+/// the record's second half of whole periods less its first half's,
+/// relative to their mean; NaN under four whole periods.
+///
+/// The stored energy's balance (`host_storage_w`) asks how far the host's
+/// energy moved over the record against the input; at a sharp resonance
+/// that is a small part of the input while the amplitude is still far from
+/// its settled value (the beam at 40 Hz: 4.8 % of the input, 20 % short).
+/// Two halves of the record agreeing is what a lab's sine controller asks
+/// before it measures.
+pub fn amplitude_drift_rel(
+    accel_mps2: &[f64],
+    rate_hz: f64,
+    freq_hz: f64,
+) -> Result<f64, SignalsError> {
+    let per_period = rate_hz / freq_hz;
+    let half = ((accel_mps2.len() as f64 / per_period + 1e-9).floor() as usize) / 2;
+    if half < 2 {
+        return Ok(f64::NAN);
+    }
+    let at = |periods: usize| (periods as f64 * per_period).round() as usize;
+    let first = sine_component(&accel_mps2[..at(half)], rate_hz, freq_hz)?.norm();
+    let second = sine_component(&accel_mps2[at(half)..at(2 * half)], rate_hz, freq_hz)?.norm();
+    Ok((second - first) / (0.5 * (second + first)))
+}
+
 /// Rates over the samples `i0 ..= i1` of a cumulative column (per s).
 fn rate(v: &[f64], i0: usize, i1: usize, span_s: f64) -> f64 {
     (v[i1] - v[i0]) / span_s
@@ -516,6 +583,7 @@ pub(crate) fn measure_point(
     let true_input = rate(&r.excitation_work_j, i1, i2, span);
     let power = mean(&periods.input_w);
     let storage = mean(&periods.storage_w);
+    let amplitude_drift = amplitude_drift_rel(accel, rate_hz, freq_hz)?;
     Ok(FrfPoint {
         freq_hz,
         receptance_re: h.re,
@@ -538,7 +606,9 @@ pub(crate) fn measure_point(
         true_damper_w: rate(&r.damper_dissipated_j, i1, i2, span)
             + rate(&r.dashpot_dissipated_j, i1, i2, span),
         host_energy_drift_w: drift,
-        steady: storage.abs() <= 0.05 * power.abs(),
+        amplitude_drift_rel: amplitude_drift,
+        steady: storage.abs() <= STEADY_STORAGE_FRACTION * power.abs()
+            && amplitude_drift.abs() <= STEADY_AMPLITUDE_DRIFT_REL,
         steps: run.steps,
         wall_time_s: run.wall_time_s,
         warnings: run.warnings.iter().map(|w| w.text.clone()).collect(),
@@ -589,6 +659,7 @@ fn ensemble_point(each: &[FrfPoint]) -> FrfPoint {
         true_damper_work_w: mean(|p| p.true_damper_work_w),
         true_damper_w: mean(|p| p.true_damper_w),
         host_energy_drift_w: mean(|p| p.host_energy_drift_w),
+        amplitude_drift_rel: mean(|p| p.amplitude_drift_rel),
         steady: each.iter().all(|p| p.steady),
         steps: each.iter().map(|p| p.steps).sum(),
         wall_time_s: each.iter().map(|p| p.wall_time_s).fold(0.0, f64::max),
@@ -1060,6 +1131,42 @@ pub(crate) mod tests {
             (p.host_storage_w / p.host_energy_drift_w - 1.0).abs() < 0.02,
             "{p:?}"
         );
+        // Not steady, on both counts: the stored energy, and the amplitude
+        // growing from the record's first half to its second.
+        assert!(!p.steady);
+        assert!(p.amplitude_drift_rel > 0.1, "{p:?}");
+        assert_eq!(p.unsteady_reasons().len(), 2, "{:?}", p.unsteady_reasons());
+    }
+
+    /// The halves of a record: a steady sine's agree, a sine whose envelope
+    /// grows by `g` a period reads `10 g / (1 + 10 g)` over 20 periods (the
+    /// halves' mean envelopes, `1 + 5 g` and `1 + 15 g`, against theirs),
+    /// within 1e-3 of it; under four whole periods there are no halves.
+    #[test]
+    fn the_halves_of_a_record_say_how_far_its_amplitude_moved() {
+        let (rate_hz, freq_hz) = (40_000.0, 40.0);
+        let n = 20 * 1000;
+        let wave = |g: f64| -> Vec<f64> {
+            (0..n)
+                .map(|k| {
+                    let periods = k as f64 * freq_hz / rate_hz;
+                    (1.0 + g * periods) * (TAU * periods).sin()
+                })
+                .collect()
+        };
+        let steady = amplitude_drift_rel(&wave(0.0), rate_hz, freq_hz).expect("drift");
+        assert!(steady.abs() < 1e-12, "{steady}");
+        for g in [0.001, 0.003, -0.004] {
+            let drift = amplitude_drift_rel(&wave(g), rate_hz, freq_hz).expect("drift");
+            let (a1, a2) = (1.0 + 5.0 * g, 1.0 + 15.0 * g);
+            let want = (a2 - a1) / (0.5 * (a1 + a2));
+            assert!(
+                (drift - want).abs() < 1e-3 * want.abs(),
+                "{g}: {drift} {want}"
+            );
+        }
+        let short = amplitude_drift_rel(&wave(0.01)[..3500], rate_hz, freq_hz).expect("drift");
+        assert!(short.is_nan());
     }
 
     /// An ensemble's point: the mean of its beds, the damper power's +-
@@ -1087,6 +1194,7 @@ pub(crate) mod tests {
             true_damper_work_w: power_w,
             true_damper_w: power_w,
             host_energy_drift_w: 0.0,
+            amplitude_drift_rel: 0.0,
             steady: true,
             steps: 10,
             wall_time_s: 1.0,
