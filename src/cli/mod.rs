@@ -26,6 +26,7 @@ mod shake;
 mod shear_box;
 mod sweep;
 mod sweep_optimum;
+mod sweep_updown;
 
 use std::process::ExitCode;
 

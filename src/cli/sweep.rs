@@ -89,6 +89,12 @@ pub struct SweepArgs {
     /// (sweep.csv's `se_from` says which). Costs N times one bed.
     #[arg(long, value_name = "N", default_value_t = 1)]
     beds: u32,
+    /// Carry the bed from each Gamma to the next, up to the highest and back
+    /// down, as a lab's controller steps the level (one bed per frequency
+    /// and seed): writes each branch as a sweep (up/sweep.csv,
+    /// down/sweep.csv) and updown.csv, which says where they part.
+    #[arg(long = "up-down", conflicts_with_all = ["resume", "shard"])]
+    up_down: bool,
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
@@ -141,6 +147,9 @@ pub fn run(a: SweepArgs, quiet: bool) -> Result<()> {
         None => {}
     }
     let plan = sweep_plan(&a)?;
+    if a.up_down {
+        return super::sweep_updown::run(a.out.clone(), &plan, quiet);
+    }
     let shard = a.shard.unwrap_or(Shard::ALL);
     let out_dir = a
         .out
@@ -215,19 +224,22 @@ fn sweep_plan(a: &SweepArgs) -> Result<SweepPlan> {
         ensemble_beds: a.beds,
     };
     plan.validate().map_err(|e| flags.name_flags(e.into()))?;
+    if a.up_down {
+        vlab::study::sweep_updown::validate(&plan).map_err(|e| flags.name_flags(e.into()))?;
+    }
     Ok(plan)
 }
 
 /// How the sweep's events read on the progress line.
-struct EventLines {
-    shard: Shard,
-    with_fill: bool,
-    with_orientation: bool,
+pub(super) struct EventLines {
+    pub(super) shard: Shard,
+    pub(super) with_fill: bool,
+    pub(super) with_orientation: bool,
 }
 
 impl EventLines {
     /// Shows `e` on `progress`.
-    fn show(&self, e: SweepEvent, progress: &mut ProgressLine) {
+    pub(super) fn show(&self, e: SweepEvent, progress: &mut ProgressLine) {
         match e {
             SweepEvent::Started {
                 total,
@@ -297,7 +309,7 @@ fn outcome(row: &SweepRow) -> String {
 
 /// A one-sigma error as printed: "n/a" when there is none (a window of
 /// fewer than 16 cycles has no error estimate; JSON and CSV keep it empty).
-fn plus_minus(se: f64) -> String {
+pub(super) fn plus_minus(se: f64) -> String {
     if se.is_finite() {
         format!("{se:.3}")
     } else {

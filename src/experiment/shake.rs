@@ -514,9 +514,7 @@ pub fn run_shake_on_bed(
     observers: &mut [&mut dyn StepObserver],
     progress: &mut dyn FnMut(Progress),
 ) -> Result<ShakeRun, SceneError> {
-    let e_max_j = setup.drive.e_max_j(bed.world.particles.total_mass_kg());
-    let judge = OneBed::new(scene.drive_length(), e_max_j);
-    run_shake_on_bed_judged(scene, bed, setup, observers, progress, (&judge, 0))
+    run_shake_carrying(scene, bed, setup, observers, progress).map(|(run, _)| run)
 }
 
 /// [`run_shake_on_bed`] as bed `judged.1` of the beds the judge `judged.0`
@@ -529,6 +527,51 @@ pub fn run_shake_on_bed_judged(
     progress: &mut dyn FnMut(Progress),
     judged: (&dyn DriveJudge, usize),
 ) -> Result<ShakeRun, SceneError> {
+    drive_bed(scene, bed, setup, observers, progress, judged).map(|(run, _)| run)
+}
+
+/// [`run_shake_on_bed`] that hands back the bed as the drive left it, for
+/// the next condition of a sweep that carries the bed's state from one
+/// amplitude to the next as a lab's controller does
+/// ([`crate::study::sweep_updown`]).
+///
+/// The drive ends on a whole cycle, where a sine's enclosure is back at its
+/// rest position: the particles keep their positions, velocities, spins and
+/// contact histories, and the next drive starts from there at its own
+/// amplitude (the enclosure's velocity steps from one amplitude's to the
+/// other's at that zero crossing, as a controller's step does).
+pub fn run_shake_carrying(
+    scene: &Scene,
+    bed: &SettledBed,
+    setup: &ShakeSetup,
+    observers: &mut [&mut dyn StepObserver],
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(ShakeRun, SettledBed), SceneError> {
+    let e_max_j = setup.drive.e_max_j(bed.world.particles.total_mass_kg());
+    let judge = OneBed::new(scene.drive_length(), e_max_j);
+    let (run, world) = drive_bed(scene, bed, setup, observers, progress, (&judge, 0))?;
+    let next = SettledBed {
+        world,
+        settle_time_s: bed.settle_time_s,
+        settle_steps: bed.settle_steps,
+        wall_time_s: 0.0,
+        packing_fraction: bed.packing_fraction,
+        bed_height_m: bed.bed_height_m,
+        from_cache: false,
+        warnings: Vec::new(),
+    };
+    Ok((run, next))
+}
+
+/// One bed driven and measured: the run and the world as it ended.
+fn drive_bed(
+    scene: &Scene,
+    bed: &SettledBed,
+    setup: &ShakeSetup,
+    observers: &mut [&mut dyn StepObserver],
+    progress: &mut dyn FnMut(Progress),
+    judged: (&dyn DriveJudge, usize),
+) -> Result<(ShakeRun, crate::dem::World), SceneError> {
     let started = Stopwatch::start();
     let dt = scene.drive_dt_s(&setup.drive);
     // The step's threads are the scene's: an ensemble gives each of its
@@ -541,10 +584,13 @@ pub fn run_shake_on_bed_judged(
     let experiment =
         run_measured_shake_judged(scene, &mut world, setup, &mut observers, progress, judged)?;
     let summary = ShakeSummary::new(scene, bed, setup, &experiment, &world, dt, started);
-    Ok(ShakeRun {
-        summary,
-        experiment,
-    })
+    Ok((
+        ShakeRun {
+            summary,
+            experiment,
+        },
+        world,
+    ))
 }
 
 impl ShakeSummary {

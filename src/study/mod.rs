@@ -1,7 +1,8 @@
 //! Studies: many experiments and what they say together. Sweeps of frequency,
 //! Gamma, fill and orientation with their maps (`sweep`, `sweep_plot`) and
 //! where each series peaks (`sweep_peak`), a sweep's report and columns
-//! (`sweep_report`), the optimum Γ of several sweeps
+//! (`sweep_report`), a sweep up and back down in Γ with the bed carried
+//! (`sweep_updown`), the optimum Γ of several sweeps
 //! against what tells them apart (`sweep_optimum`), the
 //! motional phases read from DEM truth (`phases`), accuracy against run time
 //! (`accuracy`) and the bouncing-bed onset predicted from the scene alone
@@ -22,3 +23,4 @@ pub mod sweep_peak;
 #[cfg(feature = "plot")]
 pub mod sweep_plot;
 pub mod sweep_report;
+pub mod sweep_updown;

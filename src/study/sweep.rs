@@ -39,8 +39,11 @@ use serde::{Serialize, Serializer};
 use crate::atomic_write::write_atomic;
 use crate::experiment::bed::cache::BedSource;
 use crate::experiment::bed::settle::SettledBed;
+use crate::experiment::damper::StepObserver;
 use crate::experiment::ensemble::{BedProvider, EnsembleFigure, bed_seed};
-use crate::experiment::shake::{check_record_window, resolve_rig, shake_drive};
+use crate::experiment::shake::{
+    ShakeRun, check_record_window, resolve_rig, run_shake_carrying, shake_drive,
+};
 use crate::experiment::shake_plan::{ShakePlan, ShakeRequest};
 use crate::rig::{RigFile, RigSpec, ShakerKind};
 use crate::scene::{CyclesSpec, Orientation, Scene, SceneError};
@@ -418,7 +421,7 @@ impl SweepPlan {
         ))
     }
 
-    fn header(&self, shard: Shard) -> SweepHeader {
+    pub(crate) fn header(&self, shard: Shard) -> SweepHeader {
         SweepHeader {
             sweep_id: self.sweep_id(),
             protocol_id: self.protocol_id(),
@@ -434,6 +437,7 @@ impl SweepPlan {
             scene_fill_ratio: self.scene.fill_ratio(),
             gravity_mps2: self.scene.simulation.gravity_mps2,
             beds: self.ensemble_beds,
+            carried: None,
         }
     }
 }
@@ -452,7 +456,7 @@ fn cycles_text(scene: &Scene) -> String {
 }
 
 /// FNV-1a, 64 bit, as 16 hex digits: stable across platforms and versions.
-fn fingerprint(text: &str) -> String {
+pub(crate) fn fingerprint(text: &str) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in text.bytes() {
         h ^= b as u64;
@@ -678,18 +682,63 @@ pub fn run_condition(plan: &SweepPlan, beds: &dyn BedProvider, c: &Condition) ->
     if let Err(why) = reachability(plan, c) {
         return SweepRow::empty(*c, RowStatus::Unreachable, why);
     }
-    match try_condition(plan, beds, c) {
+    let mut run = |shake: &ShakePlan, observer: &mut PhaseObserver| {
+        Ok(shake
+            .run(
+                beds,
+                1,
+                &mut [observer as &mut dyn StepObserver],
+                &mut |_| {},
+            )?
+            .run)
+    };
+    match try_condition(plan, c, &mut run) {
         Ok(row) => row,
         Err(e) => SweepRow::empty(*c, RowStatus::Failed, e.to_string()),
     }
 }
 
+/// Runs condition `c` on `bed` as the previous condition of a carried sweep
+/// left it ([`crate::study::sweep_updown`]): the row, and the bed as this
+/// drive left it (none where the condition could not run: the chain goes
+/// on from `bed`). One bed, whatever the plan's ensemble.
+pub fn run_condition_carried(
+    plan: &SweepPlan,
+    bed: &SettledBed,
+    c: &Condition,
+) -> (SweepRow, Option<SettledBed>) {
+    if let Err(why) = reachability(plan, c) {
+        return (SweepRow::empty(*c, RowStatus::Unreachable, why), None);
+    }
+    let mut next = None;
+    let mut run = |shake: &ShakePlan, observer: &mut PhaseObserver| {
+        let (run, left) = run_shake_carrying(
+            &shake.scene,
+            bed,
+            &shake.setup,
+            &mut [observer as &mut dyn StepObserver],
+            &mut |_| {},
+        )?;
+        next = Some(left);
+        Ok(run)
+    };
+    let row = match try_condition(plan, c, &mut run) {
+        Ok(row) => row,
+        Err(e) => SweepRow::empty(*c, RowStatus::Failed, e.to_string()),
+    };
+    (row, next)
+}
+
+/// How a condition's shake is run: on the plan's beds, or carried on.
+type ConditionRunner<'a> =
+    dyn FnMut(&ShakePlan, &mut PhaseObserver) -> Result<ShakeRun, SceneError> + 'a;
+
 /// Over 80 lines: one sweep row assembled field by field from the shake's
 /// summary, its ensemble and the phase observer.
 fn try_condition(
     plan: &SweepPlan,
-    beds: &dyn BedProvider,
     c: &Condition,
+    run_shake: &mut ConditionRunner,
 ) -> Result<SweepRow, SceneError> {
     let started = Stopwatch::start();
     let scene = plan.scene_for(c)?;
@@ -713,7 +762,7 @@ fn try_condition(
     let mut observer = PhaseObserver::new(&drive, dt, sample_from, clearance);
     // The phase indicators, the shares and the apparent mass are the first
     // bed's; the efficiencies and the energy the ensemble's.
-    let run = shake.run(beds, 1, &mut [&mut observer], &mut |_| {})?.run;
+    let run = run_shake(&shake, &mut observer)?;
     let ensemble = run.summary.ensemble.clone();
     let s = &run.summary;
     let impacts = collective_impacts(
@@ -832,6 +881,11 @@ pub struct SweepHeader {
     pub gravity_mps2: f64,
     /// Beds each condition drove (1 in files written before ensembles).
     pub beds: u32,
+    /// A branch of a carried sweep (`up`, `down`): every condition's bed
+    /// came from the condition before it, not from rest
+    /// ([`crate::study::sweep_updown`]); none for a sweep whose conditions
+    /// each start from the settled bed.
+    pub carried: Option<String>,
 }
 
 impl SweepHeader {
@@ -866,6 +920,9 @@ impl SweepHeader {
         let _ = writeln!(t, "# scene_fill_ratio: {}", self.scene_fill_ratio);
         let _ = writeln!(t, "# gravity_mps2: {}", self.gravity_mps2);
         let _ = writeln!(t, "# beds: {}", self.beds);
+        if let Some(branch) = &self.carried {
+            let _ = writeln!(t, "# carried: {branch}");
+        }
         t
     }
 
@@ -939,6 +996,7 @@ impl SweepHeader {
             } else {
                 1
             },
+            carried: lines.get("carried").cloned(),
         })
     }
 }

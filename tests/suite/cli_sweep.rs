@@ -467,3 +467,107 @@ fn a_sweep_of_ensembles_says_how_its_errors_are_known() {
     assert!(!refused.status.success());
     assert!(stderr(&refused).contains("--beds"), "{}", stderr(&refused));
 }
+
+/// `--up-down` carries the bed from each Γ to the next: the first condition
+/// up starts from the settled bed as an ordinary sweep's does (the same
+/// row), every later one from where the last left it (not the ordinary
+/// sweep's row), the top is one run on both branches, the branches differ
+/// below it, the numbers do not depend on the thread count, and what a
+/// carried sweep cannot do is refused before any work.
+#[test]
+fn a_sweep_up_and_down_carries_the_bed() {
+    let dir = Scratch::new("sweep-updown");
+    dir.write("tiny.toml", TINY_SCENE);
+    let sweep = |threads: &str, out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "--threads",
+            threads,
+            "sweep",
+            "--freq",
+            "40",
+            "--gamma",
+            "1,3,15",
+            "--seeds",
+            "1,2",
+            "--scene",
+            "tiny.toml",
+            "--out",
+            out,
+        ];
+        args.extend_from_slice(extra);
+        vlab(&dir.0, &args)
+    };
+    let plain = sweep("2", "plain", &[]);
+    assert!(plain.status.success(), "{}", stderr(&plain));
+    let carried = sweep("2", "carried", &["--up-down"]);
+    assert!(carried.status.success(), "{}", stderr(&carried));
+    let one_thread = sweep("1", "carried-1", &["--up-down"]);
+    assert!(one_thread.status.success(), "{}", stderr(&one_thread));
+
+    let plain = rows_without_wall_time(&dir.path("plain/sweep.csv"));
+    let up = rows_without_wall_time(&dir.path("carried/up/sweep.csv"));
+    let down = rows_without_wall_time(&dir.path("carried/down/sweep.csv"));
+    // Rows by (Γ, seed): the condition's columns lead each row.
+    let row = |rows: &[String], gamma: &str, seed: &str| -> String {
+        rows.iter()
+            .find(|r| {
+                let c: Vec<&str> = r.split(',').collect();
+                c[3] == gamma && c[4] == seed
+            })
+            .unwrap_or_else(|| panic!("no row at Gamma {gamma} seed {seed} in {rows:?}"))
+            .clone()
+    };
+    for seed in ["1", "2"] {
+        assert_eq!(row(&up, "1", seed), row(&plain, "1", seed));
+        assert_ne!(row(&up, "3", seed), row(&plain, "3", seed));
+        assert_ne!(row(&up, "15", seed), row(&plain, "15", seed));
+        assert_eq!(row(&up, "15", seed), row(&down, "15", seed));
+        assert_ne!(row(&up, "3", seed), row(&down, "3", seed));
+        assert_ne!(row(&up, "1", seed), row(&down, "1", seed));
+    }
+    assert_eq!(
+        up,
+        rows_without_wall_time(&dir.path("carried-1/up/sweep.csv"))
+    );
+    assert_eq!(
+        down,
+        rows_without_wall_time(&dir.path("carried-1/down/sweep.csv"))
+    );
+    let text = std::fs::read_to_string(dir.path("carried/down/sweep.csv")).expect("sweep.csv");
+    assert!(text.contains("\n# carried: down\n"), "{text}");
+    // Both branches side by side: 3 Γ × 2 seeds, the top with no difference.
+    let side = std::fs::read_to_string(dir.path("carried/updown.csv")).expect("updown.csv");
+    assert_eq!(side.lines().count(), 7, "{side}");
+    assert!(
+        side.lines()
+            .filter(|l| l.contains(",40,15,"))
+            .all(|l| l.split(',').nth(11) == Some("0")),
+        "{side}"
+    );
+    let table = String::from_utf8_lossy(&carried.stdout);
+    assert!(table.contains("up and down in Gamma"), "{table}");
+
+    // Refused before any work, by the flag.
+    for (extra, flag) in [
+        (&["--up-down", "--beds", "2"][..], "--beds"),
+        (&["--up-down", "--resume"][..], "--resume"),
+    ] {
+        let o = sweep("2", "refused", extra);
+        assert!(!o.status.success(), "{extra:?}");
+        assert!(stderr(&o).contains(flag), "{extra:?}: {}", stderr(&o));
+    }
+    let mut args = vec![
+        "sweep",
+        "--freq",
+        "40",
+        "--gamma",
+        "3",
+        "--scene",
+        "tiny.toml",
+    ];
+    args.extend(["--up-down", "--out", "refused"]);
+    let o = vlab(&dir.0, &args);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--gamma"), "{}", stderr(&o));
+    assert!(!dir.path("refused").exists());
+}

@@ -707,12 +707,16 @@ fn settling_progress(
 }
 
 /// Makes a settled bed ready to drive: the scene's contact laws (every
-/// tangential history dropped), the test time step `dt_s`, the energy ledger
-/// started.
+/// tangential history dropped; a bed under them already keeps its
+/// histories), the test time step `dt_s`, the energy ledger started.
 pub fn prepare_drive(bed: &SettledBed, scene: &Scene, dt_s: f64) -> Result<World, SceneError> {
     let mut world = bed.world.clone();
     let laws = contact_laws(scene);
-    world.set_contact_laws(laws.particle_particle, laws.particle_wall)?;
+    // A bed a drive left (a carried sweep's) is under the drive's laws
+    // already: its contacts' histories are part of its state and stay.
+    if world.pp_law != laws.particle_particle || world.pw_law != laws.particle_wall {
+        world.set_contact_laws(laws.particle_particle, laws.particle_wall)?;
+    }
     world.set_dt_s(dt_s);
     world.numerics.parallel_min_pairs = scene.simulation.parallel_min_pairs;
     world.set_step_threads(scene.simulation.step_threads);
