@@ -15,6 +15,7 @@ use vlab::atomic_write::OutputDir;
 use vlab::scene::{Scene, SceneError, SceneOverrides};
 use vlab::study::sweep::{Shard, SweepError, SweepEvent, SweepFile, SweepPlan, run_sweep};
 use vlab::study::sweep_plot::plot_sweep;
+use vlab::study::sweep_updown;
 
 use crate::common::{Callback, bed_source, shaker_of, thread_pool, value_error};
 use crate::scene::orientation_of;
@@ -35,6 +36,9 @@ const TEXT_COLUMNS: [&str; 6] = [
 #[pyclass(module = "vlab._vlab", frozen)]
 pub(crate) struct Sweep {
     file: SweepFile,
+    /// With `up_down`: the down branch and `updown.csv`'s text (the file
+    /// is then the up branch).
+    branches: Option<(SweepFile, String)>,
 }
 
 #[pymethods]
@@ -103,6 +107,23 @@ impl Sweep {
         made.keep_if_ok(written).map_err(PyRuntimeError::new_err)
     }
 
+    /// The down branch of a sweep run with `up_down` (this one is the up
+    /// branch); none for any other sweep.
+    #[getter]
+    fn down(&self) -> Option<Sweep> {
+        self.branches.as_ref().map(|(down, _)| Sweep {
+            file: down.clone(),
+            branches: None,
+        })
+    }
+
+    /// `updown.csv` of a sweep run with `up_down`: both branches side by
+    /// side, where they part; none for any other sweep.
+    #[getter]
+    fn up_down_csv(&self) -> Option<String> {
+        self.branches.as_ref().map(|(_, csv)| csv.clone())
+    }
+
     fn __len__(&self) -> usize {
         self.file.rows.len()
     }
@@ -141,7 +162,10 @@ pub(crate) fn read_sweep(path: PathBuf) -> PyResult<Sweep> {
         path
     };
     let file = SweepFile::read(&file_path).map_err(value_error)?;
-    Ok(Sweep { file })
+    Ok(Sweep {
+        file,
+        branches: None,
+    })
 }
 
 /// The keyword a library key is given by in Python.
@@ -195,6 +219,7 @@ fn refused(e: SweepError) -> PyErr {
     beds = 1,
     out = None,
     resume = false,
+    up_down = false,
     cache = true,
     threads = None,
     progress = None,
@@ -216,6 +241,7 @@ pub(crate) fn sweep(
     beds: u32,
     out: Option<PathBuf>,
     resume: bool,
+    up_down: bool,
     cache: bool,
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
@@ -245,22 +271,38 @@ pub(crate) fn sweep(
         beds: bed_source(py, cache)?,
         ensemble_beds: beds,
     };
-    plan.validate().map_err(|e| match e {
+    let checked = if up_down {
+        sweep_updown::validate(&plan)
+    } else {
+        plan.validate()
+    };
+    checked.map_err(|e| match e {
         SweepError::Scene(SceneError::Invalid(_)) | SweepError::Invalid(_) => refused(e),
         SweepError::Scene(s) => PyValueError::new_err(format!("rig = {rig:?}: {s}")),
         other => value_error(other),
     })?;
+    if up_down && resume {
+        return Err(PyValueError::new_err(
+            "resume = True: a sweep up and down cannot be resumed (each chain carries its bed from the start)",
+        ));
+    }
     let pool = thread_pool(threads)?;
-    let file = match out {
-        Some(dir) => run_into(py, &plan, &dir, resume, &pool, progress)?,
+    let run = |dir: &Path, resume: bool, progress: Option<Py<PyAny>>| match up_down {
+        false => run_into(py, &plan, dir, resume, &pool, progress).map(|file| Sweep {
+            file,
+            branches: None,
+        }),
+        true => run_up_down_into(py, &plan, dir, &pool, progress),
+    };
+    match out {
+        Some(dir) => run(&dir, resume, progress),
         None => {
             let dir = scratch_folder();
-            let file = run_into(py, &plan, &dir, false, &pool, progress);
+            let sweep = run(&dir, false, progress);
             let _ = std::fs::remove_dir_all(&dir);
-            file?
+            sweep
         }
-    };
-    Ok(Sweep { file })
+    }
 }
 
 /// A folder of this process's own under the system's temporary folder.
@@ -291,6 +333,66 @@ fn run_into(
             dir.join("sweep.csv").display()
         )));
     }
+    in_folder(py, dir, pool, progress, &|on_event| {
+        let file = run_sweep(plan, Shard::ALL, dir, resume, on_event)?;
+        plot(&file, dir)?;
+        Ok(file)
+    })
+}
+
+/// Runs `plan` up and back down in Γ as `vlab sweep --up-down --out dir`
+/// does: each branch in `dir`/up and `dir`/down (sweep.csv and plots),
+/// `updown.csv` beside them, written when every chain has finished.
+fn run_up_down_into(
+    py: Python<'_>,
+    plan: &SweepPlan,
+    dir: &Path,
+    pool: &rayon::ThreadPool,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Sweep> {
+    if dir.join("updown.csv").exists() {
+        return Err(PyValueError::new_err(format!(
+            "{} exists: choose another out",
+            dir.join("updown.csv").display()
+        )));
+    }
+    let both = in_folder(py, dir, pool, progress, &|on_event| {
+        let both = sweep_updown::run_up_down(plan, on_event)?;
+        both.write(dir)?;
+        plot(&both.up, &dir.join("up"))?;
+        plot(&both.down, &dir.join("down"))?;
+        Ok(both)
+    })?;
+    let csv = both.csv();
+    Ok(Sweep {
+        file: both.up,
+        branches: Some((both.down, csv)),
+    })
+}
+
+/// A sweep's plots drawn into `dir`, a failure as the sweep's.
+fn plot(file: &SweepFile, dir: &Path) -> Result<(), SweepError> {
+    plot_sweep(file, dir)
+        .map(|_| ())
+        .map_err(|e| SweepError::Write {
+            path: dir.to_path_buf(),
+            source: std::io::Error::other(e.to_string()),
+        })
+}
+
+/// What [`in_folder`] runs: a sweep given where its events go.
+type SweepWork<'a, T> = dyn Fn(&(dyn Fn(SweepEvent) + Sync)) -> Result<T, SweepError> + Sync + 'a;
+
+/// `work` run in `pool` without the GIL, its events given to `progress` as
+/// ("bed", settled, beds) and ("condition", done, conditions); the folder
+/// `dir` made for it, and removed again if it made it and `work` fails.
+fn in_folder<T: Send>(
+    py: Python<'_>,
+    dir: &Path,
+    pool: &rayon::ThreadPool,
+    progress: Option<Py<PyAny>>,
+    work: &SweepWork<'_, T>,
+) -> PyResult<T> {
     let made = OutputDir::prepare(dir).map_err(|e| {
         PyRuntimeError::new_err(format!("cannot create folder {}: {e}", dir.display()))
     })?;
@@ -307,16 +409,7 @@ fn run_into(
             callback.call(("condition", done, total));
         }
     };
-    let result = py.detach(|| {
-        pool.install(|| {
-            let file = run_sweep(plan, Shard::ALL, dir, resume, &on_event)?;
-            plot_sweep(&file, dir).map_err(|e| SweepError::Write {
-                path: dir.to_path_buf(),
-                source: std::io::Error::other(e.to_string()),
-            })?;
-            Ok::<_, SweepError>(file)
-        })
-    });
+    let result = py.detach(|| pool.install(|| work(&on_event)));
     callback.finish()?;
     made.keep_if_ok(result)
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))

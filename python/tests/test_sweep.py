@@ -154,3 +154,33 @@ def test_a_folder_with_a_sweep_is_not_overwritten(small):
     with pytest.raises(ValueError, match="resume=True"):
         vlab.sweep(**GRID, **SHORT, out=out)
     assert (out / "sweep.csv").read_bytes() == before
+
+
+def test_a_sweep_up_and_down_is_the_commands_and_carries_the_bed(small, cli, tmp_path):
+    s, _, _ = small
+    assert s.down is None and s.branches is None
+    out = tmp_path / "py"
+    up = vlab.sweep(**GRID, **SHORT, up_down=True, out=out, progress=False)
+    made = tmp_path / "cli"
+    subprocess.run([cli, "--quiet", "sweep", *FLAGS, "--up-down", "--out", str(made)],
+                   capture_output=True, text=True, check=True)
+    for branch in ["up", "down"]:
+        assert (rows_without_wall_times(out / branch / "sweep.csv")
+                == rows_without_wall_times(made / branch / "sweep.csv")), branch
+    assert (out / "updown.csv").read_text() == (made / "updown.csv").read_text()
+    down = up.down
+    # The first condition up starts from the settled bed, as the plain
+    # sweep's does; the top is one run on both branches; coming down, Gamma
+    # 10 starts from where Gamma 20 left the bed.
+    assert up.columns["efficiency"][0] == s.columns["efficiency"][0]
+    assert up.columns["efficiency"][1] == down.columns["efficiency"][0]
+    assert down.columns["gamma"].tolist() == [20.0, 10.0]
+    assert down.columns["efficiency"][1] != up.columns["efficiency"][0]
+    side = up.branches
+    assert side["gamma"].tolist() == [10.0, 20.0]
+    assert side["difference"][1] == 0.0
+    with pytest.raises(ValueError, match="beds"):
+        vlab.sweep(**GRID, **SHORT, up_down=True, beds=2)
+    with pytest.raises(ValueError, match="resume"):
+        vlab.sweep(**GRID, **SHORT, up_down=True, resume=True, out=tmp_path / "again")
+    assert not (tmp_path / "again").exists()

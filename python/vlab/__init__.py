@@ -294,6 +294,24 @@ class Sweep:
         names, as a dict."""
         return self._inner.header
 
+    @property
+    def down(self):
+        """The down branch (a Sweep) of a sweep run with `up_down=True`,
+        whose own rows are the up branch; None for any other sweep."""
+        down = self._inner.down
+        return None if down is None else Sweep(down)
+
+    @property
+    def branches(self):
+        """updown.csv of a sweep run with `up_down=True` as columns: each
+        condition both branches ran (fill_ratio, orientation, freq_hz,
+        gamma, seed), each branch's efficiency, error and phase
+        (`efficiency_up`, `efficiency_up_se`, `phase_up`, the same `_down`),
+        `difference` (down less up), `z` (over their errors in quadrature)
+        and `apart` ("true" beyond 3 sigma); None for any other sweep."""
+        text = self._inner.up_down_csv
+        return None if text is None else _csv_columns(text)
+
     def write(self, out):
         """Writes sweep.csv and the sweep's plots (efficiency and map, PNG
         and SVG) into folder `out`; returns the paths written."""
@@ -318,7 +336,11 @@ def sweep(freqs_hz, gammas, **options):
     `dt_s`, `rig`, `shaker`, `beds` (an ensemble per condition), `out` (the
     folder sweep.csv and the plots go to, kept up to date as conditions
     finish; none: a temporary folder, removed), `resume` (go on with the
-    sweep in `out`), `cache`, `threads`, and `progress`: a callable given
+    sweep in `out`), `up_down` (each chain of Gamma run up and back down
+    with the bed carried from each condition to the next, as `vlab sweep
+    --up-down`: the Sweep returned is the up branch, its `down` the down
+    branch and its `branches` the two side by side; one bed a condition,
+    not resumable), `cache`, `threads`, and `progress`: a callable given
     `("bed", settled, beds)` and `("condition", done, conditions)`, `False`
     for none; left out, tqdm bars when tqdm is installed. Bad values raise
     `ValueError` naming the keyword, its unit and its range, before any work.
