@@ -37,7 +37,13 @@ pub fn run(out: Option<PathBuf>, plan: &SweepPlan, quiet: bool) -> Result<()> {
     };
     let on_event = |e: SweepEvent| {
         let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
-        events.show(e, &mut p);
+        match e {
+            SweepEvent::Started { total, beds, .. } => p.note(&format!(
+                "sweep up and down: {total} runs in {beds} chain{} of one bed each, the bed carried from run to run",
+                if beds == 1 { "" } else { "s" }
+            )),
+            e => events.show(e, &mut p),
+        }
     };
     let result = run_up_down(plan, &on_event)
         .and_then(|s| s.write(&out_dir).map(|()| s))
