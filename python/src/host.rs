@@ -96,7 +96,7 @@ impl HostPredict {
     /// The map's words on each response outside it.
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.prediction.warnings.clone()
+        self.prediction.all_warnings()
     }
 
     /// Writes predict.csv and predict.json into folder `out`, as `vlab host
@@ -143,7 +143,8 @@ pub(crate) fn host_predict(
     let dissipation = dissipation_map(&file, orientation, None, source).map_err(|e| in_map(&e))?;
     let spec = HostSpec::from_name_or_path(&host)
         .map_err(|e| PyValueError::new_err(format!("host = {host:?}: {e}")))?;
-    let prediction = HostPrediction::run(&dissipation, label, source, spec, &freqs_hz, force_n);
+    let prediction = HostPrediction::run(&dissipation, label, source, spec, &freqs_hz, force_n)
+        .with_map_branch(&file);
     Ok(HostPredict { prediction })
 }
 

@@ -113,14 +113,21 @@ pub fn dissipation_map(
 /// over a finer Γ grid and several seeds there, without sweeping the whole
 /// map again. Every file must have been swept with the first's protocol
 /// (scene, rig, shaker and vlab version: [`super::sweep::SweepHeader`]'s
-/// `protocol_id`), or its efficiencies would not be comparable.
+/// `protocol_id`), or its efficiencies would not be comparable. The
+/// header's `carried` names the branches of carried sweeps among the files.
 pub fn read_map_files(paths: &[PathBuf]) -> Result<SweepFile, SweepError> {
     let Some((first_path, rest)) = paths.split_first() else {
         return Err(SweepError::Merge("no map file given".into()));
     };
     let mut map = SweepFile::read(first_path)?;
+    let mut branches: Vec<String> = map.header.carried.iter().cloned().collect();
     for path in rest {
         let finer = SweepFile::read(path)?;
+        if let Some(b) = &finer.header.carried
+            && !branches.contains(b)
+        {
+            branches.push(b.clone());
+        }
         if finer.header.protocol_id != map.header.protocol_id {
             return Err(SweepError::Merge(format!(
                 "{} was swept with another protocol than {} (protocol_id {} against {}: the scene, \
@@ -155,6 +162,9 @@ pub fn read_map_files(paths: &[PathBuf]) -> Result<SweepFile, SweepError> {
         }
         to.seeds.sort_unstable();
     }
+    // A carried sweep's branch among the files: the map is that branch's
+    // where it holds conditions ([`super::sweep_updown`]).
+    map.header.carried = (!branches.is_empty()).then(|| branches.join(", "));
     map.sort_canonical();
     Ok(map)
 }

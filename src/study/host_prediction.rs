@@ -12,6 +12,7 @@ use crate::host::{DissipationMap, HostSpec};
 use crate::scene::SceneError;
 
 use super::dissipation_map::MapSource;
+use super::sweep::SweepFile;
 use crate::validation::{InvalidParameter, positive};
 
 pub use crate::host::excitation::{MAX_FREQUENCIES, check_frequencies};
@@ -40,6 +41,9 @@ pub struct HostPrediction {
     pub points: Vec<(SteadyResponse, usize)>,
     /// The map's words on each response outside it.
     pub warnings: Vec<String>,
+    /// Where the map holds a branch of a carried sweep, what that means
+    /// ([`HostPrediction::with_map_branch`]).
+    pub branch_warning: Option<String>,
     pub elapsed_ms: f64,
 }
 
@@ -71,8 +75,34 @@ impl HostPrediction {
             has_apparent_mass: map.has_apparent_mass(),
             points,
             warnings,
+            branch_warning: None,
             elapsed_ms,
         }
+    }
+
+    /// The prediction with a warning first where the map (`file`, as
+    /// [`super::dissipation_map::read_map_files`] read it) holds a branch
+    /// of a carried sweep: its conditions came from the one before, not
+    /// from the bed at rest, and the model's answer depends on it (at
+    /// 40 Hz the up branch lifts the plate's 5 N flat top by up to 8 %,
+    /// docs/host.md section 5).
+    pub fn with_map_branch(mut self, file: &SweepFile) -> Self {
+        if let Some(branch) = &file.header.carried {
+            self.branch_warning = Some(format!(
+                "the map holds the {branch} branch of a sweep carried in Gamma (`vlab sweep --up-down`): there its conditions started from the one before, not from the bed at rest, as a stepped sine that starts each frequency afresh does; the model answers for a bed on that branch"
+            ));
+        }
+        self
+    }
+
+    /// Every warning: the map's branch first, then each response outside
+    /// the map.
+    pub fn all_warnings(&self) -> Vec<String> {
+        self.branch_warning
+            .iter()
+            .chain(&self.warnings)
+            .cloned()
+            .collect()
     }
 
     /// `predict.csv`: one row per frequency.
@@ -116,7 +146,7 @@ impl HostPrediction {
             "source": match self.source { MapSource::Yang => "yang", MapSource::Dem => "dem" },
             "force_n": self.force_n,
             "elapsed_ms": self.elapsed_ms,
-            "warnings": self.warnings,
+            "warnings": self.all_warnings(),
             "points": points.map(|(p, r)| serde_json::json!({"response": p, "roots": r})).collect::<Vec<_>>(),
         })
     }

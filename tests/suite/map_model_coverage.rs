@@ -426,4 +426,39 @@ fn the_maps_branches_part_at_the_onset_and_the_fresh_map_meets_the_fresh_dem() {
         held[1].1
     );
     assert_eq!(held[2].0, 16, "{:?}", held[2].1);
+
+    // The prediction says which branch its map is, first; a map from rest
+    // says nothing of branches.
+    let dir = Scratch::new("map-model-branch-words");
+    let said = |maps: &[&str], out: &str| {
+        let mut args = vec!["host", "predict", "--freq", "40", "--force-n", "5"];
+        let paths: Vec<String> = maps
+            .iter()
+            .map(|m| root.join(m).to_string_lossy().into_owned())
+            .collect();
+        for p in &paths {
+            args.extend(["--map", p.as_str()]);
+        }
+        args.extend(["--out", out]);
+        let run = vlab(&dir.0, &args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let json: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.path(&format!("{out}/predict.json"))).expect("json"),
+        )
+        .expect("JSON");
+        (stderr(&run), json["warnings"].clone())
+    };
+    let (text, listed) = said(
+        &branch("signals/reference/host-map-updown/up/sweep.csv"),
+        "up",
+    );
+    assert!(text.contains("the up branch of a sweep carried"), "{text}");
+    assert!(
+        listed[0]
+            .as_str()
+            .is_some_and(|w| w.contains("the up branch")),
+        "{listed}"
+    );
+    let (text, _) = said(REFINED_MAP, "rest");
+    assert!(!text.contains("branch"), "{text}");
 }

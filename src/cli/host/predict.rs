@@ -54,7 +54,8 @@ pub fn run(a: PredictArgs) -> Result<()> {
         .with_context(|| format!("--map {label}"))?;
     let host =
         HostSpec::from_name_or_path(&a.host).with_context(|| format!("--host {}", a.host))?;
-    let p = HostPrediction::run(&map, label, source, host, &a.freqs.0, a.force_n);
+    let p = HostPrediction::run(&map, label, source, host, &a.freqs.0, a.force_n)
+        .with_map_branch(&file);
     println!(
         "{} with the damper of {} ({} kg of particles, {} map points{}), {} N at the drive: {} frequencies in {:.1} ms",
         p.host.name,
@@ -92,6 +93,9 @@ pub fn run(a: PredictArgs) -> Result<()> {
                 ""
             }
         );
+    }
+    if let Some(w) = &p.branch_warning {
+        eprintln!("warning: {w}");
     }
     for w in &p.warnings {
         eprintln!("warning: {w} (a prediction outside the map is a guess; extend the sweep)");
