@@ -25,6 +25,7 @@ mod scene_cmd;
 mod shake;
 mod shear_box;
 mod sweep;
+mod sweep_lines;
 mod sweep_optimum;
 mod sweep_updown;
 

@@ -15,8 +15,8 @@ use vlab::atomic_write::OutputDir;
 use vlab::rig::{RigFile, RigSpec, ShakerKind};
 use vlab::scene::{Orientation, Scene, SceneOverrides};
 use vlab::study::sweep::{
-    ConditionSummary, RowStatus, Shard, Steady, SweepEvent, SweepFile, SweepPlan, SweepRow,
-    merge_shards, phase_name, run_sweep, summarise,
+    ConditionSummary, RowStatus, Shard, SweepEvent, SweepFile, SweepPlan, merge_shards, phase_name,
+    run_sweep, summarise,
 };
 use vlab::study::sweep_peak::{SeriesPeak, series_peaks};
 use vlab::study::sweep_plot::plot_sweep;
@@ -24,6 +24,7 @@ use vlab::study::sweep_plot::plot_sweep;
 use super::args;
 use super::cache_cmd::NoCacheArg;
 use super::progress::ProgressLine;
+use super::sweep_lines::{EventLines, plus_minus};
 
 #[derive(Debug, Clone, Args)]
 #[command(
@@ -230,105 +231,6 @@ fn sweep_plan(a: &SweepArgs) -> Result<SweepPlan> {
     Ok(plan)
 }
 
-/// How the sweep's events read on the progress line.
-pub(super) struct EventLines {
-    pub(super) shard: Shard,
-    pub(super) with_fill: bool,
-    pub(super) with_orientation: bool,
-}
-
-impl EventLines {
-    /// Shows `e` on `progress`.
-    pub(super) fn show(&self, e: SweepEvent, progress: &mut ProgressLine) {
-        match e {
-            SweepEvent::Started {
-                total,
-                already_done,
-                beds,
-            } => progress.note(&format!(
-                "sweep{}: {total} conditions, {already_done} already in sweep.csv, {beds} bed{} to settle",
-                if self.shard == Shard::ALL {
-                    String::new()
-                } else {
-                    format!(" shard {}", self.shard)
-                },
-                if beds == 1 { "" } else { "s" }
-            )),
-            SweepEvent::BedSettled {
-                seed,
-                wall_time_s,
-                from_cache,
-                warnings,
-            } => {
-                for w in warnings {
-                    progress.warn(&format!("sweep: warning: {w}"));
-                }
-                progress.note(&if from_cache {
-                    format!("sweep: bed of seed {seed} read from the cache ({wall_time_s:.1} s)")
-                } else {
-                    format!("sweep: bed of seed {seed} settled ({wall_time_s:.0} s)")
-                })
-            }
-            SweepEvent::ConditionDone {
-                row,
-                done,
-                total,
-                eta_s,
-            } => progress.note(&format!(
-                "sweep: {done}/{total}  {}: {}; ETA {}",
-                row.condition
-                    .describe(self.with_fill, self.with_orientation),
-                outcome(row),
-                eta(eta_s)
-            )),
-        }
-    }
-}
-
-/// A finished condition's result, for its progress line.
-fn outcome(row: &SweepRow) -> String {
-    match row.status {
-        RowStatus::Ok => format!(
-            "efficiency {:.3} +- {}, measured {:.3}, {} ({} cycles{}, {:.0} s)",
-            row.efficiency,
-            plus_minus(row.efficiency_se),
-            row.efficiency_measured,
-            phase_name(row.phase),
-            row.cycles,
-            if row.steady == Some(Steady::Capped) {
-                ", NOT steady at the cap"
-            } else {
-                ""
-            },
-            row.wall_time_s
-        ),
-        RowStatus::Unreachable => "beyond the rig".into(),
-        RowStatus::Failed => format!("FAILED: {}", row.note),
-    }
-}
-
-/// A one-sigma error as printed: "n/a" when there is none (a window of
-/// fewer than 16 cycles has no error estimate; JSON and CSV keep it empty).
-pub(super) fn plus_minus(se: f64) -> String {
-    if se.is_finite() {
-        format!("{se:.3}")
-    } else {
-        "not known".into()
-    }
-}
-
-fn eta(s: f64) -> String {
-    if !s.is_finite() {
-        "?".into()
-    } else if s < 90.0 {
-        format!("{s:.0} s")
-    } else if s < 5400.0 {
-        format!("{:.0} min", s / 60.0)
-    } else {
-        format!("{:.1} h", s / 3600.0)
-    }
-}
-
 fn report(file: &SweepFile, dir: &Path, plots: &[PathBuf], json: bool) -> Result<()> {
     if json {
         println!("{}", file.report().json()?);
@@ -469,18 +371,4 @@ fn merge(m: MergeArgs) -> Result<()> {
     made.keep_if_ok(merged.write(&path))?;
     let plots = plot_sweep(&merged, &m.out).context("drawing the sweep's plots")?;
     report(&merged, &m.out, &plots, false)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// An efficiency without an error estimate (one seed, a window under 16
-    /// cycles) prints "not known", never "NaN"; one with an estimate prints
-    /// it.
-    #[test]
-    fn an_error_that_is_not_known_prints_as_not_known() {
-        assert_eq!(plus_minus(f64::NAN).trim(), "not known");
-        assert_eq!(plus_minus(0.0123), "0.012");
-    }
 }

@@ -13,7 +13,7 @@ use vlab::study::sweep_plot::plot_sweep;
 use vlab::study::sweep_updown::{APART_SIGMAS, UpDownSweep, run_up_down};
 
 use super::progress::ProgressLine;
-use super::sweep::{EventLines, plus_minus};
+use super::sweep_lines::{EventLines, plus_minus};
 
 /// Runs `plan` up and down, writes both branches and their comparison into
 /// `out` (refused if it holds a carried sweep already) and prints where
