@@ -24,7 +24,7 @@ pub struct ExportArgs {
 
 #[derive(Debug, Clone, Subcommand)]
 enum ExportTarget {
-    /// A LAMMPS input deck (pair_style granular, moving region walls; bodies
+    /// A LAMMPS input deck (pair_style granular, two wiggling wall fixes; bodies
     /// as fix rigid/small molecules with vlab's mass and inertia) and vlab's
     /// settled packing; the deck writes record.txt for `vlab replay`. It runs
     /// --cycles (the last --steady-cycles the window) at vlab's time step for

@@ -20,23 +20,27 @@
 //!   5.6), `tangential mindlin` (k_t = 8 G* √(R* δ), eq. 5.24, vector history,
 //!   Coulomb cap μ F_n, eq. 5.16) and `damping tsuji` with `limit_damping` (a
 //!   dashpot `α √(m* k_n)`, `k_n = 4/3 E* a`, whose force never pulls);
-//! - the cylinder as three `fix wall/gran/region` walls of the same law on
-//!   regions that move with the drive (`move NULL NULL v_enclosure_displacement`,
-//!   `u = Γ g / ω² sin ωt`, eq. 6.2, from t = 0 at the settled packing, as a
-//!   vlab shake): the side (an open cylinder), the floor and the lid (planes);
+//! - the cylinder as two `fix wall/gran` walls of the same law that move with
+//!   the drive by LAMMPS' `wiggle z`: the side (`zcylinder`) and the floor and
+//!   lid (one `zplane` pair). Wiggle moves a wall as `u = A (1 - cos ωt)` from
+//!   t = 0 at the settled packing, `A = Γ g / ω²` (eq. 6.2): the drive starts
+//!   from rest, where a vlab shake starts mid-stroke (`u = A sin ωt`); the two
+//!   start-ups differ, the steady drive does not. (Three moving region walls
+//!   with a drive variable evaluated every step ran LAMMPS 2.3 times slower.)
 //! - gravity along -z (vertical) or -y (horizontal), the time step vlab's
 //!   drive would take at this frequency and Γ ([`Scene::drive_dt_s`]: the
 //!   scene's `simulation.dt_s` rule) and `cycles` whole drive periods
 //!   ([`LammpsExport::for_scene`]: a scene that runs until steady runs
 //!   `drive.min_cycles` unless told otherwise, as LAMMPS keeps no ledger of
 //!   the dissipation to judge steadiness by);
-//! - `fix ave/time 1 N N` writing `record.txt`: time, enclosure displacement,
-//!   velocity and acceleration and the particles' axial force on the
-//!   enclosure (minus the sum of the three walls' forces on the atoms, from
-//!   each wall's `contacts` per-atom array), each the mean over `N` steps
-//!   (`N` = steps per 40 kHz sample, so no impact aliases), with `# key:
-//!   value` comments giving the drive, the particle mass, g and the
-//!   orientation.
+//! - `record.txt`: time, enclosure displacement, velocity and acceleration
+//!   and the particles' axial force on the enclosure (minus the sum of the
+//!   two walls' forces on the atoms, from each wall's `contacts` per-atom
+//!   array), each the mean over `N` steps (`N` = steps per 40 kHz sample, so
+//!   no impact aliases): the force by `fix ave/time 1 N N`, the motion once a
+//!   row as the exact window mean of the analytic drive
+//!   ([`window_mean_factor`]), with `# key: value` comments giving the drive,
+//!   the particle mass, g and the orientation.
 //!
 //! # Matching vlab's contact law, and what remains
 //!
@@ -57,8 +61,8 @@
 //!   `1 - ν²`) and its `mindlin NULL` stiffness wrongly; the deck gives the
 //!   wall fixes `ν = 0` and `E = 2 E*_pw` (the same E* whichever formula a
 //!   LAMMPS version uses) and the Mindlin coefficient `8 G*_pw` explicitly.
-//!   LAMMPS treats the inside of a region cylinder as concave with contact
-//!   radius `-2 R_c` (R* = 2.67 mm for a 2.5 mm sphere in the 40 mm
+//!   LAMMPS treats the inside of a `zcylinder` wall (as of a region
+//!   cylinder) as concave with contact radius `-2 R_c` (R* = 2.67 mm for a 2.5 mm sphere in the 40 mm
 //!   cylinder) where vlab takes every wall flat (R* = R, thesis); the side
 //!   wall's E and k_t coefficient are scaled by `√(1 - R / (2 R_c))` so that
 //!   its force against overlap is vlab's. One wall fix has one factor: for
@@ -94,6 +98,11 @@ use crate::scene::contact_laws;
 use crate::scene::{DriveLength, transient_cycles};
 use crate::scene::{Orientation, Scene, SceneError};
 use crate::validation::{InvalidParameter, count_in};
+
+/// What the deck is, in a line (for a report that times it).
+pub const DECK_FORM: &str = "two fix wall/gran walls moved by wiggle (side zcylinder; floor and lid \
+     one zplane pair), one reduction of their forces, the force averaged every step and the motion \
+     written once a 40 kHz row";
 
 /// File name of the LAMMPS input.
 pub const INPUT_FILE: &str = "in.damper";
@@ -395,8 +404,8 @@ fn scene_key_uses(
             k if k.starts_with("particles.material") => {
                 "sphere E and nu in pair_coeff (E* of eq. 5.6) and the wall fixes; density in packing.data (and a body's mass in bodies.txt)".into()
             }
-            "enclosure.inner_diameter_m" => "radius of region side (cylinder)".into(),
-            "enclosure.inner_length_m" => "height of region lid (plane)".into(),
+            "enclosure.inner_diameter_m" => "radius of the side wall (fix side_wall zcylinder)".into(),
+            "enclosure.inner_length_m" => "height of the lid (fix ends_wall zplane hi)".into(),
             "enclosure.orientation" => "direction of fix gravity".into(),
             k if k.starts_with("enclosure.material") => {
                 "wall E*_pw and G*_pw in the wall fixes".into()
@@ -493,9 +502,8 @@ pub fn lammps_deck(
         drive_lines(&plan),
         enclosure_lines(&plan),
         motion_lines(&plan),
-        force_lines(),
-        record_lines(&plan),
-        run_lines(&plan),
+        force_lines(&plan),
+        record_and_run_lines(&plan),
     ]
     .concat();
     let bodies = plan
@@ -690,8 +698,8 @@ fn packing_data(plan: &DeckPlan, particles: &Particles) -> String {
     let _ = writeln!(
         data,
         "{:.9e} {:.9e} zlo zhi",
-        -amplitude - margin,
-        length + amplitude + margin
+        -margin,
+        length + 2.0 * amplitude + margin
     );
     let _ = writeln!(data);
     let _ = writeln!(data, "Atoms # sphere");
@@ -832,7 +840,7 @@ fn contact_comment_lines(plan: &DeckPlan) -> String {
     );
     line(
         &mut s,
-        "#   region cylinder as concave (contact radius -2 R_c), vlab every wall as flat (R* = R).",
+        "#   zcylinder wall as concave (contact radius -2 R_c), vlab every wall as flat (R* = R).",
     );
     line(
         &mut s,
@@ -917,71 +925,94 @@ fn pair_lines(plan: &DeckPlan) -> String {
     s
 }
 
-/// The drive's variables (thesis eq. 6.2).
+/// The mean of `sin(ω t_k)` (or `cos`) over `n` instants `dt_s` apart,
+/// divided by its value at their centre: `sin(n ω dt / 2) / (n sin(ω dt / 2))`.
+/// The record's motion columns are written once a row from it, as the exact
+/// window means a per-step average would give.
+pub fn window_mean_factor(n: u64, omega_rad_s: f64, dt_s: f64) -> f64 {
+    let half = 0.5 * omega_rad_s * dt_s;
+    if half == 0.0 {
+        return 1.0;
+    }
+    (n as f64 * half).sin() / (n as f64 * half.sin())
+}
+
+/// The drive (thesis eq. 6.2, from rest) and the record's motion variables.
 fn drive_lines(plan: &DeckPlan) -> String {
-    let (export, amplitude) = (plan.export, plan.amplitude);
+    let (export, amplitude, every, dt) = (plan.export, plan.amplitude, plan.every, plan.dt);
+    let omega = std::f64::consts::TAU * export.freq_hz;
+    let factor = window_mean_factor(every, omega, dt);
     let mut s = String::new();
     line(
         &mut s,
-        "# The drive, from t = 0 at the settled packing (thesis eq. 6.2): u = Gamma g / w^2 sin(w t).",
+        "# The drive (thesis eq. 6.2, amplitude Gamma g / w^2) by the walls' wiggle, from rest at t = 0",
+    );
+    line(
+        &mut s,
+        "# at the settled packing: u = A (1 - cos w t). (vlab's shake starts mid-stroke, u = A sin w t;",
+    );
+    line(
+        &mut s,
+        "# the start-up differs, the steady drive does not.)",
     );
     let _ = writeln!(s, "variable        drive_freq_hz equal {}", export.freq_hz);
     let _ = writeln!(s, "variable        amplitude_m equal {amplitude:.17e}");
     line(&mut s, "variable        omega equal 2.0*PI*v_drive_freq_hz");
-    line(&mut s, "variable        time equal time");
-    line(
-        &mut s,
-        "variable        enclosure_displacement equal v_amplitude_m*sin(v_omega*time)",
+    let _ = writeln!(
+        s,
+        "# The record's motion, evaluated once a row: the mean over the row's {every} steps, i.e. the value"
     );
-    line(
-        &mut s,
-        "variable        enclosure_velocity equal v_amplitude_m*v_omega*cos(v_omega*time)",
+    let _ = writeln!(
+        s,
+        "# at the window's centre (time - {}/2 dt) times sin(n w dt/2) / (n sin(w dt/2)) = {factor:?}.",
+        every - 1
     );
-    line(
-        &mut s,
-        "variable        enclosure_acceleration equal -v_amplitude_m*v_omega*v_omega*sin(v_omega*time)",
+    let _ = writeln!(
+        s,
+        "variable        time equal time-{:?}",
+        0.5 * (every - 1) as f64 * dt
+    );
+    let _ = writeln!(
+        s,
+        "variable        enclosure_displacement equal v_amplitude_m*(1.0-{factor:?}*cos(v_omega*v_time))"
+    );
+    let _ = writeln!(
+        s,
+        "variable        enclosure_velocity equal {factor:?}*v_amplitude_m*v_omega*sin(v_omega*v_time)"
+    );
+    let _ = writeln!(
+        s,
+        "variable        enclosure_acceleration equal {factor:?}*v_amplitude_m*v_omega*v_omega*cos(v_omega*v_time)"
     );
     line(&mut s, "");
     s
 }
 
-/// The enclosure's three moving regions and their wall fixes.
+/// The enclosure as two wall fixes moving together along z: the side (a
+/// `zcylinder`, with the concave-contact factor) and the floor and lid (one
+/// `zplane` pair), each wiggled by the drive.
 fn enclosure_lines(plan: &DeckPlan) -> String {
-    let (radius, cyl_r, length) = (plan.radius, plan.cyl_r, plan.length);
+    let (cyl_r, length, amplitude) = (plan.cyl_r, plan.length, plan.amplitude);
     let (pw, side_factor) = (&plan.pw, plan.side_factor);
+    let period = 1.0 / plan.export.freq_hz;
+    let wiggle = format!("wiggle z {amplitude:?} {period:?}");
     let mut s = String::new();
     line(
         &mut s,
         "# The enclosure: side, floor and lid, moving together along z.",
     );
-    let _ = writeln!(
-        s,
-        "region          side cylinder z 0 0 {cyl_r:?} {:?} {:?} side in open 1 open 2 move NULL NULL v_enclosure_displacement",
-        -2.0 * radius,
-        length + 2.0 * radius
-    );
-    line(
-        &mut s,
-        "region          floor plane 0 0 0 0 0 1 side in move NULL NULL v_enclosure_displacement",
-    );
-    let _ = writeln!(
-        s,
-        "region          lid plane 0 0 {length:?} 0 0 -1 side in move NULL NULL v_enclosure_displacement"
-    );
     let wall_e = 2.0 * pw.effective_youngs_pa;
     let wall_kt = 8.0 * pw.effective_shear_pa;
     let _ = writeln!(
         s,
-        "fix             side_wall all wall/gran/region granular {} region side contacts",
+        "fix             side_wall all wall/gran granular {} zcylinder {cyl_r:?} {wiggle} contacts",
         granular_words(pw, wall_e * side_factor, 0.0, Some(wall_kt * side_factor))
     );
-    for name in ["floor", "lid"] {
-        let _ = writeln!(
-            s,
-            "fix             {name}_wall all wall/gran/region granular {} region {name} contacts",
-            granular_words(pw, wall_e, 0.0, Some(wall_kt))
-        );
-    }
+    let _ = writeln!(
+        s,
+        "fix             ends_wall all wall/gran granular {} zplane 0.0 {length:?} {wiggle} contacts",
+        granular_words(pw, wall_e, 0.0, Some(wall_kt))
+    );
     line(&mut s, "");
     s
 }
@@ -1035,50 +1066,69 @@ fn motion_lines(plan: &DeckPlan) -> String {
     s
 }
 
-/// The particles' force on the enclosure from the walls' per-atom forces.
-fn force_lines() -> String {
+/// The particles' force on the enclosure from the walls' per-atom forces,
+/// averaged over each record row's steps.
+fn force_lines(plan: &DeckPlan) -> String {
+    let every = plan.every;
     let mut s = String::new();
     line(
         &mut s,
-        "# The particles' force on the enclosure along z: minus the walls' forces on the atoms.",
+        "# The particles' force on the enclosure along z: minus the walls' forces on the atoms,",
+    );
+    let _ = writeln!(s, "# the mean over each row's {every} steps.");
+    line(
+        &mut s,
+        "compute         wall_fz all reduce sum f_side_wall[4] f_ends_wall[4]",
     );
     line(
         &mut s,
-        "compute         side_fz all reduce sum f_side_wall[4]",
+        "variable        wall_force_axial equal -(c_wall_fz[1]+c_wall_fz[2])",
+    );
+    let _ = writeln!(
+        s,
+        "fix             force_mean all ave/time 1 {every} {every} v_wall_force_axial"
     );
     line(
         &mut s,
-        "compute         floor_fz all reduce sum f_floor_wall[4]",
-    );
-    line(
-        &mut s,
-        "compute         lid_fz all reduce sum f_lid_wall[4]",
-    );
-    line(
-        &mut s,
-        "variable        particle_force_axial equal -(c_side_fz+c_floor_fz+c_lid_fz)",
+        "variable        particle_force_axial equal f_force_mean",
     );
     line(&mut s, "");
     s
 }
 
-/// The `fix ave/time` that writes `record.txt`, with its `# key: value`
-/// header for `vlab replay`.
-fn record_lines(plan: &DeckPlan) -> String {
+/// Thermo output, the first row's steps, the `fix ave/time` that writes
+/// `record.txt` (with its `# key: value` header for `vlab replay`), and the
+/// rest of the run. No kinetic energy for bodies: LAMMPS' comes from a
+/// temperature whose degrees of freedom the rigid bodies take away.
+fn record_and_run_lines(plan: &DeckPlan) -> String {
     let (scene, export, version) = (plan.scene, plan.export, plan.version);
-    let (every, mass, g) = (plan.every, plan.mass, plan.g);
+    let (every, mass, g, steps) = (plan.every, plan.mass, plan.g, plan.steps);
     let mut s = String::new();
+    let ke = if plan.bodies.is_some() { "" } else { " ke" };
+    let _ = writeln!(
+        s,
+        "thermo_style    custom step time atoms{ke} v_enclosure_displacement v_particle_force_axial"
+    );
+    line(&mut s, "thermo_modify   lost error norm no");
+    let _ = writeln!(s, "thermo          {}", (steps / 20 / every).max(1) * every);
+    line(
+        &mut s,
+        "# The first row's steps run before the record exists: a fix ave/time of one sample a row",
+    );
+    line(&mut s, "# writes a row at the step it starts on.");
+    let _ = writeln!(s, "run             {every}");
+    line(&mut s, "");
     let _ = writeln!(
         s,
         "# The record vlab replay reads: each row the mean over {every} steps (one 40 kHz sample),"
     );
     line(
         &mut s,
-        "# time included, which thus gives each window's centre.",
+        "# time included (the window's centre), written once a row.",
     );
     let _ = writeln!(
         s,
-        "fix             record all ave/time 1 {every} {every} v_time v_enclosure_displacement v_enclosure_velocity v_enclosure_acceleration v_particle_force_axial file {RECORD_FILE} format \" %.17g\" title1 \"\"\"# vlab replay record: {} damper, {} Hz, Gamma {}, from a LAMMPS deck of vlab {version}",
+        "fix             record all ave/time {every} 1 {every} v_time v_enclosure_displacement v_enclosure_velocity v_enclosure_acceleration v_particle_force_axial file {RECORD_FILE} format \" %.17g\" title1 \"\"\"# vlab replay record: {} damper, {} Hz, Gamma {}, from a LAMMPS deck of vlab {version}",
         scene.name, export.freq_hz, export.gamma
     );
     line(&mut s, "# units: si");
@@ -1094,22 +1144,7 @@ fn record_lines(plan: &DeckPlan) -> String {
         "# particle_force_axial: the particles' force on the enclosure along +z (N); each row a window mean\"\"\"",
     );
     line(&mut s, "");
-    s
-}
-
-/// Thermo output and the run (no kinetic energy for bodies: LAMMPS' comes
-/// from a temperature whose degrees of freedom the rigid bodies take away).
-fn run_lines(plan: &DeckPlan) -> String {
-    let steps = plan.steps;
-    let mut s = String::new();
-    let ke = if plan.bodies.is_some() { "" } else { " ke" };
-    let _ = writeln!(
-        s,
-        "thermo_style    custom step time atoms{ke} v_enclosure_displacement v_particle_force_axial"
-    );
-    line(&mut s, "thermo_modify   lost error norm no");
-    let _ = writeln!(s, "thermo          {}", (steps / 20).max(1));
-    let _ = writeln!(s, "run             {steps}");
+    let _ = writeln!(s, "run             {}", steps - every);
     s
 }
 
@@ -1150,5 +1185,34 @@ mod tests {
         assert!((tsuji_alpha(0.86) - 0.0762).abs() < 1e-4);
         assert!(tsuji_restitution_for(2.0).is_none());
         assert!(tsuji_restitution_for(-0.1).is_none());
+    }
+
+    #[test]
+    fn the_window_factor_turns_a_centre_value_into_the_window_mean() {
+        // The record's motion rows: the value at the window's centre times
+        // the factor is the mean of the n per-step values, to rounding.
+        let (omega, dt) = (std::f64::consts::TAU * 40.0, 1.2201890525467253e-6);
+        for (n, t_end_steps) in [(20_u64, 20_u64), (20, 123_460), (7, 301), (1, 5)] {
+            let factor = window_mean_factor(n, omega, dt);
+            let times = (t_end_steps + 1 - n..=t_end_steps).map(|k| k as f64 * dt);
+            let centre = (t_end_steps as f64 - 0.5 * (n - 1) as f64) * dt;
+            let (mean_sin, mean_cos) = times.fold((0.0, 0.0), |(s, c), t| {
+                (
+                    s + (omega * t).sin() / n as f64,
+                    c + (omega * t).cos() / n as f64,
+                )
+            });
+            assert!(
+                (mean_sin - factor * (omega * centre).sin()).abs() < 1e-14,
+                "{n}"
+            );
+            assert!(
+                (mean_cos - factor * (omega * centre).cos()).abs() < 1e-14,
+                "{n}"
+            );
+        }
+        // Coarse windows make the factor matter: 10 steps of a tenth of a period.
+        let f = window_mean_factor(10, std::f64::consts::TAU, 0.01);
+        assert!((f - 0.983_79).abs() < 1e-5, "{f}");
     }
 }

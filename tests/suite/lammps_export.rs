@@ -290,9 +290,17 @@ fn export(
 /// `cycles` periods, at most one row more.
 fn assert_run_covers(commands: &[String], summary: &serde_json::Value, cycles: u32) {
     let dt = number_after(command(commands, &["timestep"]), "timestep", 1);
-    let steps = number_after(command(commands, &["run"]), "run", 1);
-    assert_eq!(summary["steps"].as_f64(), Some(steps));
+    // Two runs: the first row's steps, then the rest with the record.
+    let runs: Vec<f64> = commands
+        .iter()
+        .filter(|c| c.split_whitespace().next() == Some("run"))
+        .map(|c| number_after(c, "run", 1))
+        .collect();
     let every = summary["record_every_steps"].as_f64().expect("every");
+    assert_eq!(runs.len(), 2, "{runs:?}");
+    assert_eq!(runs[0], every, "{runs:?}");
+    let steps = runs.iter().sum::<f64>();
+    assert_eq!(summary["steps"].as_f64(), Some(steps));
     assert_eq!(
         every,
         (25e-6 / dt).round().max(1.0),
@@ -380,10 +388,43 @@ fn deck_is_complete_si_and_has_no_placeholder() {
             );
         }
     }
-    for region in ["side", "floor", "lid"] {
-        assert!(defined(&input, "region").contains(region));
-        assert!(input.contains(&format!("region {region} contacts")));
+    // The enclosure: two wall fixes, no region, both wiggled by the drive
+    // (u = A (1 - cos wt), A the drive's amplitude, period 1/40 s).
+    assert!(defined(&input, "region").is_empty(), "no region walls");
+    let amplitude_m = 10.0 * x.f("simulation.gravity_mps2") / (2.0 * PI * 40.0f64).powi(2);
+    for name in ["side_wall", "ends_wall"] {
+        let wall = command(&cmds, &["fix", name]);
+        assert!(wall.contains(" all wall/gran granular "), "{wall}");
+        assert!(wall.ends_with(" contacts"), "{wall}");
+        assert_rel(name, number_after(wall, "wiggle", 2), amplitude_m, 1e-12);
+        assert_eq!(number_after(wall, "wiggle", 3), 1.0 / 40.0, "{wall}");
+        assert!(wall.contains("wiggle z "), "{wall}");
     }
+    // The motion columns are the exact window means of that drive.
+    let every = summary["record_every_steps"].as_f64().expect("every");
+    let dt_deck = number_after(command(&cmds, &["timestep"]), "timestep", 1);
+    let w = 2.0 * PI * 40.0;
+    let factor = (every * w * dt_deck / 2.0).sin() / (every * (w * dt_deck / 2.0).sin());
+    let velocity = command(&cmds, &["variable", "enclosure_velocity"]);
+    let (written, form) = velocity
+        .split_once("equal ")
+        .and_then(|(_, f)| f.split_once('*'))
+        .expect("a factor");
+    assert_eq!(
+        form, "v_amplitude_m*v_omega*sin(v_omega*v_time)",
+        "{velocity}"
+    );
+    assert_rel(
+        "window factor",
+        written.parse().expect("number"),
+        factor,
+        1e-14,
+    );
+    let centre = command(&cmds, &["variable", "time"]);
+    assert!(
+        centre.contains(&format!("equal time-{:?}", 0.5 * (every - 1.0) * dt_deck)),
+        "{centre}"
+    );
 
     // Every key's value, or what the thesis' formulas make of it, is in a
     // LAMMPS command (not only in the header's comment) or in the packing
@@ -391,8 +432,7 @@ fn deck_is_complete_si_and_has_no_placeholder() {
     let pair = command(&cmds, &["pair_coeff"]);
     let walls = [
         command(&cmds, &["fix", "side_wall"]),
-        command(&cmds, &["fix", "floor_wall"]),
-        command(&cmds, &["fix", "lid_wall"]),
+        command(&cmds, &["fix", "ends_wall"]),
     ];
     let record = command(&cmds, &["fix", "record"]);
     let gravity = command(&cmds, &["fix", "gravity"]);
@@ -448,7 +488,7 @@ fn deck_is_complete_si_and_has_no_placeholder() {
             // Wall E = 2 E*_pw with nu = 0, Mindlin 8 G*_pw; the side
             // wall's both times sqrt(1 - R / 2 R_c).
             "enclosure.material" => {
-                for (w, factor) in walls.iter().zip([side_factor, 1.0, 1.0]) {
+                for (w, factor) in walls.iter().zip([side_factor, 1.0]) {
                     assert_rel(
                         key,
                         number_after(w, "hertz/material", 1),
@@ -482,12 +522,13 @@ fn deck_is_complete_si_and_has_no_placeholder() {
                 assert!(atoms.iter().all(|a| a[2] == x.f(key)));
             }
             "enclosure.inner_diameter_m" => {
-                let side = command(&cmds, &["region", "side"]);
-                assert_eq!(number_after(side, "cylinder", 4), r_c, "{side}");
+                let side = command(&cmds, &["fix", "side_wall"]);
+                assert_eq!(number_after(side, "zcylinder", 1), r_c, "{side}");
             }
             "enclosure.inner_length_m" => {
-                let lid = command(&cmds, &["region", "lid"]);
-                assert_eq!(number_after(lid, "plane", 3), length, "{lid}");
+                let ends = command(&cmds, &["fix", "ends_wall"]);
+                assert_eq!(number_after(ends, "zplane", 1), 0.0, "{ends}");
+                assert_eq!(number_after(ends, "zplane", 2), length, "{ends}");
             }
             "enclosure.orientation" => {
                 assert_eq!(x.s(key), "horizontal");

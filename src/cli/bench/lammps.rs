@@ -33,7 +33,7 @@ use serde::Serialize;
 
 use vlab::experiment::bed::settle::SettledBed;
 use vlab::export::lammps_deck::{
-    DeckSummary, INPUT_FILE, LammpsExport, MIN_EXPORT_CYCLES, lammps_deck,
+    DECK_FORM, DeckSummary, INPUT_FILE, LammpsExport, MIN_EXPORT_CYCLES, lammps_deck,
 };
 use vlab::scene::{Scene, SceneOverrides};
 
@@ -63,6 +63,8 @@ pub struct LammpsComparison {
     pub lammps_version: String,
     /// The export the deck is: `vlab export lammps` with these arguments.
     pub deck: String,
+    /// What that deck holds (its walls, reductions and record).
+    pub deck_form: &'static str,
     pub particles: usize,
     pub cycles: u32,
     pub dt_s: f64,
@@ -138,30 +140,51 @@ struct LammpsLog {
     cpu_use_percent: f64,
 }
 
-/// Reads the first line ("LAMMPS (...)"), "Loop time of T on 1 procs for S
-/// steps with A atoms" and "P% CPU use ..." of a LAMMPS log.
+/// Reads the first line ("LAMMPS (...)") and every run's "Loop time of T on
+/// 1 procs for S steps with A atoms" and "P% CPU use ..." of a LAMMPS log:
+/// the deck runs its first record row's steps apart from the rest, so the
+/// loop is the sum of its runs (their CPU use weighted by their time).
 fn parse_log(text: &str) -> Option<LammpsLog> {
     let version = text
         .lines()
         .find(|l| l.starts_with("LAMMPS ("))?
         .trim()
         .to_string();
-    let loop_line = text.lines().find(|l| l.starts_with("Loop time of "))?;
-    let w: Vec<&str> = loop_line.split_whitespace().collect();
-    // Loop time of T on P procs for S steps with A atoms
-    let loop_s = w.get(3)?.parse().ok()?;
-    let steps = w.get(8)?.parse().ok()?;
-    let atoms = w.get(11)?.parse().ok()?;
-    let cpu_use_percent = text
+    let mut loops = Vec::new();
+    for loop_line in text.lines().filter(|l| l.starts_with("Loop time of ")) {
+        let w: Vec<&str> = loop_line.split_whitespace().collect();
+        // Loop time of T on P procs for S steps with A atoms
+        let loop_s: f64 = w.get(3)?.parse().ok()?;
+        let steps: u64 = w.get(8)?.parse().ok()?;
+        let atoms: usize = w.get(11)?.parse().ok()?;
+        loops.push((loop_s, steps, atoms));
+    }
+    let &(_, _, atoms) = loops.last()?;
+    let cpu_use: Vec<f64> = text
         .lines()
-        .find(|l| l.contains("% CPU use with"))
-        .and_then(|l| l.split('%').next())
-        .and_then(|p| p.trim().parse().ok())
-        .unwrap_or(f64::NAN);
+        .filter(|l| l.contains("% CPU use with"))
+        .map(|l| {
+            l.split('%')
+                .next()
+                .and_then(|p| p.trim().parse().ok())
+                .unwrap_or(f64::NAN)
+        })
+        .collect();
+    let loop_s: f64 = loops.iter().map(|l| l.0).sum();
+    let cpu_use_percent = if cpu_use.len() == loops.len() && loop_s > 0.0 {
+        loops
+            .iter()
+            .zip(&cpu_use)
+            .map(|(l, c)| l.0 * c)
+            .sum::<f64>()
+            / loop_s
+    } else {
+        f64::NAN
+    };
     Some(LammpsLog {
         version,
         loop_s,
-        steps,
+        steps: loops.iter().map(|l| l.1).sum(),
         atoms,
         cpu_use_percent,
     })
@@ -247,6 +270,7 @@ pub fn lammps_rows(
         deck: format!(
             "vlab export lammps --freq {freq_hz} --gamma {gamma} --cycles {cycles} --steady-cycles {STEADY_CYCLES}"
         ),
+        deck_form: DECK_FORM,
         particles: n,
         cycles,
         dt_s: s.dt_s,
@@ -366,6 +390,7 @@ pub fn print_comparison(c: &LammpsComparison) {
         "  against {}, per core: the deck of `{}` ({} spheres, dt {:.4e} s; vlab {} steps, lmp {}), vlab and lmp in turns, {} run(s) each",
         c.lammps_version, c.deck, c.particles, c.dt_s, c.vlab_steps, c.lammps_steps, c.runs
     );
+    println!("    the deck:   {}", c.deck_form);
     println!("    vlab timed: {}", c.vlab_timed);
     println!("    lmp timed:  {}", c.lammps_process_timed);
     println!("    and:        {}", c.lammps_loop_timed);
@@ -402,6 +427,17 @@ mod tests {
                 cpu_use_percent: 87.7,
             }
         );
+        // The deck's two runs (the first row's steps, then the rest): summed,
+        // the CPU use weighted by each run's time.
+        let two = "LAMMPS (29 Sep 2021 - Update 2)\n\
+                   Loop time of 0.002 on 1 procs for 20 steps with 358 atoms\n\n\
+                   50.0% CPU use with 1 MPI tasks x 1 OpenMP threads\n\
+                   Loop time of 4.462 on 1 procs for 61460 steps with 358 atoms\n\n\
+                   90.0% CPU use with 1 MPI tasks x 1 OpenMP threads\n";
+        let got = parse_log(two).expect("parses");
+        assert_eq!(got.steps, 61480);
+        assert!((got.loop_s - 4.464).abs() < 1e-12, "{}", got.loop_s);
+        assert!((got.cpu_use_percent - (0.1 + 401.58) / 4.464).abs() < 1e-9);
         // No Loop line (LAMMPS stopped before its run): nothing read.
         assert_eq!(parse_log("LAMMPS (29 Sep 2021)\nERROR: x\n"), None);
     }
