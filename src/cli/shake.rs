@@ -365,12 +365,13 @@ fn print_ensemble(e: &EnsembleSummary) {
     print_mean_series(st);
     print_bed_rows(e);
     println!(
-        "    wall time {:.1} s for {} beds on {} thread{} (settling included), {:.2} M particle-steps/s",
+        "    wall time {:.1} s for {} beds on {} thread{} (settling included), {:.2} M particle-steps/s; the drive {:.2} M particle-steps/s over the beds",
         e.wall_time_s,
         e.beds,
         e.threads,
         if e.threads == 1 { "" } else { "s" },
-        e.particle_steps_per_s / 1e6
+        e.particle_steps_per_s / 1e6,
+        e.drive_particle_steps_per_s / 1e6
     );
 }
 

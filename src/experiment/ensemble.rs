@@ -365,6 +365,10 @@ fn summarise(
     wall_time_s: f64,
     threads: usize,
 ) -> EnsembleSummary {
+    let particle_steps: f64 = runs
+        .iter()
+        .map(|r| r.summary.n_particles as f64 * r.summary.steps as f64)
+        .sum();
     let rows: Vec<BedRow> = runs
         .iter()
         .enumerate()
@@ -438,11 +442,12 @@ fn summarise(
         steady_first_cycle: first.dem.steady_first_cycle,
         wall_time_s,
         threads,
-        particle_steps_per_s: runs
-            .iter()
-            .map(|r| r.summary.n_particles as f64 * r.summary.steps as f64)
-            .sum::<f64>()
-            / wall_time_s.max(f64::MIN_POSITIVE),
+        particle_steps_per_s: particle_steps / wall_time_s.max(f64::MIN_POSITIVE),
+        drive_particle_steps_per_s: particle_steps
+            / runs
+                .iter()
+                .map(|r| r.summary.wall_time_s)
+                .fold(f64::MIN_POSITIVE, f64::max),
         rows,
     }
 }

@@ -439,7 +439,9 @@ pub struct ShakeSummary {
     pub sample_rate_hz: f64,
     /// Wall-clock time of the drive's stepping loop (s).
     pub wall_time_s: f64,
-    /// Particles × drive steps / `wall_time_s`.
+    /// Particles × drive steps / `wall_time_s`. In an ensemble this bed's,
+    /// whose wall time counts its waits for the other beds: the DEM's rate
+    /// over the beds is the ensemble's `drive_particle_steps_per_s`.
     pub particle_steps_per_s: f64,
     /// Wall-clock time of pouring and settling (s); of reading the bed when
     /// it came from the cache.

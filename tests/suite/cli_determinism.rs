@@ -114,7 +114,12 @@ fn an_ensemble_is_the_same_on_one_and_two_threads() {
         );
         let ensemble = without_keys(
             ensemble.take(),
-            &["wall_time_s", "threads", "particle_steps_per_s"],
+            &[
+                "wall_time_s",
+                "threads",
+                "particle_steps_per_s",
+                "drive_particle_steps_per_s",
+            ],
         );
         let beds = std::fs::read(dir.path(&format!("{out_dir}/beds.csv"))).expect("beds.csv");
         let record = std::fs::read(dir.path(&format!("{out_dir}/trace.csv"))).expect("trace");
