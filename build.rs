@@ -10,10 +10,11 @@
 //! - the sources: every file below `src/dem/`, `src/scene/` and
 //!   `src/experiment/bed/` (filling, settling and the cache itself), and
 //!   `src/experiment/damper.rs` (the contact laws and gravity that settling
-//!   uses), by their path relative to
+//!   uses) and `src/maths.rs` (the transcendental functions), by their path
+//!   relative to
 //!   the package (with `/`) and their bytes, in sorted order;
 //! - the versions of the crates whose arithmetic or random numbers reach the
-//!   bed (`glam`, `rand_core`, `rand_xoshiro`), from `Cargo.lock`;
+//!   bed (`glam`, `libm`, `rand_core`, `rand_xoshiro`), from `Cargo.lock`;
 //! - the compiler facts that can change a floating-point result: the rustc
 //!   version, the target triple, its enabled target features and the
 //!   optimisation level (`powi` is expanded into multiplications when
@@ -32,9 +33,9 @@ use std::process::Command;
 /// Folders whose every file is hashed.
 const HASHED_DIRS: [&str; 3] = ["src/dem", "src/scene", "src/experiment/bed"];
 /// Single files that are hashed.
-const HASHED_FILES: [&str; 1] = ["src/experiment/damper.rs"];
+const HASHED_FILES: [&str; 2] = ["src/experiment/damper.rs", "src/maths.rs"];
 /// Dependencies whose code computes a bed's numbers.
-const HASHED_CRATES: [&str; 3] = ["glam", "rand_core", "rand_xoshiro"];
+const HASHED_CRATES: [&str; 4] = ["glam", "libm", "rand_core", "rand_xoshiro"];
 
 /// FNV-1a, 64 bits, fed piece by piece.
 struct Fnv1a(u64);

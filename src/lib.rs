@@ -25,6 +25,7 @@ pub mod drive;
 pub mod experiment;
 pub mod export;
 pub mod host;
+pub mod maths;
 pub mod rig;
 pub mod scene;
 pub mod shape;

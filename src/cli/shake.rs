@@ -250,6 +250,15 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
     }
     print_dem(&s.dem);
     print_measured(s);
+    println!(
+        "  state hash {} (the final DEM state{}: the same on any thread count and platform)",
+        s.state_hash,
+        if s.ensemble.is_some() {
+            ", first bed"
+        } else {
+            ""
+        }
+    );
     if s.ensemble.is_some() {
         println!("  wrote {}", dir.display());
         return;

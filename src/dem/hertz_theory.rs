@@ -8,20 +8,29 @@
 //!   impact speed above which the contact yields and the model's constant
 //!   restitution no longer holds (Section 5.5.4).
 
+use crate::maths;
+
 /// Maximum overlap (m) of an elastic impact at approach speed `v_mps`, eq. 5.8.
 pub fn max_overlap_m(m_star_kg: f64, e_star_pa: f64, r_star_m: f64, v_mps: f64) -> f64 {
-    (15.0 * m_star_kg * v_mps * v_mps / (16.0 * e_star_pa * r_star_m.sqrt())).powf(0.4)
+    maths::powf(
+        15.0 * m_star_kg * v_mps * v_mps / (16.0 * e_star_pa * r_star_m.sqrt()),
+        0.4,
+    )
 }
 
 /// Duration (s) of an elastic impact, twice eq. 5.10.
 pub fn contact_duration_s(m_star_kg: f64, e_star_pa: f64, r_star_m: f64, v_mps: f64) -> f64 {
-    2.0 * 1.435 * (m_star_kg * m_star_kg / (e_star_pa * e_star_pa * r_star_m * v_mps)).powf(0.2)
+    2.0 * 1.435
+        * maths::powf(
+            m_star_kg * m_star_kg / (e_star_pa * e_star_pa * r_star_m * v_mps),
+            0.2,
+        )
 }
 
 /// Peak force (N) of an elastic impact: the Hertz force at the maximum overlap.
 pub fn max_force_n(m_star_kg: f64, e_star_pa: f64, r_star_m: f64, v_mps: f64) -> f64 {
     let d = max_overlap_m(m_star_kg, e_star_pa, r_star_m, v_mps);
-    4.0 / 3.0 * e_star_pa * r_star_m.sqrt() * d.powf(1.5)
+    4.0 / 3.0 * e_star_pa * r_star_m.sqrt() * maths::powf(d, 1.5)
 }
 
 /// Yield velocity (m/s) of eq. 5.26 for yield strength `yield_pa`.

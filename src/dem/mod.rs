@@ -20,6 +20,7 @@ pub mod ordering;
 pub mod particles;
 pub mod restitution;
 pub mod rigid_rotation;
+pub mod state_hash;
 mod step;
 pub mod testbed;
 pub mod timestep;

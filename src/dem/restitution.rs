@@ -21,6 +21,7 @@
 //! `X'' = -max(0, X^{3/2} + √5 β X^{1/4} X')`, `X(0) = 0`, `X'(0) = 1`, and the
 //! realised restitution is the separation speed `-X'` at the end of the contact.
 
+use crate::maths;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -51,7 +52,7 @@ pub fn thesis_damping_factor(e: f64) -> f64 {
     if e >= 1.0 {
         return 0.0;
     }
-    let l = e.ln();
+    let l = maths::ln(e);
     -l / (l * l + PI * PI).sqrt()
 }
 

@@ -21,6 +21,7 @@ use super::restitution::RestitutionMode;
 use super::timestep::shortest_contact_s;
 use super::walls::Walls;
 use super::world::{Numerics, World};
+use crate::maths;
 
 /// Sphere diameter of the bed (m).
 pub const BED_DIAMETER_M: f64 = 0.002;
@@ -31,7 +32,7 @@ pub fn lattice_bed(n: usize, friction: f64, seed: u64) -> Result<World, DemError
     let r = 0.5 * BED_DIAMETER_M;
     let spacing = BED_DIAMETER_M * 1.0005;
     // Height about twice the radius: n s³ = 2π R³.
-    let cyl_r = spacing * (n as f64 / (2.0 * std::f64::consts::PI)).cbrt() + 2.0 * r;
+    let cyl_r = spacing * maths::cbrt(n as f64 / (2.0 * std::f64::consts::PI)) + 2.0 * r;
     let clear = 1.05 * r;
     let reach = cyl_r - clear;
     let half = (reach / spacing).floor() as i64;

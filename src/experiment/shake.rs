@@ -452,6 +452,11 @@ pub struct ShakeSummary {
     /// stepping loop: the channels, the calibration, Yang's analysis (s).
     pub rig_wall_time_s: f64,
     pub threads: usize,
+    /// The final DEM state's fingerprint, 16 hex digits
+    /// ([`crate::dem::state_hash`]): the same scene, drive and seed give the
+    /// same on any thread count and platform (the browser lab's included).
+    #[serde(default)]
+    pub state_hash: String,
     pub dem: DemTruth,
     pub measured: Measured,
     pub warnings: Vec<RunWarning>,
@@ -649,6 +654,9 @@ impl ShakeSummary {
             bed_from_cache: bed.from_cache,
             rig_wall_time_s: (started.elapsed().as_secs_f64() - outcome.wall_time_s).max(0.0),
             threads: rayon::current_num_threads(),
+            state_hash: crate::dem::state_hash::hex(crate::dem::state_hash::state_hash(
+                &world.particles,
+            )),
             dem,
             measured: experiment.measured.clone(),
             warnings,

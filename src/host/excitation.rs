@@ -26,6 +26,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use realfft::num_complex::Complex64;
 use serde::Serialize;
 
+use crate::maths;
 use crate::validation::{Bound, InvalidParameter, in_range, positive};
 
 /// Width of the hammer's half-sine pulse, s: a steel tip on a steel host.
@@ -336,7 +337,7 @@ impl Excitation {
     /// The force at `t_s` from the start, N.
     pub fn force_n(&self, t_s: f64) -> f64 {
         match self {
-            Excitation::Sine { freq_hz, force_n } => force_n * (TAU * freq_hz * t_s).sin(),
+            Excitation::Sine { freq_hz, force_n } => force_n * maths::sin(TAU * freq_hz * t_s),
             Excitation::Sweep {
                 start_hz,
                 end_hz,
@@ -348,18 +349,18 @@ impl Excitation {
                 } else {
                     let cycles =
                         start_hz * t_s + (end_hz - start_hz) * t_s * t_s / (2.0 * duration_s);
-                    force_n * (TAU * cycles).sin()
+                    force_n * maths::sin(TAU * cycles)
                 }
             }
             Excitation::Lines { lines, .. } => lines
                 .iter()
-                .map(|l| l.force_n * (TAU * l.freq_hz * t_s + l.phase_rad).sin())
+                .map(|l| l.force_n * maths::sin(TAU * l.freq_hz * t_s + l.phase_rad))
                 .sum(),
             Excitation::Hammer { impulse_n_s } => {
                 if (0.0..=HAMMER_PULSE_S).contains(&t_s) {
                     // Peak F0 with integral F0 2 w / pi = J.
                     let peak = PI * impulse_n_s / (2.0 * HAMMER_PULSE_S);
-                    peak * (PI * t_s / HAMMER_PULSE_S).sin()
+                    peak * maths::sin(PI * t_s / HAMMER_PULSE_S)
                 } else {
                     0.0
                 }
@@ -387,7 +388,7 @@ impl Excitation {
                     let end_s = start_s + f64::from(*cycles) / f;
                     if t_s < end_s {
                         return match t_s >= start_s {
-                            true => force_n * (TAU * f * (t_s - start_s)).sin(),
+                            true => force_n * maths::sin(TAU * f * (t_s - start_s)),
                             false => 0.0,
                         };
                     }

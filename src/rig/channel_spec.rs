@@ -32,6 +32,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::error::{InvalidParameter, RigError, finite, non_negative, positive};
 use super::filter::{MAX_LOW_PASS_ORDER, butterworth_response, high_pass_response};
+use crate::maths;
 
 /// How a channel turns its filtered signal into samples.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -212,7 +213,7 @@ impl ChannelParams {
         h *= Complex64::from_polar(1.0, 2.0 * PI * freq_hz * self.sample_skew_s);
         if self.sampling == Sampling::Boxcar && freq_hz > 0.0 {
             let x = PI * freq_hz / sample_rate_hz;
-            h *= x.sin() / x;
+            h *= maths::sin(x) / x;
         }
         h
     }

@@ -26,6 +26,7 @@
 
 use std::f64::consts::PI;
 
+use crate::maths;
 use realfft::num_complex::Complex64;
 
 /// Highest supported low-pass order.
@@ -141,7 +142,7 @@ pub fn butterworth_sections(order: u32) -> (Vec<f64>, bool) {
             } else {
                 (2.0 * k - 1.0) * PI / (2.0 * n)
             };
-            1.0 / (2.0 * theta.cos())
+            1.0 / (2.0 * maths::cos(theta))
         })
         .collect();
     (qs, odd)

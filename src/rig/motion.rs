@@ -13,6 +13,7 @@ use serde::Serialize;
 
 use super::error::{InvalidParameter, RigError, positive};
 use crate::drive::Drive;
+use crate::maths;
 
 /// Enclosure kinematics along the drive axis.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
@@ -89,7 +90,7 @@ impl SineMotion {
 
     /// Kinematics at `t_s`.
     pub fn at(&self, t_s: f64) -> Kinematics {
-        let (s, c) = (self.omega * t_s).sin_cos();
+        let (s, c) = maths::sin_cos(self.omega * t_s);
         let x = self.amplitude_m;
         Kinematics {
             displacement_m: x * s,

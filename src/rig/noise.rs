@@ -8,6 +8,7 @@
 
 use std::f64::consts::PI;
 
+use crate::maths;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -41,8 +42,8 @@ impl GaussianNoise {
         // u1 in (0, 1] so that ln(u1) is finite.
         let u1 = 1.0 - self.uniform();
         let u2 = self.uniform();
-        let r = (-2.0 * u1.ln()).sqrt();
-        let (s, c) = (2.0 * PI * u2).sin_cos();
+        let r = (-2.0 * maths::ln(u1)).sqrt();
+        let (s, c) = maths::sin_cos(2.0 * PI * u2);
         self.spare = Some(r * s);
         r * c
     }

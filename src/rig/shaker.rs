@@ -61,6 +61,7 @@ use super::error::{RigError, non_negative, positive};
 use super::motion::{EnclosureMotion, Kinematics, SineMotion};
 use super::spec::{ElectrodynamicSpec, RigSpec, ShakerKind};
 use crate::drive::Drive;
+use crate::maths;
 
 /// How the drive went, for the caller's report.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -319,7 +320,7 @@ impl Electrodynamic {
             self.discretise(dt_s);
         }
         self.e = self.phi * self.e + self.gamma_f * force_n;
-        let (sn, cs) = (w * t_s).sin_cos();
+        let (sn, cs) = maths::sin_cos(w * t_s);
         let z = self.state(sn, cs);
         let k = Kinematics {
             displacement_m: z.x,

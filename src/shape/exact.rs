@@ -15,12 +15,13 @@
 //!   one and it reproduces Tables 8.1 and 8.2).
 
 use super::{ShapeError, out_of_range, positive};
+use crate::maths;
 use std::f64::consts::PI;
 
 /// True sphericity Ψ = (36π V²)^(1/3) / S (eq. 8.3): the surface of the
 /// volume-equivalent sphere over the particle's surface; 1 for a sphere.
 pub fn true_sphericity(volume_m3: f64, surface_m2: f64) -> f64 {
-    (36.0 * PI * volume_m3 * volume_m3).cbrt() / surface_m2
+    maths::cbrt(36.0 * PI * volume_m3 * volume_m3) / surface_m2
 }
 
 /// Perimeter of the ellipse of semi-axes `a_m`, `b_m` (m), exact to
@@ -77,7 +78,7 @@ impl Spheroid {
     pub fn from_aspect_ratio(aspect_ratio: f64, r_eq_m: f64) -> Result<Self, ShapeError> {
         let alpha = positive("aspect_ratio", aspect_ratio, "dimensionless")?;
         let r = positive("r_eq_m", r_eq_m, "m")?;
-        let b_m = alpha.powf(-1.0 / 3.0) * r;
+        let b_m = maths::powf(alpha, -1.0 / 3.0) * r;
         Ok(Self {
             a_m: alpha * b_m,
             b_m,
@@ -170,7 +171,7 @@ impl Torus {
             ));
         }
         let r = positive("r_eq_m", r_eq_m, "m")?;
-        let b_m = (1.5 * PI * a_over_b).powf(-1.0 / 3.0) * r;
+        let b_m = maths::powf(1.5 * PI * a_over_b, -1.0 / 3.0) * r;
         Ok(Self {
             a_m: a_over_b * b_m,
             b_m,

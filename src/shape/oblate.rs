@@ -39,6 +39,7 @@
 
 use super::exact::Spheroid;
 use super::{MultiSphere, ShapeError, SubSphere, out_of_range};
+use crate::maths;
 use glam::DVec3;
 
 /// How a candidate's radius is set.
@@ -128,7 +129,7 @@ pub fn grid_candidates(
 /// golden-section refinement about the best (to ~1e-15 of the size).
 pub fn distance_to_surface_m(s: &Spheroid, p: DVec3) -> f64 {
     let (u, v) = (p.x.abs(), (p.y * p.y + p.z * p.z).sqrt());
-    let d2 = |t: f64| (s.a_m * t.cos() - u).powi(2) + (s.b_m * t.sin() - v).powi(2);
+    let d2 = |t: f64| (s.a_m * maths::cos(t) - u).powi(2) + (s.b_m * maths::sin(t) - v).powi(2);
     let samples = 512;
     let step = 0.5 * std::f64::consts::PI / samples as f64;
     let best = (0..=samples)

@@ -18,6 +18,7 @@
 //! holds whatever overlaps whatever; for a toroid of 50 sub-spheres with
 //! a/b = 2, second neighbours overlap too, and eq. 4.31 would miscount.
 
+use crate::maths;
 use glam::DVec2;
 use std::f64::consts::{PI, TAU};
 use std::sync::OnceLock;
@@ -115,7 +116,7 @@ fn covered_intervals(discs: &[Disc], i: usize, covered: &mut Vec<(f64, f64)>) ->
         }
         let cos_w = ((ri * ri + d * d - rj * rj) / (2.0 * ri * d)).clamp(-1.0, 1.0);
         let w = cos_w.acos();
-        let phi = delta.y.atan2(delta.x);
+        let phi = maths::atan2(delta.y, delta.x);
         push_wrapped(covered, phi - w, phi + w);
     }
     false
@@ -162,7 +163,7 @@ fn gauss_legendre<const N: usize>() -> [(f64, f64); N] {
     let mut rule = [(0.0, 0.0); N];
     let n = N as f64;
     for (k, slot) in rule.iter_mut().enumerate() {
-        let mut x = (PI * (k as f64 + 0.75) / (n + 0.5)).cos();
+        let mut x = maths::cos(PI * (k as f64 + 0.75) / (n + 0.5));
         let mut dp = 1.0;
         for _ in 0..100 {
             let (p, d) = legendre_and_derivative(N, x);
@@ -204,7 +205,7 @@ fn add_arc_moments(disc: &Disc, t0: f64, t1: f64, m: &mut AreaMoments) {
         let mid = t0 + (p as f64 + 0.5) * h;
         for &(node, weight) in rule.iter() {
             let t = mid + 0.5 * h * node;
-            let (s, co) = t.sin_cos();
+            let (s, co) = maths::sin_cos(t);
             let x = c.x + r * co;
             let y = c.y + r * s;
             let w = 0.5 * h * weight * r * co; // dy = r cos t dt

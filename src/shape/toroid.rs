@@ -18,6 +18,7 @@
 use super::exact::Torus;
 use super::section::{Disc, disc_union};
 use super::{MultiSphere, ShapeError, SubSphere};
+use crate::maths;
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};
 
@@ -28,7 +29,7 @@ use std::f64::consts::{PI, TAU};
 /// the sense the method intends.
 pub fn min_subs(torus: &Torus) -> usize {
     let (a, b) = (torus.a_m, torus.b_m);
-    let overlaps = |n: usize| a * (PI / n as f64).sin() < b * (1.0 - 1e-12);
+    let overlaps = |n: usize| a * maths::sin(PI / n as f64) < b * (1.0 - 1e-12);
     let mut n = ((PI / (b / a).min(1.0).asin()).floor() as usize).max(2);
     while !overlaps(n) {
         n += 1;
@@ -54,7 +55,7 @@ pub fn ring(torus: &Torus, n_subs: usize) -> Result<MultiSphere, ShapeError> {
     let dphi = TAU / n_subs as f64;
     let subs = (0..n_subs)
         .map(|i| {
-            let (s, c) = (dphi * i as f64).sin_cos();
+            let (s, c) = maths::sin_cos(dphi * i as f64);
             SubSphere::new(DVec3::new(torus.a_m * c, torus.a_m * s, 0.0), torus.b_m)
         })
         .collect();

@@ -69,6 +69,18 @@ fn one_and_two_threads_give_identical_physics() {
     assert!(out.status.success(), "{}", stderr(&out));
     let other = std::fs::read(dir.path("seed2/kinematics.csv")).expect("csv");
     assert!(other != records[0]);
+    // The final state's hash says so in 16 hex digits: the same on 1 and 2
+    // threads (in the summaries compared above), another for another seed.
+    let hash = |s: &serde_json::Value| s["state_hash"].as_str().expect("state_hash").to_string();
+    let one = hash(&summaries[0]);
+    assert!(
+        one.len() == 16 && one.chars().all(|c| c.is_ascii_hexdigit()),
+        "{one}"
+    );
+    let seed2: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path("seed2/summary.json")).expect("summary"))
+            .expect("json");
+    assert_ne!(hash(&seed2), one);
 }
 
 /// An ensemble of three beds driven until steady (at most 32 cycles: the

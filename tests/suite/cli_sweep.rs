@@ -447,8 +447,9 @@ fn a_sweep_of_ensembles_says_how_its_errors_are_known() {
         "{table}"
     );
 
-    // One bed's 2 kept cycles have no error: not known; its 16 have the
-    // window's, said to leave out other packings.
+    // One bed's 2 kept cycles have no error: not known; its 32 have the
+    // window's, said to leave out other packings (32: should the bed
+    // alternate from cycle to cycle its error is that of 16 pairs).
     let short = sweep("1", "short", &[]);
     assert!(short.status.success(), "{}", stderr(&short));
     let table = String::from_utf8_lossy(&short.stdout);
@@ -456,7 +457,7 @@ fn a_sweep_of_ensembles_says_how_its_errors_are_known() {
         table.contains("+- not known") && table.contains("not_known"),
         "{table}"
     );
-    let one = sweep("1", "one", &["--cycles", "20", "--steady-cycles", "16"]);
+    let one = sweep("1", "one", &["--cycles", "36", "--steady-cycles", "32"]);
     assert!(one.status.success(), "{}", stderr(&one));
     let table = String::from_utf8_lossy(&one.stdout);
     assert!(

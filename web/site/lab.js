@@ -284,6 +284,7 @@ function showResult(r) {
     ["without the phase correction", "", `${m.uncorrected_energy_per_cycle_j.toFixed(5)} J (${(100 * m.uncorrected_error_vs_dem_rel).toFixed(2)} %)`],
     ["leak the phase error predicts", "", `${(100 * m.predicted_leak_per_cycle_j / d.energy_per_cycle_j).toFixed(2)} % of the DEM's energy`],
     ["spheres, time step, steps", `${s.n_particles}, ${s.dt_s.toExponential(3)} s, ${s.steps}`, ""],
+    ["state hash", s.state_hash, "the final DEM state: vlab shake --beds 1 prints the same for this scene and seed"],
   ];
   $("result-table").tBodies[0].innerHTML = rows.map((row, i) =>
     `<tr>${row.map((cell) => i === 0 ? `<th>${cell}</th>` : `<td>${cell}</td>`).join("")}</tr>`).join("");
@@ -294,6 +295,7 @@ function showResult(r) {
     freq_hz: s.freq_hz, gamma: s.gamma, orientation: s.orientation, seed: s.seed,
     cycles: s.cycles, steady_cycles: s.steady_cycles, rig: s.rig, n_particles: s.n_particles,
     dt_s: s.dt_s, steps: s.steps, particle_mass_kg: s.particle_mass_kg, e_max_j: d.e_max_j,
+    state_hash: s.state_hash,
     dem_efficiency: d.efficiency, dem_energy_per_cycle_j: d.energy_per_cycle_j,
     measured_efficiency: m.efficiency, measured_energy_per_cycle_j: m.energy_per_cycle_j,
     rig_phase_error_rad: m.rig_phase_error_rad, phase_correction_rad: m.phase_correction_rad,

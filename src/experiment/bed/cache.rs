@@ -27,8 +27,8 @@
 //! the cache, is not needed to notice. The price: any edit of a hashed file,
 //! a comment-only one included, and a debug build after a release build,
 //! settle their beds anew once. [`SETTLING_VERSION`] stays in the key as the
-//! settling law's own name. Not covered: the platform's maths library that
-//! `powf` and `ln` call at run time (one machine keeps one).
+//! settling law's own name. The transcendental functions are `libm`'s
+//! ([`crate::maths`]), whose version is in the key, not the platform's.
 //!
 //! Beds of another fingerprint are never read; `vlab cache list` marks them
 //! stale and `vlab cache clear` removes them.
@@ -56,6 +56,7 @@
 //! leave a whole file.
 
 use crate::clock::Stopwatch;
+use crate::dem::state_hash::fnv1a64;
 use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -178,16 +179,6 @@ fn bed_key_with(scene: &Scene, fingerprint: &str) -> String {
     };
     // Plain data with string keys: serialising cannot fail.
     serde_json::to_string(&key).unwrap_or_else(|e| panic!("bed key: {e}"))
-}
-
-/// FNV-1a, 64 bits: a hash whose value does not change between Rust versions.
-fn fnv1a64(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    h
 }
 
 /// The header of a bed file: the key and the figures of the bed.
@@ -661,14 +652,6 @@ mod tests {
         let mut s = Scene::thesis();
         s.particles.count = 40;
         s
-    }
-
-    #[test]
-    fn fnv1a_matches_published_vectors() {
-        // Test vectors of the FNV reference (Fowler, Noll, Vo).
-        assert_eq!(fnv1a64(b""), 0xcbf2_9ce4_8422_2325);
-        assert_eq!(fnv1a64(b"a"), 0xaf63_dc4c_8601_ec8c);
-        assert_eq!(fnv1a64(b"foobar"), 0x8594_4171_f739_67e8);
     }
 
     #[test]

@@ -12,6 +12,7 @@ use glam::{DQuat, DVec3};
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
+use crate::maths;
 use crate::scene::SceneError;
 
 /// Fill ratio of the insertion column, safely below the jamming of random
@@ -47,10 +48,10 @@ pub fn random_orientation(rng: &mut SceneRng) -> DQuat {
     let tau = std::f64::consts::TAU;
     let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
     DQuat::from_xyzw(
-        a * (tau * u2).sin(),
-        a * (tau * u2).cos(),
-        b * (tau * u3).sin(),
-        b * (tau * u3).cos(),
+        a * maths::sin(tau * u2),
+        a * maths::cos(tau * u2),
+        b * maths::sin(tau * u3),
+        b * maths::cos(tau * u3),
     )
     .normalize()
 }

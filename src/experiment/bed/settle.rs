@@ -68,6 +68,7 @@ use crate::dem::{
 };
 use crate::experiment::bed::fill::{COLUMN_FILL, SceneRng, insert_in_cylinder, random_orientation};
 use crate::experiment::damper::{Progress, gravity_vector};
+use crate::maths;
 use crate::scene::contact_laws;
 use crate::scene::{Orientation, Scene, SceneError};
 use crate::warning::RunWarning;
@@ -335,7 +336,7 @@ fn stiffen(
     let (pp_full, pw_full) = settling_laws(scene, 1.0);
     let stages = RELAX_STAGES;
     for k in 1..=stages {
-        let factor = SETTLE_STIFFNESS_FACTOR.powf(1.0 - k as f64 / stages as f64);
+        let factor = maths::powf(SETTLE_STIFFNESS_FACTOR, 1.0 - k as f64 / stages as f64);
         let (pp, pw) = (
             pp_full.with_stiffness_scaled(factor),
             pw_full.with_stiffness_scaled(factor),
