@@ -70,8 +70,10 @@ mod tests {
     /// function fails here), and they are musl's, not the platform's: for
     /// these arguments (found by comparing two million random ones)
     /// Debian 12's glibc on x86-64 rounds the other way in the last bit
-    /// (`powf` gives 0.17169672530615718, `sin` 0.9853793197223584), so a
-    /// call that slipped back to `f64::powf` or `f64::sin` fails on Linux.
+    /// (`powf` gives 0.17169672530615718, `sin` 0.9853793197223584), so
+    /// these functions turned back into `f64::powf` or `f64::sin` fail here
+    /// on Linux. (A call site that bypasses this module is caught by the
+    /// browser lab's test instead: its state hash would part from the CLI's.)
     #[test]
     fn each_is_its_function_and_keeps_musls_bits() {
         let x = 0.7310585786300049_f64;

@@ -94,6 +94,7 @@ use crate::drive::Drive;
 use crate::experiment::bed::settle::SettledBed;
 use crate::experiment::shake::{TRUTH_SAMPLE_RATE_HZ, shake_drive};
 use crate::export::lammps_bodies::RigidBodies;
+use crate::maths;
 use crate::scene::contact_laws;
 use crate::scene::{DriveLength, transient_cycles};
 use crate::scene::{Orientation, Scene, SceneError};
@@ -928,13 +929,11 @@ fn pair_lines(plan: &DeckPlan) -> String {
 /// The mean of `sin(ω t_k)` (or `cos`) over `n` instants `dt_s` apart,
 /// divided by its value at their centre: `sin(n ω dt / 2) / (n sin(ω dt / 2))`.
 /// The record's motion columns are written once a row from it, as the exact
-/// window means a per-step average would give.
+/// window means a per-step average would give. (`libm`'s sine, so that the
+/// deck's text is the same on every platform; `ω dt > 0`.)
 pub fn window_mean_factor(n: u64, omega_rad_s: f64, dt_s: f64) -> f64 {
     let half = 0.5 * omega_rad_s * dt_s;
-    if half == 0.0 {
-        return 1.0;
-    }
-    (n as f64 * half).sin() / (n as f64 * half.sin())
+    maths::sin(n as f64 * half) / (n as f64 * maths::sin(half))
 }
 
 /// The drive (thesis eq. 6.2, from rest) and the record's motion variables.
