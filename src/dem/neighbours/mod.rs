@@ -23,11 +23,14 @@
 //! are added afterwards, in a fixed order, so that the sums are the same
 //! bits for any number of threads ([`crate::dem::step`]).
 
+mod by_body;
+
 use glam::DVec3;
 
 use super::clumps::NOT_IN_CLUMP;
 use super::contact::ContactState;
 use super::step::block_size::PARTICLE_BLOCK;
+use by_body::ByBody;
 
 /// The parts of a [`NeighbourList`] a step of the pair contacts reads and
 /// writes, borrowed apart ([`NeighbourList::step_view`]).
@@ -101,6 +104,10 @@ pub struct NeighbourList {
     new_states: Vec<ContactState>,
     new_gaps: Vec<f64>,
     row: Vec<u32>,
+    /// The search of a bed of rigid bodies, body by body.
+    by_body: ByBody,
+    /// The units near one unit, in that search.
+    near_units: Vec<u32>,
 }
 
 impl NeighbourList {
@@ -242,9 +249,16 @@ impl NeighbourList {
             self.build_adjacency(n);
             return;
         }
-        let grid = Grid::around(positions, radii, self.skin_m);
-        self.sort_into_cells(&grid, positions);
-        self.list_pairs(&grid, (positions, radii, clump), old_of_new);
+        let has_bodies = clump.iter().any(|&c| c != NOT_IN_CLUMP);
+        let grid = if has_bodies {
+            self.search_by_body(positions, radii, clump);
+            None
+        } else {
+            let grid = Grid::around(positions, radii, self.skin_m);
+            self.sort_into_cells(&grid, positions);
+            Some(grid)
+        };
+        self.list_pairs(grid.as_ref(), (positions, radii, clump), old_of_new);
         std::mem::swap(&mut self.pairs, &mut self.new_pairs);
         std::mem::swap(&mut self.states, &mut self.new_states);
         std::mem::swap(&mut self.gaps, &mut self.new_gaps);
@@ -285,26 +299,48 @@ impl NeighbourList {
             self.cell_of.push(c as u32);
             self.cell_start[c + 1] += 1;
         }
-        for c in 0..n_cells {
-            self.cell_start[c + 1] += self.cell_start[c];
+        group_by_key(
+            &self.cell_of,
+            &mut self.cell_start,
+            &mut self.cell_items,
+            &mut self.fill,
+        );
+    }
+
+    /// The pairs of a bed with rigid bodies, found body by body
+    /// ([`by_body`]): the units (bodies and free spheres) on a cell grid of
+    /// their own, each unit's neighbours from the 27 cells around it, and
+    /// the sub-sphere pairs of each two neighbouring units; laid out by rows
+    /// for [`Self::list_pairs`].
+    fn search_by_body(&mut self, positions: &[DVec3], radii: &[f64], clump: &[u32]) {
+        let n_units = self.by_body.group_units(positions, radii, clump);
+        let mut by_body = std::mem::take(&mut self.by_body);
+        let mut near_units = std::mem::take(&mut self.near_units);
+        let grid = Grid::around(&by_body.centre, &by_body.radius, self.skin_m);
+        self.sort_into_cells(&grid, &by_body.centre);
+        by_body.clear();
+        for u in 0..n_units {
+            self.fill_row(&grid, &by_body.centre, &by_body.radius, u);
+            near_units.clear();
+            near_units.extend_from_slice(&self.row);
+            for &v in &near_units {
+                by_body.pairs_of_units((u, v as usize), positions, radii, self.skin_m);
+            }
         }
-        self.cell_items.clear();
-        self.cell_items.resize(positions.len(), 0);
-        self.fill.clear();
-        self.fill.extend_from_slice(&self.cell_start[..n_cells]);
-        for (i, &c) in self.cell_of.iter().enumerate() {
-            self.cell_items[self.fill[c as usize] as usize] = i as u32;
-            self.fill[c as usize] += 1;
-        }
+        by_body.lay_out_rows(positions.len());
+        self.by_body = by_body;
+        self.near_units = near_units;
     }
 
     /// The pairs `i < j` within the cutoff, sorted by `(i, j)`, into the new
-    /// list: each particle's row from the 27 cells around it, each pair with
-    /// the state it had on the old list (found in its row there, under its
-    /// old numbers `old_of_new`), or apart if it is new.
+    /// list, each pair with the state it had on the old list (found in its
+    /// row there, under its old numbers `old_of_new`), or apart if it is
+    /// new. Each particle's row comes from the 27 cells of `grid` around
+    /// it, or, without a grid, from the body-by-body search
+    /// ([`Self::search_by_body`]).
     fn list_pairs(
         &mut self,
-        grid: &Grid,
+        grid: Option<&Grid>,
         (positions, radii, clump): (&[DVec3], &[f64], &[u32]),
         old_of_new: Option<&[u32]>,
     ) {
@@ -312,10 +348,18 @@ impl NeighbourList {
         let old_number = |k: u32| old_of_new.map_or(k, |o| o[k as usize]);
         for i in 0..n {
             let pi = positions[i];
-            self.fill_row(grid, positions, radii, i);
-            if !clump.is_empty() && clump[i] != NOT_IN_CLUMP {
-                let own = clump[i];
-                self.row.retain(|&j| clump[j as usize] != own);
+            match grid {
+                Some(grid) => {
+                    self.fill_row(grid, positions, radii, i);
+                    if !clump.is_empty() && clump[i] != NOT_IN_CLUMP {
+                        let own = clump[i];
+                        self.row.retain(|&j| clump[j as usize] != own);
+                    }
+                }
+                None => {
+                    self.row.clear();
+                    self.row.extend_from_slice(self.by_body.row(i));
+                }
             }
             for r in 0..self.row.len() {
                 let j = self.row[r];
@@ -435,6 +479,26 @@ impl Grid {
     }
 }
 
+/// Counting sort of the items `0..keys.len()` by their keys: with `start`
+/// holding each key's count at `start[key + 1]` (and zero at `start[0]`),
+/// the items of key `k` become `items[start[k]..start[k + 1]]`, in item
+/// order; `fill` is scratch.
+fn group_by_key(keys: &[u32], start: &mut [u32], items: &mut Vec<u32>, fill: &mut Vec<u32>) {
+    let n_keys = start.len() - 1;
+    for k in 0..n_keys {
+        start[k + 1] += start[k];
+    }
+    items.clear();
+    items.resize(keys.len(), 0);
+    fill.clear();
+    fill.extend_from_slice(&start[..n_keys]);
+    for (i, &k) in keys.iter().enumerate() {
+        let at = &mut fill[k as usize];
+        items[*at as usize] = i as u32;
+        *at += 1;
+    }
+}
+
 fn bounding_box(positions: &[DVec3]) -> (DVec3, DVec3) {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -486,6 +550,55 @@ pub(crate) mod tests {
             let mut list = NeighbourList::new(0.0005);
             list.rebuild(&pos, &radii, &[]);
             assert_eq!(list.pairs, brute_force(&pos, &radii, 0.0005), "n {n}");
+        }
+    }
+
+    /// The body-by-body search against brute force on a bed of bodies
+    /// (chains of overlapping sub-spheres of unequal radii, their particles
+    /// interleaved with other bodies' and with free spheres): a filter that
+    /// drops a pair within the cutoff, or a pair of one body listed, fails
+    /// it.
+    #[test]
+    fn body_by_body_search_finds_exactly_the_brute_force_pairs_of_other_bodies() {
+        for (n_bodies, n_free, box_m, seed) in
+            [(120, 40, 0.05, 11), (60, 0, 0.03, 12), (3, 5, 0.008, 13)]
+        {
+            let centres = scattered(n_bodies + n_free, box_m, seed);
+            let axes = scattered(n_bodies, 2.0, seed + 100);
+            let (mut pos, mut radii, mut clump) = (Vec::new(), Vec::new(), Vec::new());
+            for (b, c) in centres.iter().enumerate() {
+                if b < n_bodies {
+                    let axis = (axes[b] - DVec3::ONE).normalize_or(DVec3::X);
+                    for k in 0..7 {
+                        pos.push(*c + axis * (k as f64 - 3.0) * 0.0008);
+                        radii.push(0.0015 + 0.0002 * f64::from(3 - (k - 3i32).abs()));
+                        clump.push(b as u32);
+                    }
+                } else {
+                    pos.push(*c);
+                    radii.push(0.002);
+                    clump.push(NOT_IN_CLUMP);
+                }
+            }
+            // Interleave: a fixed shuffle of the particles.
+            let n = pos.len();
+            let order: Vec<usize> = (0..n).map(|k| (k * 37 + 11) % n).collect();
+            assert!(n % 37 != 0);
+            let pos: Vec<DVec3> = order.iter().map(|&k| pos[k]).collect();
+            let radii: Vec<f64> = order.iter().map(|&k| radii[k]).collect();
+            let clump: Vec<u32> = order.iter().map(|&k| clump[k]).collect();
+            let skin = 0.0003;
+            let expected: Vec<(u32, u32)> = brute_force(&pos, &radii, skin)
+                .into_iter()
+                .filter(|&(i, j)| {
+                    let (a, b) = (clump[i as usize], clump[j as usize]);
+                    a == NOT_IN_CLUMP || a != b
+                })
+                .collect();
+            let mut list = NeighbourList::new(skin);
+            list.rebuild(&pos, &radii, &clump);
+            assert!(!expected.is_empty(), "bodies {n_bodies}: the bed has pairs");
+            assert_eq!(list.pairs, expected, "bodies {n_bodies}, free {n_free}");
         }
     }
 
