@@ -12,6 +12,7 @@ use vlab::drive::Drive;
 use vlab::experiment::damper::{Steadiness, StepObserver};
 use vlab::experiment::ensemble::{DEFAULT_BEDS, EnsembleSummary, unsteady_reasons};
 use vlab::experiment::ensemble_summary::{LONGER_DRIVE_SCALE, longer_drive_rel};
+use vlab::experiment::orientation_record::OrientationOrder;
 use vlab::experiment::shake::{DemTruth, ShakeSummary, default_out_dir, percent_or_unknown};
 use vlab::experiment::shake_plan::{RequestField, ShakePlan, ShakeRequest};
 use vlab::export::snapshots::PhaseSnapshots;
@@ -224,6 +225,17 @@ fn plot_snapshots(sn: &PhaseSnapshots, scene: &Scene, drive: &Drive, dir: &Path)
     Ok(())
 }
 
+/// How the bodies lie: the order parameter settled and over the drive.
+fn print_orientation_order(o: &OrientationOrder, steady_cycles: u32) {
+    println!(
+        "  orientation order S {:+.3} settled, {:+.3} +- {:.3} over the last {} cycles (P2 of each body's symmetry axis against the cylinder's: +1 all along it, -0.5 all across, 0 at random; +- the cycle-to-cycle spread)",
+        o.settled,
+        o.steady_mean,
+        o.steady_sd,
+        steady_cycles.min(o.per_cycle.len() as u32),
+    );
+}
+
 /// The summary as a person reads it.
 fn print_summary(s: &ShakeSummary, dir: &Path) {
     let particles = match &s.bodies {
@@ -249,6 +261,9 @@ fn print_summary(s: &ShakeSummary, dir: &Path) {
         );
     }
     print_dem(&s.dem);
+    if let Some(o) = s.bodies.as_ref().and_then(|b| b.orientation_order.as_ref()) {
+        print_orientation_order(o, s.steady_cycles);
+    }
     print_measured(s);
     println!(
         "  state hash {} (the final DEM state{}: the same on any thread count and platform)",

@@ -17,6 +17,7 @@ pub mod ledger;
 pub mod material;
 pub mod neighbours;
 pub mod ordering;
+pub mod orientation_order;
 pub mod particles;
 pub mod restitution;
 pub mod rigid_rotation;

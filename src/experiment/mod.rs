@@ -36,6 +36,7 @@ pub mod ensemble_summary;
 pub mod host_test;
 pub mod impact;
 pub mod measurement;
+pub mod orientation_record;
 pub mod press;
 pub mod record;
 pub mod replay;

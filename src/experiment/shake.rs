@@ -30,6 +30,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::atomic_write::write_bytes_atomic;
+use crate::dem::orientation_order::{CYLINDER_AXIS, order_parameter};
 use crate::dem::{Dissipation, LedgerBalance};
 use crate::drive::Drive;
 use crate::experiment::bed::cache::BedSource;
@@ -42,6 +43,7 @@ use crate::experiment::ensemble_summary::EnsembleSummary;
 use crate::experiment::measurement::{
     Measured, ShakeExperiment, ShakeSetup, run_measured_shake_judged,
 };
+use crate::experiment::orientation_record::{OrientationOrder, OrientationTrack};
 use crate::experiment::record::TruthSamples;
 use crate::rig::{DaqReport, RigFile, RigSpec, ShakerKind, check_limits};
 use crate::scene::{CyclesSpec, Scene, SceneError};
@@ -398,11 +400,16 @@ impl DemTruth {
     }
 }
 
-/// The rigid bodies of a shake of shapes: how many, and what shape.
+/// The rigid bodies of a shake of shapes: how many, what shape, and how
+/// they lie.
 #[derive(Debug, Clone, Serialize)]
 pub struct BodiesSummary {
     pub count: usize,
     pub shape: &'static str,
+    /// The order parameter of their symmetry axes against the cylinder's
+    /// axis ([`crate::dem::orientation_order`]); none for bodies without one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientation_order: Option<OrientationOrder>,
 }
 
 /// Everything `summary.json` says about a shake.
@@ -584,13 +591,33 @@ fn drive_bed(
     // The step's threads are the scene's: an ensemble gives each of its
     // beds its share.
     let mut world = prepare_drive(bed, scene, dt)?;
-    let mut observers = Observers(observers);
+    // A bed of bodies also keeps how they lie at the end of each cycle.
+    let mut track = OrientationTrack::new(setup.drive.freq_hz());
+    let mut all: Vec<&mut dyn StepObserver> = Vec::with_capacity(observers.len() + 1);
+    all.extend(
+        observers
+            .iter_mut()
+            .map(|o| &mut **o as &mut dyn StepObserver),
+    );
+    if !world.particles.clumps.is_empty() {
+        all.push(&mut track);
+    }
+    let mut observers = Observers(&mut all);
     if observers.wants_particle_dissipation() {
         world.track_particle_dissipation(true);
     }
     let experiment =
         run_measured_shake_judged(scene, &mut world, setup, &mut observers, progress, judged)?;
-    let summary = ShakeSummary::new(scene, bed, setup, &experiment, &world, dt, started);
+    drop(all);
+    let order = OrientationOrder::new(
+        order_parameter(&bed.world.particles.clumps, CYLINDER_AXIS),
+        track.per_cycle,
+        experiment.outcome.steady_first_cycle,
+    );
+    let mut summary = ShakeSummary::new(scene, bed, setup, &experiment, &world, dt, started);
+    if let Some(b) = summary.bodies.as_mut() {
+        b.orientation_order = order;
+    }
     Ok((
         ShakeRun {
             summary,
@@ -634,6 +661,7 @@ impl ShakeSummary {
             bodies: (!world.particles.clumps.is_empty()).then(|| BodiesSummary {
                 count: world.particles.clumps.len(),
                 shape: scene.particles.shape.as_str(),
+                orientation_order: None,
             }),
             particle_mass_kg: world.particles.total_mass_kg(),
             fill_ratio: scene.fill_ratio(),

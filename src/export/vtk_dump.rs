@@ -13,7 +13,11 @@
 //!   belongs to, 4294967295 for a free sphere) and `body_x_axis`,
 //!   `body_z_axis` (its body's principal axes in space: a prolate's long
 //!   axis is x, a torus's axis z), so that ParaView can colour by body or
-//!   draw the axes as glyphs;
+//!   draw the axes as glyphs, `body_orientation` (its body's unit
+//!   quaternion, body frame to space, as x, y, z, w) and `body_order_p2`
+//!   (P₂ of its body's symmetry axis against the cylinder's axis, whose
+//!   mean over the bodies is the order parameter of
+//!   [`crate::dem::orientation_order`]; NaN for a body without one);
 //! - `enclosure-NNNNN.vtp`: the closed cylinder as polygons (side wall and both
 //!   end caps) at its current displacement.
 //!
@@ -54,6 +58,7 @@ use quick_xml::events::{BytesEnd, BytesStart, BytesText, Event};
 
 use crate::atomic_write::write_atomic;
 use crate::dem::clumps::NOT_IN_CLUMP;
+use crate::dem::orientation_order::{CYLINDER_AXIS, legendre_p2, symmetry_axis};
 use crate::dem::{Particles, World};
 use crate::experiment::damper::{Kinematics, StepObserver};
 use crate::validation::InvalidParameter;
@@ -196,6 +201,8 @@ impl VtkDump {
                 DataArray::named("body", 1, Values::U32(&p.clump)),
                 DataArray::named("body_x_axis", 3, Values::F64(&b.x_axis)),
                 DataArray::named("body_z_axis", 3, Values::F64(&b.z_axis)),
+                DataArray::named("body_orientation", 4, Values::F64(&b.orientation)),
+                DataArray::named("body_order_p2", 1, Values::F64(&b.order_p2)),
             ]);
         }
         let piece = Piece {
@@ -288,6 +295,10 @@ impl Values<'_> {
 struct BodyArrays {
     x_axis: Vec<f64>,
     z_axis: Vec<f64>,
+    /// The body's quaternion (x, y, z, w); zero for a free sphere.
+    orientation: Vec<f64>,
+    /// P₂ of the body's symmetry axis against the cylinder's axis.
+    order_p2: Vec<f64>,
 }
 
 impl BodyArrays {
@@ -302,9 +313,23 @@ impl BodyArrays {
         let flat = |e: glam::DVec3| -> Vec<f64> {
             (0..p.len()).flat_map(|k| axis(k, e).to_array()).collect()
         };
+        let body = |k: usize| (p.clump[k] != NOT_IN_CLUMP).then(|| p.clump[k] as usize);
+        let orientation = (0..p.len())
+            .flat_map(|k| body(k).map_or([0.0; 4], |b| p.clumps.orientation[b].to_array()))
+            .collect();
+        let order_p2 = (0..p.len())
+            .map(|k| {
+                let b = body(k)?;
+                let axis = symmetry_axis(p.clumps.inertia[b])?;
+                Some(legendre_p2(p.clumps.orientation[b] * axis, CYLINDER_AXIS))
+            })
+            .map(|v| v.unwrap_or(f64::NAN))
+            .collect();
         Some(BodyArrays {
             x_axis: flat(glam::DVec3::X),
             z_axis: flat(glam::DVec3::Z),
+            orientation,
+            order_p2,
         })
     }
 }

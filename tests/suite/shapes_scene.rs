@@ -171,6 +171,13 @@ fn scene_json_describes_a_prolate_body() {
 /// run takes the bed from the cache and gives the same trace, byte for
 /// byte. A cache that stored only the sub-spheres (losing the bodies'
 /// angular momentum) or a key without the shape would fail it.
+///
+/// The orientation order the summary gives at the end of the second cycle
+/// is the one computed here from the dump's quaternions at that time (each
+/// prolate's long axis, body x, against the cylinder's axis z), to 1e-4
+/// (the two may take steps 1.2 µs apart), and every value lies within its
+/// range [−½, 1]: a summary that sampled another cycle, a dump that wrote
+/// another body's turn or an order parameter on the wrong axis fails it.
 #[test]
 fn a_bed_of_prolates_settles_shakes_and_comes_back_from_the_cache() {
     let dir = Scratch::new("shape-bed");
@@ -182,8 +189,56 @@ fn a_bed_of_prolates_settles_shakes_and_comes_back_from_the_cache() {
     let args = [
         "shake", "--beds", "1", "--scene", &name, "--freq", "40", "--gamma", "10", "--rig", "ideal",
     ];
-    let (o1, s1) = common::run_summary(&dir, &args, "one");
+    let dumped = [&args[..], &["--dump", "vtk", "--dump-every-s", "0.025"]].concat();
+    let (o1, s1) = common::run_summary(&dir, &dumped, "one");
     let (_, s2) = common::run_summary(&dir, &args, "two");
+    let order = &s1["bodies"]["orientation_order"];
+    let per_cycle: Vec<f64> = order["per_cycle"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|v| v.as_f64()).collect())
+        .unwrap_or_default();
+    assert_eq!(per_cycle.len(), 3, "{order:#}");
+    let settled = order["settled"].as_f64().unwrap_or(f64::NAN);
+    for s in per_cycle.iter().chain([&settled]) {
+        assert!((-0.5..=1.0).contains(s), "{order:#}");
+    }
+    // The dump's frame at the end of the second cycle (its own rule takes
+    // the first step at or past 0.05 s, the summary the step nearest to it:
+    // at most a step apart).
+    let pvd = std::fs::read_to_string(dir.path("vtk/particles.pvd")).expect("pvd");
+    let times: Vec<f64> = pvd
+        .split("timestep=\"")
+        .skip(1)
+        .filter_map(|t| t.split('"').next()?.parse().ok())
+        .collect();
+    let second = times
+        .iter()
+        .position(|t| (t - 0.05).abs() < 1e-5)
+        .unwrap_or_else(|| panic!("no frame at 0.05 s: {times:?}"));
+    let frame = dir.path(&format!("vtk/particles-{second:05}.vtp"));
+    let vtk = vlab::export::vtk_dump::read_vtp(&frame).expect("the last frame");
+    let array = |name: &str| {
+        vtk.arrays
+            .iter()
+            .find(|a| a.name == name)
+            .unwrap_or_else(|| panic!("{name}"))
+            .values
+            .clone()
+    };
+    let (body, turn) = (array("body"), array("body_orientation"));
+    let mut p2 = std::collections::BTreeMap::new();
+    for (k, b) in body.iter().enumerate() {
+        let q = glam::DQuat::from_slice(&turn[4 * k..4 * k + 4]);
+        let z = (q * glam::DVec3::X).z;
+        p2.insert(*b as u64, 1.5 * z * z - 0.5);
+    }
+    assert_eq!(p2.len(), 24);
+    let from_dump = p2.values().sum::<f64>() / 24.0;
+    assert!(
+        (from_dump - per_cycle[1]).abs() < 1e-4,
+        "S {} in the summary, {from_dump} from the dump",
+        per_cycle[1]
+    );
     let err = common::stderr(&o1);
     let l = &s1["dem"]["ledger"];
     let f = |k: &str| l[k].as_f64().unwrap_or(f64::NAN);
