@@ -108,7 +108,10 @@ fn print_body(scene: &Scene, body: &ParticleBody) {
             100.0 * v,
             100.0 * s
         ),
-        _ => String::new(),
+        _ => format!(
+            "; sphericity {:.3} (eq. 8.3 on the union itself: a clump file has no exact shape)",
+            body.union_sphericity()
+        ),
     };
     println!(
         "  body             union of its sub-spheres {:.2} mm3, {:.3} mm2{errors}",

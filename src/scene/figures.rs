@@ -22,6 +22,7 @@ pub fn scene_figures(scene: &Scene) -> Result<serde_json::Value, SceneError> {
             "volume_error": b.volume_error(),
             "surface_error": b.surface_error(),
             "sphericity": b.sphericity(),
+            "union_sphericity": b.union_sphericity(),
             "min_sub_radius_m": b.min_sub_radius_m,
             "bounding_radius_m": b.bounding_radius_m,
             "sub_sphere_centres_m": t.offsets_m.iter().map(|o| o.to_array()).collect::<Vec<_>>(),

@@ -342,6 +342,13 @@ impl ParticleBody {
         self.exact.map(|(v, s)| shape::exact::true_sphericity(v, s))
     }
 
+    /// True sphericity (eq. 8.3) of the union of the sub-spheres itself,
+    /// `(36π V²)^(1/3) / S` with the union's volume and surface: the one a
+    /// clump file has, which has no exact shape.
+    pub fn union_sphericity(&self) -> f64 {
+        shape::exact::true_sphericity(self.union_volume_m3, self.union_surface_m2)
+    }
+
     /// The union's volume error against the exact shape (relative).
     pub fn volume_error(&self) -> Option<f64> {
         self.exact.map(|(v, _)| self.union_volume_m3 / v - 1.0)

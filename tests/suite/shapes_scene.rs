@@ -321,7 +321,8 @@ fn press_writes_the_curves_of_a_flat_toroid_and_its_ripple() {
 /// far as the union of a body's sub-spheres falls short of the smooth
 /// shape's volume (the report's `volume_error`, -2.5e-4 for a prolate of
 /// 1.5 of 51 sub-spheres); a clump weighs its file's spheres, their exact
-/// union (a lens less for two). Before 6167560 a body scene
+/// union (a lens less for two), and its sphericity is that union's (eq.
+/// 8.3 with the caps each sphere loses). Before 6167560 a body scene
 /// reported count x the least mass a contact meets (48 % for prolates of
 /// 1.5); the world was right.
 #[test]
@@ -378,7 +379,28 @@ fn every_shape_weighs_what_its_world_weighs() {
                 * (d * d + 2.0 * d * r2 - 3.0 * r2 * r2 + 2.0 * d * r1 + 6.0 * r1 * r2
                     - 3.0 * r1 * r1)
                 / (12.0 * d);
-            60.0 * density * (ball(r1) + ball(r2) - lens)
+            // Its sphericity (eq. 8.3) is the union's own: each sphere less
+            // the cap beyond the plane of the two spheres' circle.
+            let x1 = (d * d + r1 * r1 - r2 * r2) / (2.0 * d);
+            let cap = |r: f64, x: f64| 2.0 * std::f64::consts::PI * r * (r - x);
+            let surface =
+                4.0 * std::f64::consts::PI * (r1 * r1 + r2 * r2) - cap(r1, x1) - cap(r2, d - x1);
+            let volume = ball(r1) + ball(r2) - lens;
+            let psi = (36.0 * std::f64::consts::PI * volume * volume).cbrt() / surface;
+            let printed = report["particles"]["body"]["union_sphericity"]
+                .as_f64()
+                .unwrap_or(f64::NAN);
+            assert!(
+                (printed / psi - 1.0).abs() < 1e-6,
+                "the clump's sphericity {printed}, {psi} expected"
+            );
+            let text = vlab(&dir.0, &["scene", "--scene", &file]);
+            let text = String::from_utf8_lossy(&text.stdout);
+            assert!(
+                text.contains(&format!("sphericity {psi:.3} (eq. 8.3 on the union")),
+                "{text}"
+            );
+            60.0 * density * volume
         } else {
             let volume_error = report["particles"]["body"]["volume_error"]
                 .as_f64()
