@@ -106,7 +106,13 @@ impl ByBody {
                 lo = lo.min(positions[i as usize]);
                 hi = hi.max(positions[i as usize]);
             }
-            let c = 0.5 * (lo + hi);
+            // A body number without sub-spheres (none is made so) would
+            // have no box: it sits at the origin with nothing to pair.
+            let c = if own.is_empty() {
+                DVec3::ZERO
+            } else {
+                0.5 * (lo + hi)
+            };
             let r = own
                 .iter()
                 .map(|&i| (positions[i as usize] - c).length() + radii[i as usize])
