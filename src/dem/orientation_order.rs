@@ -1,8 +1,8 @@
 //! How the rigid bodies of a bed line up: the orientation order parameter
 //! of their symmetry axes against the enclosure's axis.
 //!
-//! Terzioglu's thesis, Chapter 8, describes how prolates and toroids lie in
-//! the bed in pictures (Fig. 8.7); this puts a number on it. Each body of
+//! Terzioglu's thesis, Chapter 8, gives no measure of how its prolates and
+//! toroids lie in the bed (its Fig. 8.7 shows the beds); this is vlab's own. Each body of
 //! revolution has a symmetry axis: the principal axis whose moment of
 //! inertia stands apart from the other two (a prolate's long axis, an
 //! oblate's or a torus's short one). With `θ` the angle between it and a
