@@ -30,8 +30,10 @@ impl OrientationOrder {
     /// `steady_first_cycle` (0-based); `None` without a value.
     pub fn new(settled: Option<f64>, per_cycle: Vec<f64>, steady_first_cycle: u32) -> Option<Self> {
         let settled = settled?;
-        let first = (steady_first_cycle as usize).min(per_cycle.len().saturating_sub(1));
-        let window = per_cycle.get(first..).unwrap_or(&[]);
+        let window = match per_cycle.get(steady_first_cycle as usize..) {
+            Some(w) if !w.is_empty() => w,
+            _ => &per_cycle[..],
+        };
         let (steady_mean, steady_sd) = if window.is_empty() {
             (settled, 0.0)
         } else {
@@ -75,5 +77,25 @@ impl StepObserver for OrientationTrack {
         {
             self.per_cycle.push(s);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The steady figures come from the window's cycles, or from every
+    /// cycle when the window starts past them; a window taken from the
+    /// start, or from the last cycle alone, fails it.
+    #[test]
+    fn the_steady_figures_are_the_windows_or_all_cycles() {
+        let o = OrientationOrder::new(Some(-0.2), vec![0.1, 0.2, 0.3, 0.5], 2).expect("a value");
+        assert!((o.steady_mean - 0.4).abs() < 1e-15, "{o:?}");
+        assert!((o.steady_sd - 0.02f64.sqrt()).abs() < 1e-15, "{o:?}");
+        let all = OrientationOrder::new(Some(-0.2), vec![0.1, 0.3], 5).expect("a value");
+        assert!((all.steady_mean - 0.2).abs() < 1e-15, "{all:?}");
+        let none = OrientationOrder::new(Some(-0.2), Vec::new(), 0).expect("a value");
+        assert_eq!((none.steady_mean, none.steady_sd), (-0.2, 0.0));
+        assert_eq!(OrientationOrder::new(None, vec![0.1], 0), None);
     }
 }

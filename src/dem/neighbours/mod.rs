@@ -22,6 +22,10 @@
 //! particles and adds to them, and the forces that cross from another block
 //! are added afterwards, in a fixed order, so that the sums are the same
 //! bits for any number of threads ([`crate::dem::step`]).
+//!
+//! A bed with rigid bodies is searched body by body instead ([`by_body`]):
+//! the same pairs, without looking at the many pairs of one body's
+//! sub-spheres, which never form a pair.
 
 mod by_body;
 
@@ -258,7 +262,7 @@ impl NeighbourList {
             self.sort_into_cells(&grid, positions);
             Some(grid)
         };
-        self.list_pairs(grid.as_ref(), (positions, radii, clump), old_of_new);
+        self.list_pairs(grid.as_ref(), (positions, radii), old_of_new);
         std::mem::swap(&mut self.pairs, &mut self.new_pairs);
         std::mem::swap(&mut self.states, &mut self.new_states);
         std::mem::swap(&mut self.gaps, &mut self.new_gaps);
@@ -341,7 +345,7 @@ impl NeighbourList {
     fn list_pairs(
         &mut self,
         grid: Option<&Grid>,
-        (positions, radii, clump): (&[DVec3], &[f64], &[u32]),
+        (positions, radii): (&[DVec3], &[f64]),
         old_of_new: Option<&[u32]>,
     ) {
         let n = positions.len();
@@ -349,13 +353,9 @@ impl NeighbourList {
         for i in 0..n {
             let pi = positions[i];
             match grid {
-                Some(grid) => {
-                    self.fill_row(grid, positions, radii, i);
-                    if !clump.is_empty() && clump[i] != NOT_IN_CLUMP {
-                        let own = clump[i];
-                        self.row.retain(|&j| clump[j as usize] != own);
-                    }
-                }
+                // Only a bed without bodies is searched on the grid: no
+                // pair of one body to drop.
+                Some(grid) => self.fill_row(grid, positions, radii, i),
                 None => {
                     self.row.clear();
                     self.row.extend_from_slice(self.by_body.row(i));
