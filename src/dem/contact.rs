@@ -12,7 +12,14 @@
 //! - tangential: [`Tangential::MindlinCoulomb`], [`mindlin_coulomb`] (eq. 5.15,
 //!   5.16, 5.24, 5.33, with the erratum of eq. 3.9: the spring stretch is the
 //!   *vector* tangential displacement), or [`Tangential::Frictionless`] when
-//!   μ = 0, which keeps no history.
+//!   μ = 0, which keeps no history;
+//! - multi-point: [`MultiPoint::Independent`], every sub-sphere contact of a
+//!   rigid body a whole contact (the thesis' multi-sphere model, Section 4.2,
+//!   EDEM's), or [`MultiPoint::Shared`], the `n` sub-sphere contacts a body
+//!   pair (or a body and a wall) touch at at once each carrying `1/n` of one
+//!   contact: the law with E*, G* and m* scaled by `1/n`
+//!   ([`ContactGeometry::share`]), so that `n` alike contacts side by side
+//!   make one contact of the asked stiffness, damping and restitution.
 //!
 //! Normal: `f_el = 4/3 E* √R* δ^{3/2}`, damping `f_d = c_n δ̇` with
 //! `c_n = 2 √(5/6) β √(2 E* √(R* δ) m*)`; the total `f_n = max(0, f_el + f_d)`
@@ -45,6 +52,7 @@
 //!   stiffness work is reported on its own for transparency.
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use super::material::{Material, effective_shear_pa, effective_youngs_pa};
 use super::restitution::RestitutionMode;
@@ -77,6 +85,38 @@ pub enum Tangential {
         /// Coefficient of friction μ.
         friction: f64,
     },
+}
+
+/// How the sub-sphere contacts a rigid body touches another body (or a
+/// wall) at, at the same time, combine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MultiPoint {
+    /// Each sub-sphere contact is a whole Hertz–Mindlin contact calibrated
+    /// on the two bodies' masses: the thesis' multi-sphere model (Section
+    /// 4.2, as EDEM's). A body pair touching at `n` sub-spheres is up to
+    /// `n` times as stiff, and loses more, than asked.
+    #[default]
+    Independent,
+    /// The `n` sub-sphere contacts a body pair (or a body and a wall) touch
+    /// at, counted every step, share one contact: each is the law with E*,
+    /// G* and m* scaled by `1/n` (its whole force scaled by `1/n`).
+    Shared,
+}
+
+impl MultiPoint {
+    /// True for the thesis' model (the default, left out of printed scenes).
+    pub fn is_independent(&self) -> bool {
+        *self == MultiPoint::Independent
+    }
+
+    /// The name a scene file gives it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MultiPoint::Independent => "independent",
+            MultiPoint::Shared => "shared",
+        }
+    }
 }
 
 /// What a scene says about one kind of contact: restitution, friction and how
@@ -112,6 +152,8 @@ pub struct ContactLaw {
     hertz_coeff: f64,
     pub damping: NormalDamping,
     pub tangential: Tangential,
+    /// How a body's simultaneous sub-sphere contacts combine.
+    pub multi_point: MultiPoint,
 }
 
 impl ContactLaw {
@@ -142,24 +184,38 @@ impl ContactLaw {
     /// The same law with both moduli scaled by `factor` (a softer or stiffer
     /// spring of the same restitution and friction).
     pub fn with_stiffness_scaled(&self, factor: f64) -> Self {
-        Self::assemble(
-            self.e_star_pa * factor,
-            self.g_star_pa * factor,
-            self.damping_factor,
-            self.restitution,
-            self.friction,
-        )
+        Self {
+            multi_point: self.multi_point,
+            ..Self::assemble(
+                self.e_star_pa * factor,
+                self.g_star_pa * factor,
+                self.damping_factor,
+                self.restitution,
+                self.friction,
+            )
+        }
     }
 
     /// The same law without friction.
     pub fn without_friction(&self) -> Self {
-        Self::assemble(
-            self.e_star_pa,
-            self.g_star_pa,
-            self.damping_factor,
-            self.restitution,
-            0.0,
-        )
+        Self {
+            multi_point: self.multi_point,
+            ..Self::assemble(
+                self.e_star_pa,
+                self.g_star_pa,
+                self.damping_factor,
+                self.restitution,
+                0.0,
+            )
+        }
+    }
+
+    /// The same law with its sub-sphere contacts combined as `multi_point` says.
+    pub fn with_multi_point(self, multi_point: MultiPoint) -> Self {
+        Self {
+            multi_point,
+            ..self
+        }
     }
 
     /// The law of moduli `e_star`, `g_star`, damping factor `beta`.
@@ -190,6 +246,7 @@ impl ContactLaw {
             hertz_coeff: 4.0 / 3.0 * e_star,
             damping,
             tangential,
+            multi_point: MultiPoint::Independent,
         }
     }
 
@@ -203,7 +260,10 @@ impl ContactLaw {
             Tangential::Frictionless => "frictionless",
             Tangential::MindlinCoulomb { .. } => "mindlin-coulomb",
         };
-        format!("hertz + {damping} + {tangential}")
+        match self.multi_point {
+            MultiPoint::Independent => format!("hertz + {damping} + {tangential}"),
+            MultiPoint::Shared => format!("hertz + {damping} + {tangential}, shared multi-point"),
+        }
     }
 
     /// True when the law has a tangential force (and so spins the particles).
@@ -409,6 +469,11 @@ pub struct ContactGeometry {
     pub normal: DVec3,
     /// Velocity of `i`'s contact point minus that of `j` over the step (m/s).
     pub v_rel: DVec3,
+    /// The part of one contact this one carries: 1, or `1/n` for one of the
+    /// `n` sub-sphere contacts a body pair shares ([`MultiPoint::Shared`]).
+    /// Its forces, stiffnesses and stored energies are the whole law's times
+    /// this; its spring history and its Hertz duration are the whole law's.
+    pub share: f64,
 }
 
 /// Evaluates one contact over a step of `dt_s`: updates `state` and returns forces
@@ -454,6 +519,7 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
         delta_m,
         normal: n,
         v_rel,
+        share,
     } = *geometry;
     let v_n = v_rel.dot(n);
     let mut out = ContactOutput::default();
@@ -469,12 +535,14 @@ pub fn evaluate_contact_with<const DAMPED: bool, const FRICTION: bool>(
         return out;
     }
 
-    // Normal: Hertz spring plus restitution damping, never attractive.
+    // Normal: Hertz spring plus restitution damping, never attractive; a
+    // shared contact's E* and m* scaled by its share (so both by the share;
+    // a whole contact's times 1 are its own bits).
     let sqrt_rd = (r_star_m * delta_m).sqrt();
-    let f_el = hertz_force_n(law.hertz_coeff, sqrt_rd, delta_m);
+    let f_el = hertz_force_n(law.hertz_coeff, sqrt_rd, delta_m) * share;
     let c_n = match law.damping {
         NormalDamping::Restitution { coeff } if DAMPED => {
-            normal_damping_nspm(coeff, sqrt_rd, m_star_kg)
+            normal_damping_nspm(coeff, sqrt_rd, m_star_kg) * share
         }
         _ => 0.0,
     };
@@ -568,7 +636,7 @@ fn tangential_step(
     let v_n = v_rel.dot(n);
     let v_t = v_rel - v_n * n;
     let ds = v_t * dt_s;
-    let k_t = shear_coeff * sqrt_rd;
+    let k_t = shear_coeff * sqrt_rd * geometry.share;
     let c_t = c_n * damping_ratio;
     let xi_rot = rotate_into_plane(state.xi, n);
     let xi_sq = xi_rot.length_squared();
@@ -625,6 +693,7 @@ mod tests {
             delta_m: 1e-6,
             normal: DVec3::Z,
             v_rel: DVec3::new(0.3, 0.0, 0.1),
+            share: 1.0,
         };
         let out = evaluate_contact(&smooth, &g, 1e-7, &mut st);
         assert_eq!(out.tangential_on_i, DVec3::ZERO);
@@ -649,6 +718,7 @@ mod tests {
             delta_m: 1e-9,
             normal: DVec3::Z,
             v_rel: -DVec3::Z * 5.0,
+            share: 1.0,
         };
         let out = evaluate_contact(&law, &g, 1e-7, &mut st);
         assert_eq!(out.normal_force_n, 0.0);
@@ -678,6 +748,7 @@ mod tests {
             delta_m: d,
             normal: DVec3::Z,
             v_rel: v,
+            share: 1.0,
         };
         // A small tangential creep sticks: no dissipation, force = -k_t ξ.
         let out = evaluate_contact(&law, &g, dt, &mut st);

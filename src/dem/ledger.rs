@@ -73,7 +73,10 @@ pub struct Ledger {
     /// Work done by the walls on the particles.
     pub work_in_j: f64,
     /// Energy the change of the Mindlin stiffness added to the tangential springs
-    /// (already netted out of the tangential dissipation).
+    /// (already netted out of the tangential dissipation), and, under shared
+    /// multi-point contacts, the change of a shared normal spring's stiffness
+    /// when its body pair's count of contacts changed (netted out of the
+    /// normal dissipation).
     pub stiffness_work_j: f64,
     /// Energy dissipated in contacts.
     pub dissipated: Dissipation,

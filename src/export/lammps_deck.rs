@@ -414,6 +414,16 @@ fn scene_key_uses(
             "contact.restitution_mode" => {
                 "how beta, hence the tsuji e, follows from the restitution".into()
             }
+            "contact.multi_point" => {
+                // Printed only when not independent: shared.
+                return Err(InvalidParameter::new(
+                    "contact.multi_point",
+                    &value,
+                    "",
+                    "\"independent\" (the default) for the LAMMPS export: its granular pair style makes every pair of atoms a whole contact and cannot share a body pair's",
+                )
+                .into());
+            }
             k if k.starts_with("contact.particle_particle") => "pair_coeff: tsuji e, friction".into(),
             k if k.starts_with("contact.particle_wall") => "wall fixes: tsuji e, friction".into(),
             "simulation.dt_s" => format!(

@@ -1,7 +1,8 @@
 //! The two contact laws of a scene, particle-particle and particle-wall:
 //! Hertz-Mindlin with restitution damping built from the scene's materials,
 //! restitution, friction and restitution mode (thesis eq. 5.6-5.10 for the
-//! effective moduli; the damping as in Section 5.2).
+//! effective moduli; the damping as in Section 5.2), and how a body's
+//! simultaneous sub-sphere contacts combine (`contact.multi_point`).
 
 use crate::dem::ContactLaw;
 use crate::scene::Scene;
@@ -27,7 +28,9 @@ pub fn contact_laws(scene: &Scene) -> ContactLaws {
             pp.restitution,
             pp.friction,
             c.restitution_mode,
-        ),
-        particle_wall: ContactLaw::new(&pm, &wm, pw.restitution, pw.friction, c.restitution_mode),
+        )
+        .with_multi_point(c.multi_point),
+        particle_wall: ContactLaw::new(&pm, &wm, pw.restitution, pw.friction, c.restitution_mode)
+            .with_multi_point(c.multi_point),
     }
 }

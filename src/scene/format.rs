@@ -10,6 +10,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use crate::dem::contact::MultiPoint;
 use crate::dem::material::{
     Material, effective_mass_kg, effective_radius_m, effective_youngs_pa, sphere_mass_kg,
 };
@@ -256,6 +257,12 @@ pub struct ContactSpec {
     pub restitution_mode: RestitutionMode,
     pub particle_particle: PairSpec,
     pub particle_wall: PairSpec,
+    /// How a body's simultaneous sub-sphere contacts combine: each a whole
+    /// contact (`"independent"`, the thesis' model) or `"shared"` by the
+    /// count touching at once ([`MultiPoint`]). Left out of printed scenes
+    /// when independent.
+    #[serde(default, skip_serializing_if = "MultiPoint::is_independent")]
+    pub multi_point: MultiPoint,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

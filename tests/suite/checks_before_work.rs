@@ -38,6 +38,18 @@ fn refused_before_work(args: &[&str], scene: Option<&str>, starts: &str, also: &
 
 const SHAKE: &[&str] = &["shake", "--freq", "40", "--gamma", "20", "--no-cache"];
 
+const EXPORT: &[&str] = &[
+    "export",
+    "lammps",
+    "--freq",
+    "40",
+    "--gamma",
+    "20",
+    "--out",
+    "o",
+    "--no-cache",
+];
+
 fn with<'a>(base: &[&'a str], more: &[&'a str]) -> Vec<&'a str> {
     base.iter().chain(more).copied().collect()
 }
@@ -47,19 +59,7 @@ fn export_refuses_cycles_below_the_window_by_the_flag_given() {
     // Was "drive.steady_cycles = 5: must be in [1, drive.cycles = 2]": a key
     // the user did not write.
     refused_before_work(
-        &[
-            "export",
-            "lammps",
-            "--freq",
-            "40",
-            "--gamma",
-            "20",
-            "--cycles",
-            "2",
-            "--out",
-            "o",
-            "--no-cache",
-        ],
+        &with(EXPORT, &["--cycles", "2"]),
         None,
         "--cycles = 2: must be at least",
         &["drive.steady_cycles = 5"],
@@ -70,22 +70,25 @@ fn export_refuses_cycles_below_the_window_by_the_flag_given() {
 fn export_names_the_equivalent_diameter_as_written() {
     // Was "particles.diameter_m = -0.0076 m".
     refused_before_work(
-        &[
-            "export",
-            "lammps",
-            "--freq",
-            "40",
-            "--gamma",
-            "20",
-            "--scene",
-            "scene.toml",
-            "--out",
-            "o",
-            "--no-cache",
-        ],
+        &with(EXPORT, &["--scene", "scene.toml"]),
         Some("[particles]\nequivalent_diameter_m = -0.0076\n"),
         "scene file scene.toml is not valid: particles.equivalent_diameter_m = -0.0076 m",
         &["positive and finite"],
+    );
+}
+
+/// Shared multi-point contacts have no LAMMPS form (its granular pair style
+/// makes every pair of atoms a whole contact): refused by the key, before
+/// the pour of the prolate bed.
+#[test]
+fn export_refuses_shared_multi_point_contacts_by_the_key() {
+    refused_before_work(
+        &with(EXPORT, &["--scene", "scene.toml"]),
+        Some(
+            "[particles]\ncount = 90\nshape = \"prolate\"\naspect_ratio = 1.5\n[contact]\nmulti_point = \"shared\"\n",
+        ),
+        "contact.multi_point = \"shared\": must be",
+        &["\"independent\" (the default) for the LAMMPS export"],
     );
 }
 

@@ -72,6 +72,9 @@ pub struct PairRun<'a> {
     pub gaps: &'a mut [f64],
     pub states: &'a mut [ContactState],
     pub slots: CrossSlotsMut<'a>,
+    /// Under a law of shared multi-point contacts: per pair, the count of
+    /// contacts its bodies touch at ([`super::shared_contacts`]).
+    pub shared: Option<&'a [u32]>,
 }
 
 /// The pair contacts of the rows of particles `start..start + force.len()`
@@ -96,6 +99,7 @@ pub fn pair_rows<const D: bool, const F: bool>(
         gaps,
         states,
         slots,
+        shared,
     } = run;
     // Room for every listed pair's dissipation, made as the list grows: no
     // step allocates for the books of its contacts.
@@ -104,9 +108,12 @@ pub fn pair_rows<const D: bool, const F: bool>(
     }
     let history = gaps.iter_mut().zip(states.iter_mut());
     let out_slots = slots.acts.iter_mut().zip(slots.force.iter_mut());
-    for ((&(i, j), (gap, st)), (act, slot)) in pairs.iter().zip(history).zip(out_slots) {
+    for (k, ((&(i, j), (gap, st)), (act, slot))) in
+        pairs.iter().zip(history).zip(out_slots).enumerate()
+    {
         let (i, j) = (i as usize, j as usize);
-        let out = pair_contact::<D, F>(law, bodies, i, j, dt, gap, st);
+        let count = shared.map(|counts| counts[k]);
+        let out = pair_contact::<D, F>(law, bodies, (i, j), (dt, count), gap, st);
         let crosses = j >= end;
         if crosses {
             *act = out.is_some();

@@ -13,6 +13,15 @@
 //! kernels are instances for a law with or without damping (`D`) and friction
 //! (`F`), always inlined into the loops of [`super::forces`] and
 //! [`super::blocks`].
+//!
+//! A contact of a law whose multi-point contacts are shared
+//! ([`MultiPoint::Shared`](crate::dem::contact::MultiPoint)) is given the
+//! count `n` of sub-sphere contacts its body pair touches at this step
+//! ([`super::shared_contacts`]) and carries `1/n` of one contact. When `n`
+//! changes while it touches, the energy its normal spring stores changes
+//! with the spring's stiffness at the same overlap: [`reshare`] books that
+//! as stiffness work, as the tangential spring's is booked when k_t follows
+//! the overlap.
 
 use glam::DVec3;
 
@@ -215,7 +224,8 @@ fn count_steps(delta_m: f64, dt: f64, began: bool, touched: u32, st: &mut Contac
 /// 3.14; a flat wall, R* = R and m* = m). `dist` is the centre's distance to
 /// the wall and `normal` points from the centre to the wall. Without
 /// friction the spin is left out of the contact velocity: only its normal
-/// part acts, and the spin has none.
+/// part acts, and the spin has none. `shared`: the count of sub-sphere
+/// contacts the particle's body shares with this wall, when they are shared.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn wall_contact<const D: bool, const F: bool>(
@@ -225,7 +235,7 @@ pub fn wall_contact<const D: bool, const F: bool>(
     dist: f64,
     normal: DVec3,
     v_wall: DVec3,
-    dt: f64,
+    (dt, shared): (f64, Option<u32>),
     st: &mut ContactState,
 ) -> ContactResult {
     let r = b.radius[i];
@@ -245,8 +255,12 @@ pub fn wall_contact<const D: bool, const F: bool>(
         delta_m: delta,
         normal,
         v_rel,
+        share: shared.map_or(1.0, share_of),
     };
-    resolve_contact::<D, F>(law, &geometry, (arm, DVec3::ZERO), r, dt, st)
+    let jump = reshare(law, &geometry, shared, dt, st);
+    let mut out = resolve_contact::<D, F>(law, &geometry, (arm, DVec3::ZERO), r, dt, st);
+    book_reshare(&mut out, jump);
+    out
 }
 
 /// One particle-particle contact (thesis eq. 3.1–3.8, 3.26–3.27); `None`
@@ -254,16 +268,16 @@ pub fn wall_contact<const D: bool, const F: bool>(
 /// list keeps of the previous step ([`NeighbourList::gaps`]: the overlap of
 /// a touching pair, minus the squared distance of the centres of one
 /// apart), read for the trapezoid at contact onset and updated here; `st`
-/// is read only when they touch.
+/// is read only when they touch. `shared`: the count of sub-sphere contacts
+/// the pair's bodies touch at, when they are shared.
 ///
 /// [`NeighbourList::gaps`]: crate::dem::neighbours::NeighbourList::gaps
 #[inline(always)]
 pub fn pair_contact<const D: bool, const F: bool>(
     law: &ContactLaw,
     b: &Bodies,
-    i: usize,
-    j: usize,
-    dt: f64,
+    (i, j): (usize, usize),
+    (dt, shared): (f64, Option<u32>),
     gap: &mut f64,
     st: &mut ContactState,
 ) -> Option<ContactResult> {
@@ -300,10 +314,74 @@ pub fn pair_contact<const D: bool, const F: bool>(
         delta_m: delta,
         normal: n,
         v_rel,
+        share: shared.map_or(1.0, share_of),
     };
-    let out = resolve_contact::<D, F>(law, &geometry, arms, ri.min(rj), dt, st);
+    let jump = reshare(law, &geometry, shared, dt, st);
+    let mut out = resolve_contact::<D, F>(law, &geometry, arms, ri.min(rj), dt, st);
+    book_reshare(&mut out, jump);
     *gap = if delta > 0.0 { st.delta_prev } else { -dist_sq };
     Some(out)
+}
+
+/// The share of one contact that each of `n` shared contacts carries.
+#[inline(always)]
+pub fn share_of(n: u32) -> f64 {
+    1.0 / f64::from(n.max(1))
+}
+
+/// A shared contact that touched at the previous step and touches now,
+/// among `shared` contacts of its body pair this step where it was among
+/// `n_prev` then: its normal spring's stored energy is rescaled by
+/// `n_prev / n`, the stiffness it has now, at the middle of the step (the
+/// overlap where velocity Verlet's trapezoid turns from the force at the
+/// step's start to the one at its end; rescaled at the step's end instead,
+/// a prolate pair's books lost 1e-3 of its dissipation to the integrator
+/// rather than 1e-6). Returns the
+/// energy that added (J; negative: taken), which no force put in: the
+/// stiffness work of the normal spring. `n_prev` is read back from the
+/// elastic force the contact carried, `f_el,prev = f_el(δ_prev) / n_prev`
+/// (the contact state keeps no count; an integer ratio, rounded). Zero for
+/// a whole contact, a pure evaluation, or a contact that opens or closes.
+#[inline(always)]
+fn reshare(
+    law: &ContactLaw,
+    geometry: &ContactGeometry,
+    shared: Option<u32>,
+    dt: f64,
+    st: &mut ContactState,
+) -> f64 {
+    let Some(n) = shared else {
+        return 0.0;
+    };
+    if dt <= 0.0 || geometry.delta_m <= 0.0 || st.delta_prev <= 0.0 || st.fel_prev <= 0.0 {
+        return 0.0;
+    }
+    let whole_prev = law.hertz_force_n(geometry.r_star_m, st.delta_prev);
+    let n_prev = (whole_prev / st.fel_prev).round();
+    let n = f64::from(n.max(1));
+    if n_prev == n {
+        return 0.0;
+    }
+    // At the middle of the step, where the integrator's trapezoid (the
+    // force at its start over its first half, at its end over the second)
+    // changes from the old stiffness to the new.
+    let u_mid = st.u_normal_j + 0.5 * st.fel_prev * (geometry.delta_m - st.delta_prev);
+    let jump = u_mid * (n_prev / n - 1.0);
+    st.u_normal_j += jump;
+    jump
+}
+
+/// Books the normal spring's stiffness work of [`reshare`] in a contact's
+/// result: stored, and taken from the net dissipation (as the tangential
+/// spring's stiffness work is), so that what the contact took from the
+/// motion is still what it stored plus what it dissipated.
+#[inline(always)]
+fn book_reshare(out: &mut ContactResult, jump: f64) {
+    if jump != 0.0 {
+        out.stiffness_work_j += jump;
+        out.stored_change_j += jump;
+        out.dissipated_normal_j -= jump;
+    }
 }
 
 /// The gap (m, never positive) of a pair apart whose centres, `reach`

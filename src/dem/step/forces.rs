@@ -22,6 +22,13 @@
 //! bits. A bed of one block (the thesis bed) is one serial loop: walls,
 //! then the pairs in pair order. The books are then added walls first,
 //! block by block ([`super::books`]).
+//!
+//! **Shared multi-point contacts.** Under a law that shares a body's
+//! simultaneous sub-sphere contacts ([`MultiPoint::Shared`]), the stage
+//! first counts them, on the caller ([`super::shared_contacts`]), and each
+//! block reads its contacts' counts.
+//!
+//! [`MultiPoint::Shared`]: crate::dem::contact::MultiPoint::Shared
 
 use super::block_size::{PARTICLE_BLOCK, spans_blocks};
 use super::blocks::{CrossForce, CrossShares, CrossSlots, CrossSlotsMut, PairRun, pair_rows};
@@ -31,8 +38,9 @@ use super::contacts::{
     Bodies, ContactAt, ContactResult, WallGeometry, bodies, law_kind, wall_contact,
 };
 use super::isa;
+use super::shared_contacts::SharedContacts;
 use super::team::{Team, for_each_block};
-use crate::dem::contact::{ContactLaw, ContactState};
+use crate::dem::contact::{ContactLaw, ContactState, MultiPoint};
 use crate::dem::neighbours::{Adjacency, NeighbourList, StepView};
 use crate::dem::particles::Particles;
 use crate::dem::walls::Walls;
@@ -48,6 +56,8 @@ pub struct ForceScratch {
     pair_books: Vec<BlockBooks>,
     /// Where the pairs into a later block leave their forces.
     cross: CrossSlots,
+    /// The counts of shared multi-point contacts, when a law shares them.
+    shared: SharedContacts,
 }
 
 impl ForceScratch {
@@ -106,6 +116,8 @@ struct BlockJob<'b> {
     wall_states: &'b mut [ContactState],
     wall_gaps: &'b mut [f64],
     run: PairRun<'b>,
+    /// Its wall contacts' counts of shared contacts (per particle and wall).
+    wall_shared: Option<&'b [u32]>,
     wall_books: &'b mut BlockBooks,
     pair_books: &'b mut BlockBooks,
 }
@@ -168,6 +180,19 @@ impl ForceStage<'_> {
             gaps,
             states,
         } = neighbours.step_view();
+        // The shared contacts counted, when a law shares them and there are
+        // bodies to share them.
+        let with_bodies = !p.clumps.is_empty();
+        let share_pairs = with_bodies && pp_law.multi_point == MultiPoint::Shared;
+        let share_walls = with_bodies && pw_law.multi_point == MultiPoint::Shared;
+        if share_pairs {
+            scratch.shared.count_pairs(&bodies, &p.clump, pairs, gaps);
+        }
+        if share_walls {
+            scratch
+                .shared
+                .count_walls(&bodies, &p.clump, &geometry, wall_gaps);
+        }
         // The blocks' shares of every per-particle and per-pair array, cut
         // as the blocks are taken (from either end), so that a step
         // allocates nothing for them.
@@ -188,6 +213,9 @@ impl ForceStage<'_> {
             states: &mut states[..n_pairs],
             acts: &mut acts[..n_pairs],
             slots: &mut slots[..n_pairs],
+            pair_shared: share_pairs.then(|| &scratch.shared.pairs[..n_pairs]),
+            wall_shared: share_walls
+                .then(|| &scratch.shared.walls[..n_particles * geometry.shapes.len()]),
             wall_books: &mut scratch.wall_books[..n_blocks],
             pair_books: &mut scratch.pair_books[..n_blocks],
         };
@@ -206,7 +234,7 @@ impl ForceStage<'_> {
                             job.start,
                             job.force,
                             job.torque,
-                            (job.wall_states, job.wall_gaps),
+                            (job.wall_states, job.wall_gaps, job.wall_shared),
                             (limits, job.wall_books),
                             dt,
                         )
@@ -268,6 +296,8 @@ struct BlockJobs<'b> {
     states: &'b mut [ContactState],
     acts: &'b mut [bool],
     slots: &'b mut [CrossForce],
+    pair_shared: Option<&'b [u32]>,
+    wall_shared: Option<&'b [u32]>,
     wall_books: &'b mut [BlockBooks],
     pair_books: &'b mut [BlockBooks],
 }
@@ -302,7 +332,9 @@ impl<'b> BlockJobs<'b> {
                     acts: cut(&mut self.acts, n_rows, back),
                     force: cut(&mut self.slots, n_rows, back),
                 },
+                shared: cut_shared(&mut self.pair_shared, n_rows, back),
             },
+            wall_shared: cut_shared(&mut self.wall_shared, wall_len, back),
             wall_books: &mut cut(&mut self.wall_books, 1, back)[0],
             pair_books: &mut cut(&mut self.pair_books, 1, back)[0],
         }
@@ -345,6 +377,15 @@ fn cut<'a, T>(rest: &mut &'a mut [T], n: usize, from_back: bool) -> &'a mut [T] 
     }
 }
 
+/// [`cut`] of counts that are read only, when there are any.
+fn cut_shared<'a>(rest: &mut Option<&'a [u32]>, n: usize, from_back: bool) -> Option<&'a [u32]> {
+    let all = (*rest)?;
+    let at = if from_back { all.len() - n } else { n };
+    let (front, back) = all.split_at(at);
+    *rest = Some(if from_back { front } else { back });
+    Some(if from_back { back } else { front })
+}
+
 /// The wall contacts of one block: [`wall_loop`] for walls that move
 /// together or apart.
 #[inline(always)]
@@ -357,7 +398,7 @@ fn wall_block<const D: bool, const F: bool>(
     start: usize,
     force: &mut [DVec3],
     torque: &mut [DVec3],
-    wall: (&mut [ContactState], &mut [f64]),
+    wall: (&mut [ContactState], &mut [f64], Option<&[u32]>),
     books: (Limits, &mut BlockBooks),
     dt: f64,
 ) {
@@ -372,6 +413,7 @@ fn wall_block<const D: bool, const F: bool>(
 /// their forces and torques are set, the wall states advanced, and the
 /// touching contacts booked in `books`, in (particle, wall) order; a
 /// contact that stops the run (an escaped particle, say) ends the block.
+/// `shared`: the contacts' counts of shared contacts, when they are shared.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn wall_loop<const D: bool, const F: bool, const OWN: bool>(
@@ -382,7 +424,7 @@ fn wall_loop<const D: bool, const F: bool, const OWN: bool>(
     start: usize,
     force: &mut [DVec3],
     torque: &mut [DVec3],
-    (states, gaps): (&mut [ContactState], &mut [f64]),
+    (states, gaps, shared): (&mut [ContactState], &mut [f64], Option<&[u32]>),
     (limits, books): (Limits, &mut BlockBooks),
     dt: f64,
 ) {
@@ -430,7 +472,8 @@ fn wall_loop<const D: bool, const F: bool, const OWN: bool>(
                 books.refused = Some((at, ContactResult::default(), Refusal::Escaped));
                 return;
             }
-            let out = wall_contact::<D, F>(law, bodies, i, dist, normal, v_wall, dt, st);
+            let count = shared.map(|counts| counts[m * n_walls + w]);
+            let out = wall_contact::<D, F>(law, bodies, i, dist, normal, v_wall, (dt, count), st);
             *gap = st.delta_prev;
             if !books.add(&limits, at, &out, dt) {
                 return;

@@ -15,7 +15,9 @@
 //!    renumbered in space with it;
 //! 4. [`forces`]: gravity and the contact forces at the new positions
 //!    (eq. 3.25–3.28), one contact at a time by the kernels of [`contacts`]
-//!    (eq. 3.1–3.8, 3.12–3.14), block by block ([`blocks`]);
+//!    (eq. 3.1–3.8, 3.12–3.14), block by block ([`blocks`]); under a law
+//!    of shared multi-point contacts, after [`shared_contacts`] has counted
+//!    each body pair's touching sub-sphere contacts;
 //! 5. [`integrate`] again: the second half kick, each block first adding
 //!    the forces that cross into it from earlier blocks; then the bodies'
 //!    ([`clump_motion`]), from the resultants of their sub-spheres' forces;
@@ -42,6 +44,7 @@ pub mod forces;
 pub mod integrate;
 pub mod isa;
 pub mod neighbour_update;
+pub mod shared_contacts;
 pub mod team;
 pub mod thread_choice;
 pub mod wake;

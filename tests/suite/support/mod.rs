@@ -3,4 +3,5 @@
 pub mod ci_counts;
 pub mod devtools;
 pub mod fingerprint;
+pub mod prolate;
 pub mod spreadsheet;
