@@ -94,26 +94,63 @@ pub fn pair_rows<const D: bool, const F: bool>(
 ) {
     books.clear();
     let end = start + force.len();
+    // Room for every listed pair's dissipation, made as the list grows: no
+    // step allocates for the books of its contacts.
+    if limits.per_particle {
+        books.dissipation.reserve(run.pairs.len());
+    }
+    let shared = run.shared;
+    // Two instances: without shared contacts the count is none at compile
+    // time, and the loop is the one it was before counts existed.
+    match shared {
+        None => pair_loop::<D, F>(
+            law,
+            bodies,
+            (start, end),
+            run,
+            (force, torque),
+            (limits, books),
+            (dt, |_| None),
+        ),
+        Some(counts) => pair_loop::<D, F>(
+            law,
+            bodies,
+            (start, end),
+            run,
+            (force, torque),
+            (limits, books),
+            (dt, |k| Some(counts[k])),
+        ),
+    }
+}
+
+/// The loop of [`pair_rows`] over the pairs of the rows `start..end`,
+/// `count(k)` giving the `k`-th pair's count of shared contacts, if any
+/// (the run's own counts are not read here).
+#[inline(always)]
+fn pair_loop<const D: bool, const F: bool>(
+    law: &ContactLaw,
+    bodies: &Bodies,
+    (start, end): (usize, usize),
+    run: PairRun,
+    (force, torque): (&mut [DVec3], &mut [DVec3]),
+    (limits, books): (&Limits, &mut BlockBooks),
+    (dt, count): (f64, impl Fn(usize) -> Option<u32>),
+) {
     let PairRun {
         pairs,
         gaps,
         states,
         slots,
-        shared,
+        ..
     } = run;
-    // Room for every listed pair's dissipation, made as the list grows: no
-    // step allocates for the books of its contacts.
-    if limits.per_particle {
-        books.dissipation.reserve(pairs.len());
-    }
     let history = gaps.iter_mut().zip(states.iter_mut());
     let out_slots = slots.acts.iter_mut().zip(slots.force.iter_mut());
     for (k, ((&(i, j), (gap, st)), (act, slot))) in
         pairs.iter().zip(history).zip(out_slots).enumerate()
     {
         let (i, j) = (i as usize, j as usize);
-        let count = shared.map(|counts| counts[k]);
-        let out = pair_contact::<D, F>(law, bodies, (i, j), (dt, count), gap, st);
+        let out = pair_contact::<D, F>(law, bodies, (i, j), (dt, count(k)), gap, st);
         let crosses = j >= end;
         if crosses {
             *act = out.is_some();
