@@ -447,7 +447,7 @@ fn a_prolate_pair_side_on_touches_at_many_points_and_realises_less() {
 ///   dissipation; measured 1e-15) and what the integration lost below 1e-5
 ///   of it (measured 0.9-8.5e-7). Without the booking the energy check
 ///   stops the run; booked without rescaling the stored energy the
-///   integration's share is 1e-4 (the path the forces took), rescaled at
+///   integration's share is up to 4e-4 (the path the forces took), rescaled at
 ///   the end of the step instead of its middle 4e-4 to 9e-3.
 #[test]
 fn a_prolate_pair_sharing_its_contacts_realises_what_was_asked() {
