@@ -335,10 +335,11 @@ pub fn share_of(n: u32) -> f64 {
 /// `n_prev / n`, the stiffness it has now, at the middle of the step (the
 /// overlap where velocity Verlet's trapezoid turns from the force at the
 /// step's start to the one at its end; rescaled at the step's end instead,
-/// a prolate pair's books lost 1e-3 of its dissipation to the integrator
-/// rather than 1e-6). Returns the
-/// energy that added (J; negative: taken), which no force put in: the
-/// stiffness work of the normal spring. `n_prev` is read back from the
+/// a prolate pair's books lost up to 9e-3 of its dissipation to the
+/// integrator rather than below 1e-6). Returns the energy that added (J;
+/// negative: taken), which no force put in: the stiffness work of the
+/// normal spring, booked as the tangential spring's is in the energy
+/// balance of Terzioglu's thesis eq. 6.4. `n_prev` is read back from the
 /// elastic force the contact carried, `f_el,prev = f_el(δ_prev) / n_prev`
 /// (the contact state keeps no count; an integer ratio, rounded). Zero for
 /// a whole contact, a pure evaluation, or a contact that opens or closes.
