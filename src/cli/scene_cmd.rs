@@ -185,11 +185,29 @@ fn print_time_step(scene: &Scene) -> Result<()> {
             "{} x the Rayleigh step",
             scene.simulation.rayleigh_safety_factor
         ),
-        TimeStepSpec::Rule(TimeStepRule::Contacts) => format!(
-            "{} steps per contact at the fastest expected impact ({:.2} m/s at 40 Hz, Gamma 20)",
-            scene.simulation.steps_per_contact,
-            scene.expected_impact_speed_mps(&thesis_drive)
-        ),
+        TimeStepSpec::Rule(rule) => {
+            let mut said = format!(
+                "{} steps per contact at the fastest expected impact ({:.2} m/s at 40 Hz, Gamma 20)",
+                scene.simulation.steps_per_contact,
+                scene.expected_impact_speed_mps(&thesis_drive)
+            );
+            let bodies = scene.body_collisions(&thesis_drive);
+            match (rule, bodies) {
+                (TimeStepRule::Contacts, Some(b)) => {
+                    let us = |t: Option<f64>| t.map_or("-".into(), |t| format!("{:.1}", t * 1e6));
+                    said.push_str(&format!(
+                        "; whole bodies measured: {} us body-body, {} us body-wall",
+                        us(b.pair_s),
+                        us(b.wall_s)
+                    ));
+                }
+                (TimeStepRule::SubSphereContacts, Some(_)) => {
+                    said.push_str("; one sub-sphere pair's contact, not the whole bodies'");
+                }
+                _ => {}
+            }
+            said
+        }
     };
     println!(
         "  time step        {:.3e} s at 40 Hz, Gamma 20 ({dt_rule}); Rayleigh limit {:.3e} s (eq. 3.31)",

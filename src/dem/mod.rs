@@ -9,6 +9,7 @@
 //! the energy books; [`clumps`] and [`rigid_rotation`] make rigid bodies of
 //! sub-spheres (the multi-sphere particles of thesis Chapter 4).
 
+pub mod body_collision;
 pub mod clumps;
 pub mod contact;
 pub mod error;

@@ -202,7 +202,9 @@ impl LammpsExport {
             steady_cycles,
         };
         export.check(keys)?;
-        scene_key_uses(scene, &export, scene.drive_dt_s(&drive))?;
+        // The step only for the header's words: a key the deck refuses is
+        // refused before a body's collisions are measured for it.
+        scene_key_uses(scene, &export, &|| scene.drive_dt_s(&drive))?;
         Ok(export)
     }
 
@@ -370,12 +372,13 @@ fn granular_words(t: &ContactTranslation, youngs_pa: f64, poisson: f64, kt: Opti
     }
 }
 
-/// What the deck does with each scene key (dotted), for its header; `Err`
-/// names a key the deck does not translate.
+/// What the deck does with each scene key (dotted), for its header, with
+/// the time step `dt_s` gives; `Err` names a key the deck does not
+/// translate.
 fn scene_key_uses(
     scene: &Scene,
     export: &LammpsExport,
-    dt_s: f64,
+    dt_s: &dyn Fn() -> f64,
 ) -> Result<Vec<SceneKeyUse>, SceneError> {
     let value: toml::Value = toml::Value::try_from(scene).map_err(|e| SceneError::Parse {
         path: scene.name.clone(),
@@ -427,13 +430,13 @@ fn scene_key_uses(
             k if k.starts_with("contact.particle_particle") => "pair_coeff: tsuji e, friction".into(),
             k if k.starts_with("contact.particle_wall") => "wall fixes: tsuji e, friction".into(),
             "simulation.dt_s" => format!(
-                "timestep {dt_s:e}: vlab's drive step at this frequency and Gamma"
+                "timestep {:e}: vlab's drive step at this frequency and Gamma", dt_s()
             ),
             "simulation.rayleigh_safety_factor" => format!(
-                "caps the time step rule (Rayleigh step x factor); here dt = {dt_s:e} s"
+                "caps the time step rule (Rayleigh step x factor); here dt = {:e} s", dt_s()
             ),
             "simulation.steps_per_contact" => format!(
-                "steps per shortest expected collision (dt_s = \"contacts\"); here dt = {dt_s:e} s"
+                "steps per shortest expected collision (dt_s = \"contacts\" or \"sub_sphere_contacts\"); here dt = {:e} s", dt_s()
             ),
             "simulation.settle_s" => format!("vlab settled the packing in {DATA_FILE} (the deck does not settle)"),
             "simulation.gravity_mps2" => "fix gravity magnitude".into(),
@@ -633,7 +636,7 @@ impl<'a> DeckPlan<'a> {
             pp,
             pw,
             side_factor: (1.0 - radius / (2.0 * cyl_r)).sqrt(),
-            keys: scene_key_uses(scene, export, dt)?,
+            keys: scene_key_uses(scene, export, &|| dt)?,
             mass: particles.total_mass_kg(),
             gravity_dir,
             bodies,

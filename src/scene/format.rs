@@ -5,11 +5,14 @@
 //! keys it changes; unknown keys are errors, and `version` must be 1. Every value
 //! is checked with its unit and valid range before anything runs.
 
+use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::path::Path;
+use std::sync::{Mutex, OnceLock};
 
 use serde::{Deserialize, Serialize};
 
+use crate::dem::body_collision::{BodyCollisions, BodyProbe, shortest_body_collisions};
 use crate::dem::contact::MultiPoint;
 use crate::dem::material::{
     Material, effective_mass_kg, effective_radius_m, effective_youngs_pa, sphere_mass_kg,
@@ -103,11 +106,16 @@ pub enum TimeStepSpec {
 
 /// How the time step is chosen when the scene does not give it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "snake_case")]
 pub enum TimeStepRule {
     /// `"contacts"`: the shortest expected contact in `steps_per_contact`
-    /// steps ([`Scene::drive_dt_s`]).
+    /// steps ([`Scene::drive_dt_s`]); for bodies, the shortest of one
+    /// sub-sphere pair and of the collisions of whole bodies, measured.
     Contacts,
+    /// `"sub_sphere_contacts"`: as `"contacts"`, but for bodies only one
+    /// sub-sphere pair's contact: the rule before 2026-11-30, under which the
+    /// shape study ran (docs/shapes.md).
+    SubSphereContacts,
     /// `"rayleigh"`: `rayleigh_safety_factor` times the Rayleigh step.
     Rayleigh,
 }
@@ -129,11 +137,12 @@ impl TryFrom<NumberOrWord<f64>> for TimeStepSpec {
             NumberOrWord::Word(w) => match w.as_str() {
                 "contacts" => Ok(TimeStepSpec::Rule(TimeStepRule::Contacts)),
                 "rayleigh" => Ok(TimeStepSpec::Rule(TimeStepRule::Rayleigh)),
+                "sub_sphere_contacts" => Ok(TimeStepSpec::Rule(TimeStepRule::SubSphereContacts)),
                 _ => Err(InvalidParameter::new(
                     "simulation.dt_s",
                     format!("\"{w}\""),
                     "",
-                    "a time step in seconds, \"contacts\" or \"rayleigh\"",
+                    "a time step in seconds, \"contacts\", \"sub_sphere_contacts\" or \"rayleigh\"",
                 )),
             },
         }
@@ -193,6 +202,11 @@ pub struct ContactScale {
 /// thread (2026-11-26, one run each): 0.5 → 2.3 M sub-sphere-steps/s, 0.2 →
 /// 7.3 M, 0.1 → 11.1 M, 0.05 → 13.0 M, 0.03 → 12.0 M, 0.02 → 9.8 M.
 pub const BODY_SKIN_RATIO: f64 = 0.05;
+
+/// Steps of the measurement of bodies' collisions
+/// ([`Scene::body_collisions`]) in one sub-sphere pair's contact: a
+/// collision counted to 1/200 of that.
+const BODY_PROBE_STEPS: f64 = 200.0;
 
 /// A size no scene gave: refused by validation with the key's name.
 fn not_given() -> f64 {
@@ -761,28 +775,83 @@ impl Scene {
     /// impact speed to expect, the enclosure's velocity amplitude `Γ g / ω`
     /// plus a free fall across the enclosure `√(2 g max(L, D))`; never above
     /// the safety factor times the Rayleigh step, nor 1/200 of a cycle.
+    /// For bodies the stiffest pair is a sub-sphere's, or, shorter where
+    /// several sub-spheres touch at once, a whole body's against another or
+    /// a wall, measured ([`Scene::body_collisions`]); `"sub_sphere_contacts"`
+    /// leaves the bodies' collisions out.
     pub fn drive_dt_s(&self, drive: &Drive) -> f64 {
         let sim = &self.simulation;
         let rayleigh = sim.rayleigh_safety_factor * self.rayleigh_limit_s();
-        match sim.dt_s {
-            TimeStepSpec::Seconds(dt) => dt,
-            TimeStepSpec::Rule(TimeStepRule::Rayleigh) => rayleigh,
-            TimeStepSpec::Rule(TimeStepRule::Contacts) => {
-                let laws = crate::scene::contact_laws(self);
-                let scale = self.contact_scale();
-                let speed = self.expected_impact_speed_mps(drive) * scale.speed_factor;
-                let t_c = shortest_contact_with_mass_s(
-                    &laws.particle_particle,
-                    &laws.particle_wall,
-                    scale.radius_m,
-                    scale.mass_kg,
-                    speed,
-                );
-                (t_c / sim.steps_per_contact)
-                    .min(rayleigh)
-                    .min(1.0 / (200.0 * drive.freq_hz()))
-            }
+        let rule = match sim.dt_s {
+            TimeStepSpec::Seconds(dt) => return dt,
+            TimeStepSpec::Rule(TimeStepRule::Rayleigh) => return rayleigh,
+            TimeStepSpec::Rule(rule) => rule,
+        };
+        let t_c = self.sub_sphere_contact_s(drive);
+        let t_c = match rule {
+            TimeStepRule::Contacts => self
+                .body_collisions(drive)
+                .and_then(|b| b.shortest_s())
+                .map_or(t_c, |t_body| t_c.min(t_body)),
+            _ => t_c,
+        };
+        (t_c / sim.steps_per_contact)
+            .min(rayleigh)
+            .min(1.0 / (200.0 * drive.freq_hz()))
+    }
+
+    /// The shortest contact of one pair of spheres, or of sub-spheres of
+    /// bodies, `drive` can bring (s): the stiffest pair, particle-particle
+    /// or particle-wall (eq. 5.6 and 5.10), at the largest impact speed to
+    /// expect ([`Scene::expected_impact_speed_mps`]), faster by a body's
+    /// spin ([`ContactScale`]).
+    fn sub_sphere_contact_s(&self, drive: &Drive) -> f64 {
+        let laws = crate::scene::contact_laws(self);
+        let scale = self.contact_scale();
+        let speed = self.expected_impact_speed_mps(drive) * scale.speed_factor;
+        shortest_contact_with_mass_s(
+            &laws.particle_particle,
+            &laws.particle_wall,
+            scale.radius_m,
+            scale.mass_kg,
+            speed,
+        )
+    }
+
+    /// The shortest collisions of whole bodies `drive` can bring
+    /// ([`crate::dem::body_collision`]): two bodies, or a body and the
+    /// enclosure's floor or side wall, meeting at the largest impact speed
+    /// to expect, measured with a step 1/200 of one sub-sphere pair's
+    /// contact; `None` for spheres. Measured once per process and scene.
+    pub fn body_collisions(&self, drive: &Drive) -> Option<BodyCollisions> {
+        static MEASURED: OnceLock<Mutex<HashMap<String, BodyCollisions>>> = OnceLock::new();
+        let body = self.particle_body().ok()??;
+        let laws = crate::scene::contact_laws(self);
+        let speed_mps = self.expected_impact_speed_mps(drive);
+        let e = &self.enclosure;
+        let cylinder_m = (0.5 * e.inner_diameter_m, e.inner_length_m);
+        let dt_s = self.sub_sphere_contact_s(drive) / BODY_PROBE_STEPS;
+        let key = format!(
+            "{:?} {laws:?} {cylinder_m:?} {speed_mps:e} {dt_s:e}",
+            body.template
+        );
+        let memo = MEASURED.get_or_init(|| Mutex::new(HashMap::new()));
+        if let Some(b) = memo.lock().ok().and_then(|m| m.get(&key).copied()) {
+            return Some(b);
         }
+        let measured = shortest_body_collisions(&BodyProbe {
+            template: &body.template,
+            pp_law: laws.particle_particle,
+            pw_law: laws.particle_wall,
+            cylinder_m,
+            speed_mps,
+            dt_s,
+            max_steps: 20 * BODY_PROBE_STEPS as u64,
+        });
+        if let Ok(mut m) = memo.lock() {
+            m.insert(key, measured);
+        }
+        Some(measured)
     }
 
     /// The largest impact speed `drive` is expected to bring (m/s): a particle thrown at the enclosure's peak velocity `V`
@@ -1096,8 +1165,17 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            err.contains("simulation.dt_s = \"fast\": must be a time step in seconds, \"contacts\" or \"rayleigh\""),
+            err.contains("simulation.dt_s = \"fast\": must be a time step in seconds, \"contacts\", \"sub_sphere_contacts\" or \"rayleigh\""),
             "{err}"
+        );
+        // The shape study's rule reads and prints back under its own word.
+        let mut one_pair = Scene::thesis();
+        one_pair.simulation.dt_s = TimeStepSpec::Rule(TimeStepRule::SubSphereContacts);
+        let text = one_pair.to_toml();
+        assert!(text.contains("dt_s = \"sub_sphere_contacts\""), "{text}");
+        assert_eq!(
+            Scene::from_toml_str(&text, "printed").expect("reads back"),
+            one_pair
         );
         let err = Scene::merge_over_preset("[drive]\ncycles = \"forever\"\n", "f.toml")
             .unwrap_err()
