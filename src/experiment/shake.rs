@@ -385,9 +385,11 @@ impl DemTruth {
         if fewest < STEPS_PER_CONTACT_SLACK * steps_per_contact {
             // A body's contact can pass from one sub-sphere to the next
             // before the collision ends: a sub-sphere pair's count is then
-            // shorter than the collision was.
+            // shorter than the collision was. And several sub-spheres
+            // touching at once make a collision shorter than one pair's,
+            // which "sub_sphere_contacts" does not resolve.
             let handed_over = if bodies {
-                " (or, between bodies, the contact passed to a neighbouring sub-sphere before the collision ended)"
+                " (or, between bodies, several sub-spheres touched at once, which simulation.dt_s = \"sub_sphere_contacts\" does not resolve and \"contacts\" does, or the contact passed to a neighbouring sub-sphere before the collision ended)"
             } else {
                 ""
             };
