@@ -395,19 +395,20 @@ fn prolate_pair(side_on: bool, speed_mps: f64, multi_point: MultiPoint) -> Meeti
 
 /// The time-step rule's measurement of a body collision
 /// (`vlab::dem::body_collision`) is the collision a body pair makes: its
-/// shortest pair meeting of two prolates of 1.5 at 1 m/s is the side-by-side
-/// meeting measured above (19.5 us independent, 54.1 us shared), or up to
-/// 2 % shorter, though the two set their bodies apart and count the steps
-/// each its own way: independent they agree to the step; shared the probe
-/// found 53.2 us (2026-11-30), a meeting along the other short axis, where
-/// the sub-spheres do not lie quite as along y. A probe that met end to end
-/// only (42.9 us independent), or that scaled the speed, fails it.
+/// shortest pair meeting of two prolates of 1.5 at 1 m/s is the shorter of
+/// the side-by-side and end-to-end meetings measured above, within 0.5 %
+/// (they set their bodies apart and count the steps each its own way, and
+/// agree to the step: 2026-11-30). Independent, side by side is the
+/// shorter (19.54 us against 27.3 us end to end); shared, end to end, by
+/// a little (53.2 us against 54.1 us). A probe that missed an axis fails it for
+/// one of the two; one that scaled the speed fails both.
 #[test]
 fn the_time_step_rule_measures_the_collision_a_body_pair_makes() {
     use vlab::dem::body_collision::{BodyProbe, shortest_body_collisions};
     let body = prolate15();
     for multi_point in [MultiPoint::Independent, MultiPoint::Shared] {
-        let met = prolate_pair(true, 1.0, multi_point);
+        let side = prolate_pair(true, 1.0, multi_point).touching_s;
+        let end = prolate_pair(false, 1.0, multi_point).touching_s;
         let probe = BodyProbe {
             template: &body.template,
             pp_law: law(0.86, 0.0).with_multi_point(multi_point),
@@ -419,15 +420,15 @@ fn the_time_step_rule_measures_the_collision_a_body_pair_makes() {
         };
         let pair_s = shortest_body_collisions(&probe).pair_s.expect("a pair met");
         eprintln!(
-            "{multi_point:?}: probe {:.2} us, side by side {:.2} us",
+            "{multi_point:?}: probe {:.2} us; side by side {:.2} us, end to end {:.2} us",
             pair_s * 1e6,
-            met.touching_s * 1e6
+            side * 1e6,
+            end * 1e6
         );
-        let ratio = pair_s / met.touching_s;
+        let met = side.min(end);
         assert!(
-            (0.98..=1.001).contains(&ratio),
-            "{multi_point:?}: probe {pair_s} s against {} s",
-            met.touching_s
+            (pair_s / met - 1.0).abs() < 0.005,
+            "{multi_point:?}: probe {pair_s} s against {met} s"
         );
     }
 }
